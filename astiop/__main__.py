@@ -1,0 +1,3 @@
+from astiop.cli import app
+
+app(prog_name="astiop")

@@ -1,0 +1,56 @@
+"""The `astiop` command: the console by default, and headless subcommands."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from astiop import __version__
+from astiop.cli import config_cmd, locations
+from astiop.cli.common import CliState
+
+app = typer.Typer(
+    help="Operator console for the LLM-controlled ASTIbot. With no command, opens the console.",
+    add_completion=False,
+    pretty_exceptions_enable=False,
+    context_settings={"help_option_names": ["-h", "--help"]},
+)
+app.add_typer(config_cmd.app, name="config")
+app.add_typer(locations.app, name="locations")
+
+
+def _version(value: bool) -> None:
+    if value:
+        typer.echo(f"astiop {__version__}")
+        raise typer.Exit()
+
+
+@app.callback(invoke_without_command=True)
+def main(
+    ctx: typer.Context,
+    db: Path | None = typer.Option(
+        None, "--db", help="SQLite database (default: XDG data dir; env ASTIOP_DB)."
+    ),
+    model: str | None = typer.Option(
+        None,
+        "--model",
+        help="LLM spec: embedded, rules, ollama:NAME, openai:NAME@URL, dmr:NAME, gguf:PATH.",
+    ),
+    robot: str | None = typer.Option(None, "--robot", help="Robot backend: sim (default) or ros2."),
+    version: bool = typer.Option(
+        False, "--version", callback=_version, is_eager=True, help="Print the version and exit."
+    ),
+) -> None:
+    overrides: dict = {}
+    if db is not None:
+        overrides["db"] = str(db)
+    if model is not None:
+        overrides.setdefault("llm", {})["model"] = model
+    if robot is not None:
+        overrides.setdefault("robot", {})["backend"] = robot
+    ctx.obj = CliState(overrides=overrides)
+    if ctx.invoked_subcommand is None:
+        from astiop.cli.console import run_console
+
+        run_console(ctx.obj)

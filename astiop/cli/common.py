@@ -1,0 +1,67 @@
+"""What every subcommand shares: the resolved settings, the store, one-line errors."""
+
+from __future__ import annotations
+
+import json
+import sys
+from dataclasses import dataclass, field
+from typing import Any, NoReturn
+
+import typer
+
+from astiop.config import ConfigError, Settings, default_db_path, load_settings
+from astiop.store import Store, StoreError
+
+USER_ERROR = 2
+
+
+def fail(message: str, code: int = USER_ERROR) -> NoReturn:
+    typer.echo(f"astiop: {message}", err=True)
+    raise typer.Exit(code)
+
+
+def print_json(data: Any) -> None:
+    typer.echo(json.dumps(data, indent=2, default=str))
+
+
+@dataclass
+class CliState:
+    overrides: dict[str, Any] = field(default_factory=dict)
+    _settings: Settings | None = None
+    _store: Store | None = None
+
+    @property
+    def settings(self) -> Settings:
+        if self._settings is None:
+            try:
+                self._settings = load_settings(self.overrides)
+            except ConfigError as exc:
+                fail(str(exc))
+        return self._settings
+
+    @property
+    def db_path(self):
+        return self.settings.db or default_db_path()
+
+    @property
+    def store(self) -> Store:
+        if self._store is None:
+            try:
+                self._store = Store(self.db_path)
+            except StoreError as exc:
+                fail(str(exc))
+            except OSError as exc:
+                fail(f"cannot open database {self.db_path}: {exc.strerror or exc}")
+        return self._store
+
+
+def state(ctx: typer.Context) -> CliState:
+    obj = ctx.find_root().obj
+    if not isinstance(obj, CliState):  # called outside the root callback (tests)
+        obj = CliState()
+        ctx.find_root().obj = obj
+    return obj
+
+
+def stdout_is_tty() -> bool:
+    return sys.stdout.isatty()

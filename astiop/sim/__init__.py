@@ -1,0 +1,1 @@
+"""The ASTIbot warehouse simulator: kinematics, physics, lidar, battery, navigation."""

@@ -1,0 +1,316 @@
+"""SQLite store (WAL, sqlite-utils): schema migrations, locations, interactions, events, bench."""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import sqlite3
+import threading
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import sqlite_utils
+import yaml
+
+from astiop.resources import data_path
+from astiop.sim.warehouse_map import WarehouseMap, default_map
+
+SQLITE_HEADER = b"SQLite format 3\x00"
+NAME_RE = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
+
+
+class StoreError(Exception):
+    """The database file cannot be used; it is left untouched."""
+
+
+class LocationError(ValueError):
+    """A location request is invalid; nothing was changed."""
+
+
+@dataclass(frozen=True)
+class Location:
+    name: str
+    x: float
+    y: float
+    theta: float  # rad
+    description: str = ""
+
+    def as_json(self) -> dict[str, Any]:
+        return {
+            "name": self.name,
+            "x": round(self.x, 4),
+            "y": round(self.y, 4),
+            "theta_deg": round(math.degrees(self.theta), 3),
+            "description": self.description,
+        }
+
+
+def _seed_locations(db: sqlite_utils.Database) -> None:
+    seeds = yaml.safe_load(data_path("locations.yaml").read_text(encoding="utf-8"))
+    now = time.time()
+    for s in seeds:
+        db["locations"].insert(
+            {
+                "name": s["name"],
+                "x": float(s["x"]),
+                "y": float(s["y"]),
+                "theta": math.radians(float(s.get("theta_deg", 0.0))),
+                "description": s.get("description", ""),
+                "created_at": now,
+                "updated_at": now,
+            }
+        )
+
+
+_SCHEMA_V1 = """
+CREATE TABLE locations (
+    id INTEGER PRIMARY KEY,
+    name TEXT NOT NULL UNIQUE COLLATE NOCASE,
+    x REAL NOT NULL, y REAL NOT NULL, theta REAL NOT NULL DEFAULT 0,
+    description TEXT NOT NULL DEFAULT '',
+    created_at REAL NOT NULL, updated_at REAL NOT NULL
+);
+CREATE TABLE interactions (
+    id INTEGER PRIMARY KEY,
+    session TEXT, started_at REAL NOT NULL, finished_at REAL,
+    model TEXT NOT NULL, mode TEXT NOT NULL, prompt TEXT NOT NULL,
+    raw_replies TEXT NOT NULL DEFAULT '[]', answer TEXT,
+    ttft_s REAL, total_s REAL, llm_s REAL,
+    prompt_tokens INTEGER, completion_tokens INTEGER,
+    status TEXT NOT NULL DEFAULT 'running', error TEXT
+);
+CREATE TABLE commands (
+    id INTEGER PRIMARY KEY,
+    interaction_id INTEGER REFERENCES interactions(id),
+    seq INTEGER NOT NULL DEFAULT 0, created_at REAL NOT NULL,
+    command TEXT NOT NULL, valid INTEGER NOT NULL, reason TEXT,
+    kind TEXT, executed INTEGER NOT NULL DEFAULT 0,
+    output TEXT, "values" TEXT
+);
+CREATE INDEX commands_interaction ON commands(interaction_id);
+CREATE TABLE events (
+    id INTEGER PRIMARY KEY,
+    t REAL NOT NULL, sim_t REAL, kind TEXT NOT NULL,
+    severity TEXT NOT NULL DEFAULT 'info', message TEXT NOT NULL
+);
+CREATE TABLE bench_runs (
+    id INTEGER PRIMARY KEY,
+    started_at REAL NOT NULL, finished_at REAL,
+    stage INTEGER NOT NULL, models TEXT NOT NULL, modes TEXT NOT NULL,
+    seed INTEGER NOT NULL DEFAULT 0, case_limit INTEGER,
+    status TEXT NOT NULL DEFAULT 'running', config TEXT NOT NULL DEFAULT '{}'
+);
+CREATE TABLE bench_results (
+    id INTEGER PRIMARY KEY,
+    run_id INTEGER NOT NULL REFERENCES bench_runs(id),
+    model TEXT NOT NULL, mode TEXT NOT NULL, case_id TEXT NOT NULL,
+    level TEXT, category TEXT, outcome TEXT NOT NULL,
+    metrics TEXT NOT NULL DEFAULT '{}', response TEXT, created_at REAL NOT NULL,
+    UNIQUE (run_id, model, mode, case_id)
+);
+"""
+
+
+def _migrate_v1(db: sqlite_utils.Database) -> None:
+    db.conn.executescript(_SCHEMA_V1)
+    _seed_locations(db)
+
+
+# Ordered; the database's PRAGMA user_version counts how many have run.
+MIGRATIONS = [_migrate_v1]
+SCHEMA_VERSION = len(MIGRATIONS)
+_OUR_TABLES = {"locations", "interactions", "commands", "events", "bench_runs", "bench_results"}
+
+
+def check_database_file(path: Path) -> None:
+    """Refuse anything that is not a SQLite file before SQLite touches it."""
+    if path.is_dir():
+        raise StoreError(f"database path {path} is a directory")
+    if path.exists() and path.stat().st_size > 0:
+        with path.open("rb") as fh:
+            if fh.read(16) != SQLITE_HEADER:
+                raise StoreError(f"{path} is not a SQLite database; it was left untouched")
+
+
+class Store:
+    """One connection per thread, all to the same file."""
+
+    def __init__(self, path: Path | str, warehouse: WarehouseMap | None = None):
+        self.path = Path(path).expanduser()
+        self.warehouse = warehouse or default_map()
+        self._local = threading.local()
+        check_database_file(self.path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._migrate()
+
+    # -- connections and schema -------------------------------------------------
+    @property
+    def db(self) -> sqlite_utils.Database:
+        db = getattr(self._local, "db", None)
+        if db is None:
+            conn = sqlite3.connect(self.path, timeout=10)
+            conn.execute("PRAGMA busy_timeout=10000")
+            db = sqlite_utils.Database(conn)
+            self._local.db = db
+        return db
+
+    def _migrate(self) -> None:
+        try:
+            db = self.db
+            version = db.conn.execute("PRAGMA user_version").fetchone()[0]
+            tables = set(db.table_names())
+        except sqlite3.DatabaseError as exc:
+            raise StoreError(f"{self.path} is not a usable SQLite database: {exc}") from None
+        if version > SCHEMA_VERSION:
+            raise StoreError(
+                f"{self.path} has schema version {version}, newer than this astiop "
+                f"understands ({SCHEMA_VERSION}); upgrade astiop. The file was left untouched"
+            )
+        if version == 0 and tables and not tables <= _OUR_TABLES:
+            raise StoreError(f"{self.path} is a SQLite database of another application")
+        db.conn.execute("PRAGMA journal_mode=WAL")
+        for index in range(version, SCHEMA_VERSION):
+            with db.conn:
+                MIGRATIONS[index](db)
+                db.conn.execute(f"PRAGMA user_version = {index + 1}")
+
+    def close(self) -> None:
+        db = getattr(self._local, "db", None)
+        if db is not None:
+            db.conn.close()
+            self._local.db = None
+
+    # -- locations ----------------------------------------------------------------
+    def list_locations(self) -> list[Location]:
+        rows = self.db.query("SELECT * FROM locations ORDER BY name COLLATE NOCASE")
+        return [_location(r) for r in rows]
+
+    def get_location(self, name: str) -> Location | None:
+        rows = list(self.db.query("SELECT * FROM locations WHERE name = ? COLLATE NOCASE", [name]))
+        return _location(rows[0]) if rows else None
+
+    def require_location(self, name: str) -> Location:
+        loc = self.get_location(name)
+        if loc is None:
+            known = ", ".join(loc.name for loc in self.list_locations()) or "none"
+            raise LocationError(f"no location named '{name}' (known: {known})")
+        return loc
+
+    def _check_new_name(self, name: str) -> None:
+        if not NAME_RE.match(name):
+            raise LocationError(
+                f"invalid location name '{name}': use 1-64 letters, digits, '_' or '-'"
+            )
+        if self.get_location(name) is not None:
+            raise LocationError(f"a location named '{name}' already exists (names ignore case)")
+
+    def _check_pose(self, x: float, y: float, theta: float) -> None:
+        if not all(math.isfinite(v) for v in (x, y, theta)):
+            raise LocationError("x, y and theta must be finite numbers")
+        if not self.warehouse.inside_bounds(x, y):
+            x0, y0, x1, y1 = self.warehouse.bounds
+            raise LocationError(
+                f"({x:g}, {y:g}) is outside the warehouse (x {x0:g}..{x1:g}, y {y0:g}..{y1:g} m)"
+            )
+
+    def add_location(
+        self, name: str, x: float, y: float, theta: float = 0.0, description: str = ""
+    ) -> Location:
+        self._check_new_name(name)
+        self._check_pose(x, y, theta)
+        theta = math.atan2(math.sin(theta), math.cos(theta))
+        now = time.time()
+        with self.db.conn:
+            self.db["locations"].insert(
+                {
+                    "name": name,
+                    "x": x,
+                    "y": y,
+                    "theta": theta,
+                    "description": description,
+                    "created_at": now,
+                    "updated_at": now,
+                }
+            )
+        return Location(name, x, y, theta, description)
+
+    def rename_location(self, old: str, new: str) -> Location:
+        loc = self.require_location(old)
+        if new.lower() != loc.name.lower():
+            self._check_new_name(new)
+        elif not NAME_RE.match(new):
+            raise LocationError(f"invalid location name '{new}'")
+        with self.db.conn:
+            self.db.conn.execute(
+                "UPDATE locations SET name = ?, updated_at = ? WHERE name = ? COLLATE NOCASE",
+                [new, time.time(), loc.name],
+            )
+        return Location(new, loc.x, loc.y, loc.theta, loc.description)
+
+    def remove_location(self, name: str) -> Location:
+        loc = self.require_location(name)
+        with self.db.conn:
+            self.db.conn.execute("DELETE FROM locations WHERE name = ? COLLATE NOCASE", [loc.name])
+        return loc
+
+    # -- interactions, commands, events --------------------------------------------
+    def start_interaction(self, *, model: str, mode: str, prompt: str, session: str = "") -> int:
+        with self.db.conn:
+            row = self.db["interactions"].insert(
+                {
+                    "session": session,
+                    "started_at": time.time(),
+                    "model": model,
+                    "mode": mode,
+                    "prompt": prompt,
+                    "status": "running",
+                }
+            )
+        return int(row.last_pk)
+
+    def update_interaction(self, interaction_id: int, **fields: Any) -> None:
+        if "raw_replies" in fields and not isinstance(fields["raw_replies"], str):
+            fields["raw_replies"] = json.dumps(fields["raw_replies"])
+        with self.db.conn:
+            self.db["interactions"].update(interaction_id, fields)
+
+    def add_command(self, interaction_id: int | None, **fields: Any) -> int:
+        record = {"interaction_id": interaction_id, "created_at": time.time(), **fields}
+        if "values" in record and not isinstance(record["values"], (str, type(None))):
+            record["values"] = json.dumps(record["values"], default=str)
+        with self.db.conn:
+            return int(self.db["commands"].insert(record).last_pk)
+
+    def add_event(
+        self, kind: str, message: str, *, severity: str = "info", sim_t: float | None = None
+    ) -> None:
+        with self.db.conn:
+            self.db["events"].insert(
+                {
+                    "t": time.time(),
+                    "sim_t": sim_t,
+                    "kind": kind,
+                    "severity": severity,
+                    "message": message,
+                }
+            )
+
+    def interactions(self, limit: int = 500) -> list[dict[str, Any]]:
+        return list(self.db.query("SELECT * FROM interactions ORDER BY id DESC LIMIT ?", [limit]))
+
+    def commands_for(self, interaction_id: int) -> list[dict[str, Any]]:
+        return list(
+            self.db.query(
+                "SELECT * FROM commands WHERE interaction_id = ? ORDER BY seq, id", [interaction_id]
+            )
+        )
+
+    def events(self, limit: int = 500) -> list[dict[str, Any]]:
+        return list(self.db.query("SELECT * FROM events ORDER BY id DESC LIMIT ?", [limit]))
+
+
+def _location(row: dict[str, Any]) -> Location:
+    return Location(row["name"], row["x"], row["y"], row["theta"], row["description"] or "")

@@ -1,0 +1,21 @@
+from __future__ import annotations
+
+import pytest
+
+from astiop.store import Store
+
+
+@pytest.fixture
+def store(tmp_path) -> Store:
+    s = Store(tmp_path / "astiop.db")
+    yield s
+    s.close()
+
+
+@pytest.fixture(autouse=True)
+def _isolated_config(tmp_path, monkeypatch):
+    # No test reads the developer's own settings or database.
+    monkeypatch.setenv("ASTIOP_CONFIG", str(tmp_path / "no-config.toml"))
+    monkeypatch.setenv("ASTIOP_DB", str(tmp_path / "default.db"))
+    for name in ("ASTIOP_MODEL", "ASTIOP_ROBOT"):
+        monkeypatch.delenv(name, raising=False)

@@ -1,0 +1,86 @@
+"""The CLI as an operator uses it: real processes, a temporary database."""
+
+import json
+import subprocess
+import sys
+
+
+def astiop(*args, env_db=None, check=False):
+    cmd = [sys.executable, "-m", "astiop", *args]
+    return subprocess.run(cmd, capture_output=True, text=True, check=check, timeout=60)
+
+
+def test_version_and_help():
+    out = astiop("--version")
+    assert out.returncode == 0 and out.stdout.startswith("astiop ")
+    out = astiop("--help")
+    for sub in ("config", "locations"):
+        assert sub in out.stdout
+
+
+def test_locations_round_trip(tmp_path):
+    db = str(tmp_path / "t.db")
+    assert (
+        astiop(
+            "--db",
+            db,
+            "locations",
+            "add",
+            "bay_7",
+            "12.5",
+            "4",
+            "90",
+            "--description",
+            "loading bay",
+        ).returncode
+        == 0
+    )
+    shown = json.loads(astiop("--db", db, "locations", "show", "BAY_7", "--json").stdout)
+    assert shown == [
+        {"name": "bay_7", "x": 12.5, "y": 4.0, "theta_deg": 90.0, "description": "loading bay"}
+    ]
+    assert astiop("--db", db, "locations", "rename", "bay_7", "bay-8").returncode == 0
+    listed = json.loads(astiop("--db", db, "locations", "list", "--json").stdout)
+    assert "bay-8" in [row["name"] for row in listed] and len(listed) == 7
+    assert astiop("--db", db, "locations", "remove", "bay-8").returncode == 0
+    assert astiop("--db", db, "locations", "show", "bay-8").returncode == 2
+
+
+def _one_line_exit_2(result):
+    assert result.returncode == 2, result
+    assert len(result.stderr.strip().splitlines()) == 1, result.stderr
+    assert "Traceback" not in result.stderr
+
+
+def test_bad_input_exits_2_with_one_line_and_changes_nothing(tmp_path):
+    db = str(tmp_path / "t.db")
+    before = astiop("--db", db, "locations", "list", "--json").stdout
+    _one_line_exit_2(astiop("--db", db, "locations", "add", "bad name", "1", "1"))
+    _one_line_exit_2(astiop("--db", db, "locations", "add", "shipping", "1", "1"))
+    _one_line_exit_2(astiop("--db", db, "locations", "add", "far", "100", "1"))
+    _one_line_exit_2(astiop("--db", db, "locations", "rename", "nowhere", "x"))
+    assert astiop("--db", db, "locations", "list", "--json").stdout == before
+
+
+def test_random_bytes_db(tmp_path):
+    path = tmp_path / "junk.db"
+    path.write_bytes(b"\x13\x37" * 5000)
+    _one_line_exit_2(astiop("--db", str(path), "locations", "list"))
+    assert path.read_bytes() == b"\x13\x37" * 5000
+
+
+def test_malformed_config(tmp_path, monkeypatch):
+    cfg = tmp_path / "bad.toml"
+    cfg.write_text("[llm]\nthreads = -3\n")
+    monkeypatch.setenv("ASTIOP_CONFIG", str(cfg))
+    result = astiop("config", "show")
+    _one_line_exit_2(result)
+    assert str(cfg) in result.stderr and "llm.threads" in result.stderr
+
+
+def test_config_path_and_show(tmp_path, monkeypatch):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("[sim]\nseed = 42\n")
+    monkeypatch.setenv("ASTIOP_CONFIG", str(cfg))
+    assert astiop("config", "path").stdout.strip() == str(cfg)
+    assert "seed = 42" in astiop("config", "show").stdout
