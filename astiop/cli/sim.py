@@ -1,0 +1,116 @@
+"""`astiop sim`: the simulator without the console."""
+
+from __future__ import annotations
+
+import math
+
+import typer
+
+from astiop.cli.common import fail, print_json, state
+from astiop.sim.geometry import path_length
+from astiop.sim.simulator import GoalError, Simulator
+from astiop.store import LocationError
+
+app = typer.Typer(
+    help="Run the warehouse simulator headless: benchmark it, drive it.", no_args_is_help=True
+)
+
+
+@app.command("bench")
+def bench(
+    seed: int = typer.Option(0, help="Seed of the run (lidar noise)."),
+    as_json: bool = typer.Option(False, "--json", help="Print the figures as JSON."),
+) -> None:
+    """Run a seeded mission (undock, three stations, dock) as fast as possible; print figures."""
+    from astiop.sim.bench import MISSION, run_mission
+
+    def progress(step: str, leg: dict) -> None:
+        if not as_json:
+            typer.echo(
+                f"  {step:<18} {leg['status']:<10} {leg['sim_s']:7.1f} s sim  "
+                f"error {leg['error_m']} m",
+                err=True,
+            )
+
+    if not as_json:
+        typer.echo(f"mission: {' -> '.join(MISSION)}", err=True)
+    figures = run_mission(seed, progress)
+    data = figures.as_json()
+    if as_json:
+        data.pop("legs")
+        print_json(data)
+        return
+    typer.echo(
+        f"real-time factor  {data['real_time_factor']:8.1f}x   (target >= 250)\n"
+        f"lidar per scan    {data['lidar_ms_mean']:8.3f} ms  (target <= 0.25)\n"
+        f"plan mean / max   {data['plan_ms_mean']:8.2f} / {data['plan_ms_max']:.2f} ms "
+        f"(target <= 10)\n"
+        f"mission           {data['mission_sim_s']:8.1f} s sim in {data['mission_wall_s']:.2f} s\n"
+        f"max penetration   {data['max_penetration_m'] * 100:8.2f} cm  (target < 1)\n"
+        f"reached all       {data['reached_all']}"
+    )
+    if not data["reached_all"]:
+        raise typer.Exit(1)
+
+
+def _parse_target(ctx: typer.Context, text: str) -> tuple[float, float, float, str]:
+    if "," in text:
+        try:
+            parts = [float(p) for p in text.split(",")]
+        except ValueError:
+            fail(f"'{text}' is neither a location name nor X,Y[,THETA_DEG]")
+        if len(parts) not in (2, 3):
+            fail(f"'{text}': coordinates are X,Y or X,Y,THETA_DEG")
+        theta = math.radians(parts[2]) if len(parts) == 3 else 0.0
+        return parts[0], parts[1], theta, text
+    try:
+        loc = state(ctx).store.require_location(text)
+    except LocationError as exc:
+        fail(str(exc))
+    return loc.x, loc.y, loc.theta, loc.name
+
+
+@app.command("goto")
+def goto(
+    ctx: typer.Context,
+    target: str = typer.Argument(..., help="A named location, or X,Y[,THETA_DEG] in metres."),
+    start: str = typer.Option("", "--from", help="Start at this named location (default: docked)."),
+    seed: int = typer.Option(0),
+    as_json: bool = typer.Option(False, "--json"),
+) -> None:
+    """Drive from the dock (or --from) to TARGET in fast mode and report how it went."""
+    x, y, theta, label = _parse_target(ctx, target)
+    try:
+        if start:
+            sx, sy, sth, _ = _parse_target(ctx, start)
+            sim = Simulator(seed=seed, start=(sx, sy, sth))
+            sim.check_goal(sx, sy, sth)
+        else:
+            sim = Simulator(seed=seed)
+        sim.goto(x, y, theta, label)
+    except GoalError as exc:
+        fail(str(exc))
+    plan_length = path_length(sim.plan)
+    result = sim.run_goal(900.0)
+    px, py, pth = sim.pose
+    data = {
+        "reached": result is not None and result.status == "succeeded",
+        "final_pose": {
+            "x": round(px, 4),
+            "y": round(py, 4),
+            "theta_deg": round(math.degrees(pth), 2),
+        },
+        "error_m": round(result.error_m, 4) if result else None,
+        "sim_s": round(sim.t, 2),
+        "path_length_m": round(plan_length, 3),
+    }
+    if as_json:
+        print_json(data)
+    else:
+        word = "reached" if data["reached"] else f"did not reach ({result.message})"
+        typer.echo(
+            f"{word} {label}: ({px:.2f}, {py:.2f}, {math.degrees(pth):.1f}°), error "
+            f"{data['error_m']} m, path {plan_length:.1f} m, {sim.t:.1f} s sim"
+        )
+    if not data["reached"]:
+        raise typer.Exit(1)

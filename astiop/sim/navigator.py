@@ -1,0 +1,70 @@
+"""Goals for the base: legs to drive, the planned path, progress and the result."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from astiop.sim.geometry import path_length
+
+
+@dataclass
+class Leg:
+    kind: str  # navigate | dock | undock
+    target: tuple[float, float, float]
+    path: list[tuple[float, float]]  # waypoints after the start
+    v_max: float
+    planned: bool = True  # replan around obstacles (the dock legs are straight and slow)
+    waypoint: int = 0
+
+
+@dataclass
+class Goal:
+    id: int
+    name: str
+    legs: list[Leg]
+    started_t: float
+    leg: int = 0
+    replans: int = 0
+    blocked_since: float | None = None
+    known_boxes: list[tuple[float, float, float, float]] = field(default_factory=list)
+
+    @property
+    def current(self) -> Leg:
+        return self.legs[self.leg]
+
+    @property
+    def final_pose(self) -> tuple[float, float, float]:
+        return self.legs[-1].target
+
+    def remaining_path(self, x: float, y: float) -> list[tuple[float, float]]:
+        pts = [(x, y)] + self.current.path[self.current.waypoint :]
+        for leg in self.legs[self.leg + 1 :]:
+            pts += leg.path
+        return pts
+
+    def distance_remaining(self, x: float, y: float) -> float:
+        return path_length(self.remaining_path(x, y))
+
+    def remember(self, box: tuple[float, float, float, float]) -> None:
+        cx, cy = (box[0] + box[2]) / 2, (box[1] + box[3]) / 2
+        for i, k in enumerate(self.known_boxes):
+            if math.hypot((k[0] + k[2]) / 2 - cx, (k[1] + k[3]) / 2 - cy) < 0.5:
+                self.known_boxes[i] = (
+                    min(k[0], box[0]),
+                    min(k[1], box[1]),
+                    max(k[2], box[2]),
+                    max(k[3], box[3]),
+                )
+                return
+        self.known_boxes.append(box)
+
+
+@dataclass(frozen=True)
+class GoalResult:
+    id: int
+    name: str
+    status: str  # succeeded | aborted | canceled
+    message: str
+    t: float
+    error_m: float

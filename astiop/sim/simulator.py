@@ -1,0 +1,571 @@
+"""The ASTIbot in the warehouse: physics, sensors, battery, conveyor and navigation in one clock.
+
+`step(dt)` advances the sim clock in fixed physics substeps (100 Hz); control runs at 20 Hz and
+the lidar at 10 Hz. Every public method takes the lock, so a runner thread may step while other
+threads command or read `snapshot()`.
+"""
+
+from __future__ import annotations
+
+import collections
+import math
+import threading
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import pymunk
+
+from astiop.sim import lidar
+from astiop.sim.battery import Battery
+from astiop.sim.controller import ControllerGains, arrived, goto_pose_command, tracking_error
+from astiop.sim.conveyor import Conveyor
+from astiop.sim.geometry import path_length, segments_hit_boxes, wrap_angle
+from astiop.sim.kinematics import ASTIBOT, MecanumParams, achievable_velocity, inverse_kinematics
+from astiop.sim.navigator import Goal, GoalResult, Leg
+from astiop.sim.perception import DetectedObstacle, detect
+from astiop.sim.planner import Planner, PlanningError
+from astiop.sim.state import Event, SimState
+from astiop.sim.warehouse_map import WarehouseMap, default_map
+from astiop.sim.world import CT_OBSTACLE, CT_ROBOT, CT_STATIC, World
+
+ROBOT_LENGTH, ROBOT_WIDTH, ROBOT_MASS = 1.0, 0.735, 45.0
+INFLATION = math.hypot(ROBOT_LENGTH, ROBOT_WIDTH) / 2 + 0.1  # circumscribed radius + margin
+TELEOP_TIMEOUT_S = 0.5
+BLOCKED_GIVE_UP_S = 60.0
+A_LIN, A_ANG = 1.0, 2.0  # m/s², rad/s² the base ramps with
+
+
+class GoalError(ValueError):
+    """A goal or command was refused; the robot's state is unchanged."""
+
+
+@dataclass
+class _Teleop:
+    v: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    until: float = -1.0
+
+
+class Simulator:
+    def __init__(
+        self,
+        warehouse: WarehouseMap | None = None,
+        *,
+        seed: int = 0,
+        start: tuple[float, float, float] | str | None = None,
+        battery_soc: float = 0.85,
+        params: MecanumParams = ASTIBOT,
+        physics_hz: int = 100,
+        lidar_enabled: bool = True,
+        v_max: float = 0.8,
+        w_max: float = 0.8,
+    ):
+        self.map = warehouse or default_map()
+        self.params = params
+        self.rng = np.random.default_rng(seed)
+        self.seed = seed
+        self.lock = threading.RLock()
+        self.dt = 1.0 / physics_hz
+        self._control_every = max(1, physics_hz // 20)
+        self._lidar_every = max(1, physics_hz // 10)
+        self.lidar_enabled = lidar_enabled
+        self.lidar_spec = lidar.LidarSpec()
+        self._beam_angles = self.lidar_spec.beam_angles()
+        self.gains = ControllerGains(v_max=v_max, w_max=w_max)
+        self.world = World(self.map)
+        self.planner = Planner(self.world.static_boxes, self.map.bounds, INFLATION)
+        self.battery = Battery(battery_soc)
+        self.conveyor = Conveyor()
+        self._build_robot(self._resolve_start(start))
+        self.t = 0.0
+        self._tick = 0
+        self._carry = 0.0
+        self._v = np.zeros(3)  # body velocity being applied (robot frame)
+        self._applied = (0.0, 0.0, 0.0)
+        self._target = (0.0, 0.0, 0.0)
+        self._teleop = _Teleop()
+        self.goal: Goal | None = None
+        self.plan: tuple[tuple[float, float], ...] = ()
+        self.last_result: GoalResult | None = None
+        self._goal_ids = 0
+        self.e_stopped = False
+        self.fault = ""
+        self.max_penetration = 0.0
+        self.collisions = 0
+        self._contact: str | None = None
+        self.scan_ranges = np.full(self.lidar_spec.beams, np.inf)
+        self.scan_stamp = 0.0
+        self.detected: list[DetectedObstacle] = []
+        self.lidar_ms: collections.deque[float] = collections.deque(maxlen=2000)
+        self.plan_ms: list[float] = []
+        self._events: collections.deque[Event] = collections.deque(maxlen=500)
+        self._event_seq = 0
+        self._motor_power = 0.0
+        self._energy_dt = 0.0
+        if self.lidar_enabled:
+            self._scan()
+
+    # -- construction ----------------------------------------------------------------
+    def _resolve_start(self, start) -> tuple[float, float, float]:
+        if start is None or start == "docked":
+            dock = self.map.station("charging_dock")
+            return dock.docked_pose if dock and dock.docked_pose else (2.0, 2.0, 0.0)
+        if isinstance(start, str):
+            st = self.map.station(start)
+            if st is None:
+                raise GoalError(f"unknown station '{start}'")
+            return st.pose
+        return tuple(float(v) for v in start)
+
+    def _build_robot(self, pose) -> None:
+        space = self.world.space
+        space.collision_slop = 0.002
+        self.control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+        moment = pymunk.moment_for_box(ROBOT_MASS, (ROBOT_LENGTH, ROBOT_WIDTH))
+        self.body = pymunk.Body(ROBOT_MASS, moment)
+        self.body.position = self.control.position = pose[:2]
+        self.body.angle = self.control.angle = pose[2]
+        hl, hw = ROBOT_LENGTH / 2, ROBOT_WIDTH / 2
+        self.shape = pymunk.Poly(self.body, [(-hl, -hw), (hl, -hw), (hl, hw), (-hl, hw)])
+        self.shape.collision_type = CT_ROBOT
+        self.shape.friction = 0.5
+        pivot = pymunk.PivotJoint(self.control, self.body, (0, 0), (0, 0))
+        pivot.max_bias, pivot.max_force = 0.0, 1500.0
+        gear = pymunk.GearJoint(self.control, self.body, 0.0, 1.0)
+        gear.max_bias, gear.max_force = 0.0, 1500.0
+        space.add(self.control, self.body, self.shape, pivot, gear)
+        for other in (CT_STATIC, CT_OBSTACLE):
+            space.on_collision(CT_ROBOT, other, begin=self._on_contact, post_solve=self._on_depth)
+
+    def _on_contact(self, arbiter, space, data) -> None:
+        other = arbiter.shapes[1] if arbiter.shapes[0] is self.shape else arbiter.shapes[0]
+        self._contact = getattr(other, "kind", "obstacle")
+
+    def _on_depth(self, arbiter, space, data) -> None:
+        for p in arbiter.contact_point_set.points:
+            if -p.distance > self.max_penetration:
+                self.max_penetration = -p.distance
+
+    # -- events ----------------------------------------------------------------------
+    def _event(self, kind: str, message: str, severity: str = "info") -> None:
+        self._event_seq += 1
+        self._events.append(Event(self._event_seq, self.t, kind, severity, message))
+
+    def events_since(self, seq: int) -> list[Event]:
+        with self.lock:
+            return [e for e in self._events if e.seq > seq]
+
+    # -- state -----------------------------------------------------------------------
+    @property
+    def pose(self) -> tuple[float, float, float]:
+        p = self.body.position
+        return (p.x, p.y, wrap_angle(self.body.angle))
+
+    def docked(self) -> bool:
+        dock = self.map.station("charging_dock")
+        if dock is None or dock.docked_pose is None:
+            return False
+        ex, ey, eth = tracking_error(self.pose, dock.docked_pose)
+        return math.hypot(ex, ey) < 0.08 and abs(eth) < math.radians(5) and self.speed() < 0.05
+
+    def speed(self) -> float:
+        return float(math.hypot(self._v[0], self._v[1]))
+
+    def state_word(self) -> str:
+        if self.e_stopped:
+            return "e_stopped"
+        if self.fault:
+            return "fault"
+        if self.goal is not None:
+            if self.goal.blocked_since is not None:
+                return "blocked"
+            return "docking" if self.goal.current.kind == "dock" else "navigating"
+        if self.docked():
+            return "charging" if self.battery.charging else "idle"
+        return "idle"
+
+    def lamp(self) -> str:
+        state = self.state_word()
+        if state in ("e_stopped", "fault"):
+            return "red"
+        if state == "blocked" or self.conveyor.running:
+            return "yellow"
+        if state == "charging":
+            return "blue"
+        return "green_flashing" if self.speed() > 0.01 or self.goal else "green"
+
+    def snapshot(self) -> SimState:
+        with self.lock:
+            x, y, th = self.pose
+            wheels = inverse_kinematics(*self._v, self.params)
+            goal = self.goal
+            return SimState(
+                t=self.t,
+                x=x,
+                y=y,
+                theta=th,
+                vx=float(self._v[0]),
+                vy=float(self._v[1]),
+                wz=float(self._v[2]),
+                wheel_speeds=tuple(float(w) for w in wheels),
+                state=self.state_word(),
+                mode="manual" if self._teleop.until > self.t else "auto",
+                active_goal=goal.name if goal else "",
+                fault=self.fault,
+                e_stopped=self.e_stopped,
+                docked=self.docked(),
+                battery_soc=self.battery.soc,
+                battery_voltage=self.battery.voltage,
+                battery_current=self.battery.current,
+                battery_charging=self.battery.charging,
+                conveyor_loaded=self.conveyor.loaded,
+                conveyor_direction=self.conveyor.direction,
+                sensor_entry=self.conveyor.sensor_entry,
+                sensor_seated=self.conveyor.sensor_seated,
+                lamp=self.lamp(),
+                scan_ranges=self.scan_ranges.copy(),
+                scan_stamp=self.scan_stamp,
+                detected=tuple(self.detected),
+                plan=self.plan,
+                distance_remaining=goal.distance_remaining(x, y) if goal else 0.0,
+                goal_id=goal.id if goal else 0,
+                last_result=self.last_result,
+                obstacles=tuple(self.world.obstacles.values()),
+                max_penetration=self.max_penetration,
+                collisions=self.collisions,
+                event_seq=self._event_seq,
+            )
+
+    # -- commands --------------------------------------------------------------------
+    def _check_can_move(self) -> None:
+        if self.e_stopped:
+            raise GoalError("the robot is e-stopped; release the e-stop first")
+        if self.fault:
+            raise GoalError(f"the robot has a fault ({self.fault}); call /stop to acknowledge it")
+
+    def check_goal(self, x: float, y: float, theta: float) -> None:
+        """Raise GoalError if the robot could never stand at this pose."""
+        if not all(math.isfinite(v) for v in (x, y, theta)):
+            raise GoalError("goal coordinates must be finite numbers")
+        if not self.map.inside_bounds(x, y):
+            x0, y0, x1, y1 = self.map.bounds
+            raise GoalError(
+                f"goal ({x:.2f}, {y:.2f}) is outside the map (x {x0:g}..{x1:g}, y {y0:g}..{y1:g} m)"
+            )
+        hit = self.world.footprint_collides(x, y, theta, ROBOT_LENGTH, ROBOT_WIDTH, margin=0.05)
+        if hit:
+            raise GoalError(
+                f"the robot does not fit at ({x:.2f}, {y:.2f}): it would overlap a "
+                f"{hit.split(':')[0]}"
+            )
+
+    def _plan(self, start, goal_xy, extra=()) -> tuple[tuple[float, float], ...]:
+        plan = self.planner.plan(start, goal_xy, extra)
+        self.plan_ms.append(plan.ms)
+        return plan.waypoints
+
+    def goto(self, x: float, y: float, theta: float, name: str = "") -> Goal:
+        with self.lock:
+            self._check_can_move()
+            self.check_goal(x, y, theta)
+            px, py, _ = self.pose
+            try:
+                path = self._plan((px, py), (x, y))
+            except PlanningError as exc:
+                raise GoalError(f"no path to ({x:.2f}, {y:.2f}): {exc}") from None
+            leg = Leg("navigate", (x, y, wrap_angle(theta)), list(path[1:]), self.gains.v_max)
+            return self._start_goal(name or f"({x:.2f}, {y:.2f})", [leg])
+
+    def dock(self) -> Goal:
+        with self.lock:
+            self._check_can_move()
+            st = self.map.station("charging_dock")
+            if st is None or st.docked_pose is None:
+                raise GoalError("this map has no charging dock")
+            if self.docked():
+                raise GoalError("the robot is already docked")
+            legs = []
+            ex, ey, _ = tracking_error(self.pose, st.pose)
+            if math.hypot(ex, ey) > 0.05:
+                try:
+                    path = self._plan(self.pose[:2], st.pose[:2])
+                except PlanningError as exc:
+                    raise GoalError(f"no path to the dock: {exc}") from None
+                legs.append(Leg("navigate", st.pose, list(path[1:]), self.gains.v_max))
+            legs.append(Leg("dock", st.docked_pose, [st.docked_pose[:2]], 0.2, planned=False))
+            return self._start_goal("dock", legs)
+
+    def undock(self) -> Goal:
+        with self.lock:
+            self._check_can_move()
+            st = self.map.station("charging_dock")
+            if not self.docked() or st is None:
+                raise GoalError("the robot is not docked")
+            leg = Leg("undock", st.pose, [st.pose[:2]], 0.2, planned=False)
+            return self._start_goal("undock", [leg])
+
+    def _start_goal(self, name: str, legs: list[Leg]) -> Goal:
+        if self.goal is not None:
+            self._finish("canceled", f"replaced by a new goal: {name}")
+        self._teleop = _Teleop()
+        self._goal_ids += 1
+        self.goal = Goal(self._goal_ids, name, legs, self.t)
+        self._refresh_plan()
+        self._event("goal", f"goal {self._goal_ids} accepted: {name}")
+        return self.goal
+
+    def _refresh_plan(self) -> None:
+        g = self.goal
+        self.plan = tuple(g.remaining_path(*self.pose[:2])) if g else ()
+
+    def _finish(self, status: str, message: str) -> None:
+        g = self.goal
+        if g is None:
+            return
+        ex, ey, _ = tracking_error(self.pose, g.final_pose)
+        self.last_result = GoalResult(g.id, g.name, status, message, self.t, math.hypot(ex, ey))
+        self.goal = None
+        self.plan = ()
+        self._target = (0.0, 0.0, 0.0)
+        severity = "info" if status == "succeeded" else "warning"
+        self._event("goal", f"goal {g.id} {status}: {message}", severity)
+
+    def cancel(self, reason: str = "canceled by the operator") -> bool:
+        with self.lock:
+            had = self.goal is not None
+            self._finish("canceled", reason)
+            return had
+
+    def stop(self) -> str:
+        """Stop all motion, cancel the goal and acknowledge a collision fault."""
+        with self.lock:
+            had_goal = self.cancel("stopped by /stop")
+            self._teleop = _Teleop()
+            self._target = (0.0, 0.0, 0.0)
+            if self.fault:
+                self._event("fault", f"fault acknowledged: {self.fault}")
+                self.fault = ""
+            return "stopped; goal canceled" if had_goal else "stopped"
+
+    def set_cmd_vel(
+        self, vx: float, vy: float, wz: float, timeout: float = TELEOP_TIMEOUT_S
+    ) -> None:
+        """Teleop velocity in the robot frame; it lapses unless repeated within `timeout`."""
+        with self.lock:
+            self._check_can_move()
+            if self.goal is not None:
+                self.cancel("overridden by /cmd_vel")
+            self._teleop = _Teleop((float(vx), float(vy), float(wz)), self.t + timeout)
+
+    def estop(self) -> None:
+        with self.lock:
+            if not self.e_stopped:
+                self.e_stopped = True
+                self.cancel("e-stop")
+                self.conveyor.abort()
+                self._teleop = _Teleop()
+                self._v[:] = 0.0
+                self.control.velocity, self.control.angular_velocity = (0, 0), 0.0
+                self._applied = (0.0, 0.0, 0.0)
+                self._event("estop", "E-STOP engaged", "error")
+
+    def release_estop(self) -> None:
+        with self.lock:
+            if self.e_stopped:
+                self.e_stopped = False
+                self._event("estop", "e-stop released")
+
+    def conveyor_transfer(self, direction: int) -> str:
+        with self.lock:
+            self._check_can_move()
+            word = "load" if direction > 0 else "unload"
+            if self.conveyor.running:
+                raise GoalError("the conveyor is already running")
+            if self.goal is not None or self.speed() > 0.02:
+                raise GoalError(f"cannot {word} while moving")
+            st, dist = self.world.nearest_station(*self.pose[:2])
+            if st is None or st.kind != "conveyor" or dist > 0.3:
+                raise GoalError(
+                    f"cannot {word} here: not at a conveyor station "
+                    "(assembly_station, cps_storage, shipping)"
+                )
+            if direction > 0 and self.conveyor.loaded:
+                raise GoalError("the conveyor already carries a load")
+            if direction < 0 and not self.conveyor.loaded:
+                raise GoalError("the conveyor is empty: nothing to unload")
+            self.conveyor.start(direction)
+            self._event("conveyor", f"{word}ing at {st.name}")
+            return f"{word}ing at {st.name}"
+
+    def add_obstacle(self, kind: str, x: float, y: float, theta: float = 0.0):
+        with self.lock:
+            ob = self.world.add_obstacle(kind, x, y, theta)
+            self._event("world", f"{kind} {ob.id} placed at ({x:.1f}, {y:.1f})")
+            return ob
+
+    def remove_obstacle(self, obstacle_id: int):
+        with self.lock:
+            ob = self.world.remove_obstacle(obstacle_id)
+            self._event("world", f"{ob.kind} {ob.id} removed")
+            return ob
+
+    # -- time ------------------------------------------------------------------------
+    def step(self, duration: float) -> None:
+        with self.lock:
+            self._carry += duration
+            n = int(self._carry / self.dt + 1e-9)
+            self._carry -= n * self.dt
+            for _ in range(n):
+                self._substep()
+
+    def run_until(self, predicate, max_sim_s: float, chunk: float = 0.1) -> bool:
+        end = self.t + max_sim_s
+        while self.t < end:
+            if predicate():
+                return True
+            self.step(chunk)
+        return predicate()
+
+    def run_goal(self, max_sim_s: float = 900.0) -> GoalResult | None:
+        """Step until the active goal ends (fast mode); returns its result."""
+        self.run_until(lambda: self.goal is None, max_sim_s)
+        if self.goal is not None:
+            with self.lock:
+                self._finish("aborted", f"timed out after {max_sim_s:.0f} s")
+        return self.last_result
+
+    def _substep(self) -> None:
+        self._tick += 1
+        self.t = self._tick * self.dt
+        if self._tick % self._control_every == 0:
+            self._control(self.dt * self._control_every)
+        if self.lidar_enabled and self._tick % self._lidar_every == 0:
+            self._scan()
+            if self.goal is not None:
+                self._check_path()
+        v = self._v
+        if self.e_stopped or self.fault:
+            v[:] = 0.0
+        else:
+            tx, ty, tw = self._target
+            dl, da = A_LIN * self.dt, A_ANG * self.dt
+            v[0] += min(dl, max(-dl, tx - v[0]))
+            v[1] += min(dl, max(-dl, ty - v[1]))
+            v[2] += min(da, max(-da, tw - v[2]))
+        th = self.body.angle
+        c, s = math.cos(th), math.sin(th)
+        command = (c * v[0] - s * v[1], s * v[0] + c * v[1], v[2])
+        if command != self._applied:  # pymunk's attribute setters cost more than the check
+            self._applied = command
+            self.control.velocity = command[:2]
+            self.control.angular_velocity = command[2]
+        self.world.space.step(self.dt)
+        if self._contact is not None:
+            self._on_collision(self._contact)
+
+    def _on_collision(self, kind: str) -> None:
+        self._contact = None
+        if self.fault or self.speed() < 0.05 and self.goal is None and self._teleop.until < self.t:
+            return
+        self.collisions += 1
+        self.fault = f"collision with {kind.split(':')[0]}"
+        self._v[:] = 0.0
+        self._target = (0.0, 0.0, 0.0)
+        self._teleop = _Teleop()
+        self.control.velocity, self.control.angular_velocity = (0, 0), 0.0
+        self._applied = (0.0, 0.0, 0.0)
+        self._finish("aborted", self.fault)
+        self._event("fault", f"{self.fault} at ({self.pose[0]:.2f}, {self.pose[1]:.2f})", "error")
+
+    # -- 20 Hz: control, battery, conveyor -----------------------------------------------
+    def _control(self, dt: float) -> None:
+        if self.goal is not None:
+            self._target = self._navigate()
+        elif self._teleop.until >= self.t:
+            vx, vy, wz = self._teleop.v
+            self._target = achievable_velocity(vx, vy, wz, self.params)
+        else:
+            self._target = (0.0, 0.0, 0.0)
+        w = inverse_kinematics(*self._v, self.params)
+        # rolling resistance at each wheel (0.34 N·m) plus idle draw of a turning motor, 75 % eff.
+        moving = np.abs(w) > 0.05
+        self._motor_power = float((0.34 * np.abs(w)).sum() + 2.0 * moving.sum()) / 0.75
+        self.battery.update(dt, self._motor_power, on_charger=self.docked())
+        done = self.conveyor.update(dt)
+        if done:
+            self._event("conveyor", f"{done}")
+
+    def _navigate(self) -> tuple[float, float, float]:
+        g = self.goal
+        leg = g.current
+        pose = self.pose
+        if g.blocked_since is not None:
+            return (0.0, 0.0, 0.0)
+        # advance past waypoints already reached
+        while (
+            leg.waypoint < len(leg.path) - 1
+            and math.dist(pose[:2], leg.path[leg.waypoint]) < self.gains.waypoint_radius
+        ):
+            leg.waypoint += 1
+        if arrived(pose, leg.target, self.gains):
+            if g.leg + 1 < len(g.legs):
+                g.leg += 1
+                self._refresh_plan()
+                return (0.0, 0.0, 0.0)
+            self._finish("succeeded", f"reached {g.name}")
+            return (0.0, 0.0, 0.0)
+        final = leg.waypoint == len(leg.path) - 1
+        gains = (
+            self.gains
+            if leg.v_max >= self.gains.v_max
+            else ControllerGains(v_max=leg.v_max, w_max=0.3)
+        )
+        remaining = path_length([pose[:2]] + leg.path[leg.waypoint :])
+        return goto_pose_command(
+            pose, leg.path[leg.waypoint], leg.target[2], remaining, final, gains
+        )
+
+    # -- 10 Hz: lidar, obstacles, re-planning -----------------------------------------------
+    def _scan(self) -> None:
+        t0 = time.perf_counter()
+        a, b, owner = self.world.edges()
+        x, y, th = self.pose
+        ranges, hit = lidar.cast(x, y, th, a, b, self.lidar_spec)
+        self.lidar_ms.append((time.perf_counter() - t0) * 1e3)
+        self.scan_ranges = lidar.add_noise(ranges, self.rng, self.lidar_spec)
+        self.scan_stamp = self.t
+        unmapped = (hit >= 0) & (owner[np.maximum(hit, 0)] >= 0)
+        self.detected = detect(self.scan_ranges, unmapped, self._beam_angles, (x, y, th))
+
+    def _check_path(self) -> None:
+        g = self.goal
+        if not g.current.planned:
+            return
+        x, y, _ = self.pose
+        for ob in self.detected:
+            if ob.distance < 12.0:
+                bx0, by0, bx1, by1 = ob.bbox
+                g.remember((bx0 - 0.15, by0 - 0.15, bx1 + 0.15, by1 + 0.15))
+        if not g.known_boxes:
+            return
+        pts = np.array(g.remaining_path(x, y))
+        boxes = np.array(g.known_boxes) + np.array([-1, -1, 1, 1]) * INFLATION
+        cut = segments_hit_boxes(pts[:-1], pts[1:], boxes).any()
+        if not cut and g.blocked_since is None:
+            return
+        leg = g.current
+        try:
+            path = self._plan((x, y), leg.target[:2], g.known_boxes)
+        except PlanningError:
+            if g.blocked_since is None:
+                g.blocked_since = self.t
+                self._event("nav", f"path to {g.name} blocked; waiting", "warning")
+            elif self.t - g.blocked_since > BLOCKED_GIVE_UP_S:
+                self._finish("aborted", f"path blocked for {BLOCKED_GIVE_UP_S:.0f} s")
+            return
+        if g.blocked_since is not None:
+            self._event("nav", f"path to {g.name} clear again")
+        g.blocked_since = None
+        g.replans += 1
+        leg.path, leg.waypoint = list(path[1:]), 0
+        self._refresh_plan()

@@ -1,0 +1,149 @@
+"""The warehouse as a pymunk space: fixed geometry, movable obstacles, and their lidar edges."""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pymunk
+
+from astiop.sim.geometry import circle_polygon, oriented_box, polygon_edges, rect_edges
+from astiop.sim.warehouse_map import WarehouseMap
+
+CT_ROBOT, CT_STATIC, CT_OBSTACLE = 1, 2, 3
+
+# kind -> (length, width) of a box, or (diameter, 0) of a round obstacle
+OBSTACLE_SIZES: dict[str, tuple[float, float]] = {
+    "pallet": (1.2, 0.8),
+    "person": (0.6, 0.0),
+    "forklift": (2.4, 1.2),
+    "box": (0.6, 0.6),
+}
+
+
+class WorldError(ValueError):
+    """A request about the world's contents is invalid."""
+
+
+@dataclass(frozen=True)
+class Obstacle:
+    id: int
+    kind: str
+    x: float
+    y: float
+    theta: float
+
+    def outline(self) -> np.ndarray:
+        length, width = OBSTACLE_SIZES[self.kind]
+        if width == 0.0:
+            return circle_polygon(self.x, self.y, length / 2)
+        return oriented_box(self.x, self.y, self.theta, length, width)
+
+    def aabb(self) -> tuple[float, float, float, float]:
+        pts = self.outline()
+        return (*pts.min(axis=0), *pts.max(axis=0))
+
+
+class World:
+    def __init__(self, warehouse: WarehouseMap):
+        self.map = warehouse
+        self.space = pymunk.Space()
+        self.space.iterations = 20
+        self.static_kinds: list[str] = []
+        a_list, b_list = [], []
+        for kind, rect in warehouse.static_rects:
+            x0, y0, x1, y1 = rect
+            shape = pymunk.Poly(self.space.static_body, [(x0, y0), (x1, y0), (x1, y1), (x0, y1)])
+            shape.collision_type = CT_STATIC
+            shape.friction = 0.6
+            shape.kind = kind
+            self.space.add(shape)
+            a, b = rect_edges(rect)
+            a_list.append(a)
+            b_list.append(b)
+            self.static_kinds += [kind] * 4
+        self._static_a = np.concatenate(a_list)
+        self._static_b = np.concatenate(b_list)
+        self.static_boxes = np.array([r for _, r in warehouse.static_rects], dtype=float)
+        self.obstacles: dict[int, Obstacle] = {}
+        self._obstacle_bodies: dict[int, tuple[pymunk.Body, pymunk.Shape]] = {}
+        self._ids = itertools.count(1)
+        self._edges_cache: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    @property
+    def n_static_edges(self) -> int:
+        return len(self._static_a)
+
+    def add_obstacle(self, kind: str, x: float, y: float, theta: float = 0.0) -> Obstacle:
+        if kind not in OBSTACLE_SIZES:
+            raise WorldError(f"unknown obstacle kind '{kind}' (one of {', '.join(OBSTACLE_SIZES)})")
+        if not self.map.inside_bounds(x, y):
+            raise WorldError(f"({x:.2f}, {y:.2f}) is outside the warehouse")
+        obstacle = Obstacle(next(self._ids), kind, x, y, theta)
+        body = pymunk.Body(body_type=pymunk.Body.STATIC)
+        length, width = OBSTACLE_SIZES[kind]
+        if width == 0.0:
+            body.position = (x, y)
+            shape: pymunk.Shape = pymunk.Circle(body, length / 2)
+        else:
+            shape = pymunk.Poly(body, [tuple(p) for p in oriented_box(0, 0, 0, length, width)])
+            body.position, body.angle = (x, y), theta
+        shape.collision_type = CT_OBSTACLE
+        shape.kind = kind
+        self.space.add(body, shape)
+        self.obstacles[obstacle.id] = obstacle
+        self._obstacle_bodies[obstacle.id] = (body, shape)
+        self._edges_cache = None
+        return obstacle
+
+    def remove_obstacle(self, obstacle_id: int) -> Obstacle:
+        if obstacle_id not in self.obstacles:
+            raise WorldError(f"no obstacle with id {obstacle_id}")
+        body, shape = self._obstacle_bodies.pop(obstacle_id)
+        self.space.remove(body, shape)
+        self._edges_cache = None
+        return self.obstacles.pop(obstacle_id)
+
+    def clear_obstacles(self) -> None:
+        for oid in list(self.obstacles):
+            self.remove_obstacle(oid)
+
+    def edges(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """All edges the lidar sees, with an owner per edge: -1 fixed geometry, else obstacle id."""
+        if self._edges_cache is None:
+            a_parts, b_parts = [self._static_a], [self._static_b]
+            owners = [np.full(len(self._static_a), -1, dtype=np.int64)]
+            for ob in self.obstacles.values():
+                a, b = polygon_edges(ob.outline())
+                a_parts.append(a)
+                b_parts.append(b)
+                owners.append(np.full(len(a), ob.id, dtype=np.int64))
+            self._edges_cache = (
+                np.concatenate(a_parts),
+                np.concatenate(b_parts),
+                np.concatenate(owners),
+            )
+        return self._edges_cache
+
+    def footprint_collides(
+        self, x: float, y: float, theta: float, length: float, width: float, margin: float = 0.0
+    ) -> str | None:
+        """The kind of the first thing a robot footprint at this pose would overlap, if any."""
+        body = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+        body.position, body.angle = (x, y), theta
+        box = oriented_box(0, 0, 0, length + 2 * margin, width + 2 * margin)
+        probe = pymunk.Poly(body, [tuple(p) for p in box])
+        for hit in self.space.shape_query(probe):
+            if hit.shape.collision_type in (CT_STATIC, CT_OBSTACLE):
+                return getattr(hit.shape, "kind", "obstacle")
+        return None
+
+    def nearest_station(self, x: float, y: float):
+        best, best_d = None, math.inf
+        for st in self.map.stations:
+            d = math.hypot(st.pose[0] - x, st.pose[1] - y)
+            if d < best_d:
+                best, best_d = st, d
+        return best, best_d
