@@ -1,0 +1,80 @@
+"""`astiop exec`: one ros2 command through validation and safety, on the sim or the robot."""
+
+from __future__ import annotations
+
+import sys
+
+import typer
+
+from astiop.cli.common import fail, print_json, state
+from astiop.robot.output import BackendError
+from astiop.robot.validation import Checked
+
+
+def exec_command(
+    ctx: typer.Context,
+    command: str = typer.Argument(..., help='One ros2 command, quoted: "ros2 topic echo /odom"'),
+    dry_run: bool = typer.Option(False, "--dry-run", help="Validate only; run nothing."),
+    yes: bool = typer.Option(False, "--yes", "-y", help="Do not ask before moving the robot."),
+    as_json: bool = typer.Option(False, "--json"),
+    settle: bool = typer.Option(
+        True, help="On the sim, let a started goal finish before exiting (fast mode)."
+    ),
+) -> None:
+    """Validate and run one `ros2` command (the subset the agent uses) on the robot."""
+    from astiop.robot.factory import make_robot_graph
+
+    st = state(ctx)
+    try:
+        graph = make_robot_graph(st.settings, st.store)
+    except BackendError as exc:
+        fail(str(exc))
+    review = graph.review(command)
+    if dry_run:
+        c = review.checked
+        data = {
+            "command": command,
+            "valid": c.valid and review.allowed,
+            "reason": review.reason or c.reason,
+            "kind": c.kind,
+            "executed": False,
+            "output": "",
+            "values": c.message,
+        }
+        if as_json:
+            print_json(data)
+        else:
+            typer.echo(
+                f"{'valid' if data['valid'] else 'rejected'} ({c.kind})"
+                + (f": {data['reason']}" if data["reason"] else "")
+            )
+        raise typer.Exit(0 if data["valid"] else 2)
+
+    def ask(checked: Checked) -> bool:
+        return typer.confirm(f"run '{checked.command.display()}' (it moves the robot)?")
+
+    # no terminal to ask on and no --yes: the graph refuses actuating commands
+    confirm = (lambda _c: True) if yes else (ask if sys.stdin.isatty() else None)
+    result = graph.run(command, confirm=confirm)
+    if result.executed and settle and getattr(graph.backend, "sim", None) is not None:
+        sim = graph.backend.sim
+        if sim.goal is not None:
+            sim.run_goal(900.0)
+    if as_json:
+        print_json(result.as_json())
+    else:
+        if result.output:
+            typer.echo(result.output, nl=False)
+        for note in result.notes:
+            typer.echo(f"note: {note}", err=True)
+    if not result.executed:
+        reason = result.reason
+        if reason.startswith("this command moves") and not yes:
+            reason += " (pass --yes)"
+        if not as_json:
+            fail(reason)
+        raise typer.Exit(2)
+    if result.error:
+        if not as_json:
+            typer.echo(f"astiop: {result.error}", err=True)
+        raise typer.Exit(1)

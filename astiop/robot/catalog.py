@@ -1,0 +1,237 @@
+"""The ASTIbot's ROS 2 graph: topics, services, actions, nodes and parameters (DESIGN.md §4).
+
+A contract: prompts, the rules baseline, the benchmark and the tests all use these names.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+
+@dataclass(frozen=True)
+class TopicSpec:
+    name: str
+    type: str
+    rate_hz: float  # 0: on change only
+    publisher: str  # node, '' when the robot only listens
+    subscriber: str = ""
+    description: str = ""
+
+    @property
+    def actuating(self) -> bool:
+        return bool(self.subscriber) and not self.publisher
+
+
+@dataclass(frozen=True)
+class ServiceSpec:
+    name: str
+    type: str
+    node: str
+    actuating: bool
+    description: str = ""
+    needs_confirmation: bool = True
+
+
+@dataclass(frozen=True)
+class ActionSpec:
+    name: str
+    type: str
+    node: str
+    description: str = ""
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    node: str
+    name: str
+    value: float | int | str | bool
+    writable: bool = False
+    minimum: float | None = None
+    maximum: float | None = None
+    description: str = ""
+
+
+@dataclass
+class Catalog:
+    topics: dict[str, TopicSpec] = field(default_factory=dict)
+    services: dict[str, ServiceSpec] = field(default_factory=dict)
+    actions: dict[str, ActionSpec] = field(default_factory=dict)
+    nodes: tuple[str, ...] = ()
+    params: dict[tuple[str, str], ParamSpec] = field(default_factory=dict)
+
+    def node_info(self, node: str) -> dict[str, list[tuple[str, str]]]:
+        return {
+            "Subscribers": [(t.name, t.type) for t in self.topics.values() if t.subscriber == node],
+            "Publishers": [(t.name, t.type) for t in self.topics.values() if t.publisher == node],
+            "Service Servers": [(s.name, s.type) for s in self.services.values() if s.node == node],
+            "Action Servers": [(a.name, a.type) for a in self.actions.values() if a.node == node],
+        }
+
+
+_TOPICS = [
+    TopicSpec(
+        "/cmd_vel",
+        "geometry_msgs/msg/Twist",
+        0,
+        "",
+        "/astibot_base",
+        "velocity command in the robot frame; clamped by safety",
+    ),
+    TopicSpec(
+        "/odom",
+        "nav_msgs/msg/Odometry",
+        50,
+        "/astibot_base",
+        "",
+        "wheel odometry: pose and velocity",
+    ),
+    TopicSpec(
+        "/robot_pose",
+        "geometry_msgs/msg/Pose2D",
+        10,
+        "/navigator",
+        "",
+        "pose in the map frame: x, y in m, theta in rad",
+    ),
+    TopicSpec(
+        "/battery_status",
+        "sensor_msgs/msg/BatteryState",
+        1,
+        "/battery_monitor",
+        "",
+        "voltage, current, charge; percentage is 0-1",
+    ),
+    TopicSpec(
+        "/robot_status",
+        "astiop_msgs/msg/RobotStatus",
+        2,
+        "/astibot_base",
+        "",
+        "state (idle, navigating, docking, charging, blocked, e_stopped, fault), mode, "
+        "goal, fault, speed",
+    ),
+    TopicSpec(
+        "/scan", "sensor_msgs/msg/LaserScan", 10, "/lidar_driver", "", "360 beams, 25 m range"
+    ),
+    TopicSpec(
+        "/obstacles",
+        "astiop_msgs/msg/ObstacleArray",
+        2,
+        "/obstacle_detector",
+        "",
+        "obstacles seen in the scan: count, kind, distance, bearing, position",
+    ),
+    TopicSpec(
+        "/diagnostics",
+        "diagnostic_msgs/msg/DiagnosticArray",
+        1,
+        "/astibot_base",
+        "",
+        "health of motors, lidar, battery, conveyor",
+    ),
+    TopicSpec(
+        "/conveyor/status",
+        "astiop_msgs/msg/ConveyorStatus",
+        2,
+        "/conveyor_plc",
+        "",
+        "belt running, direction, loaded, both load sensors, lamp",
+    ),
+    TopicSpec(
+        "/plan", "nav_msgs/msg/Path", 1, "/navigator", "", "the global path while navigating"
+    ),
+    TopicSpec("/tf", "tf2_msgs/msg/TFMessage", 50, "/astibot_base", "", "map -> odom -> base_link"),
+    TopicSpec(
+        "/tf_static", "tf2_msgs/msg/TFMessage", 0, "/astibot_base", "", "base_link -> laser, camera"
+    ),
+]
+
+_SERVICES = [
+    ServiceSpec(
+        "/goto_position",
+        "astiop_msgs/srv/GotoPosition",
+        "/navigator",
+        True,
+        "go to a named location {name: 'shipping'} or to {x, y, theta}",
+    ),
+    ServiceSpec(
+        "/stop",
+        "std_srvs/srv/Trigger",
+        "/navigator",
+        True,
+        "stop motion and cancel the goal; acknowledges a collision fault",
+        needs_confirmation=False,
+    ),
+    ServiceSpec(
+        "/dock", "std_srvs/srv/Trigger", "/navigator", True, "drive onto the charging dock"
+    ),
+    ServiceSpec("/undock", "std_srvs/srv/Trigger", "/navigator", True, "back off the dock"),
+    ServiceSpec(
+        "/conveyor/load",
+        "std_srvs/srv/Trigger",
+        "/conveyor_plc",
+        True,
+        "take a load on, only at a conveyor station",
+    ),
+    ServiceSpec(
+        "/conveyor/unload",
+        "std_srvs/srv/Trigger",
+        "/conveyor_plc",
+        True,
+        "hand the load over, only at a conveyor station",
+    ),
+    ServiceSpec(
+        "/save_location",
+        "astiop_msgs/srv/SaveLocation",
+        "/astiop_agent",
+        True,
+        "name the robot's current pose",
+    ),
+    ServiceSpec(
+        "/list_locations",
+        "astiop_msgs/srv/ListLocations",
+        "/astiop_agent",
+        False,
+        "names and poses of the named locations",
+    ),
+]
+
+_ACTIONS = [
+    ActionSpec(
+        "/navigate_to_pose",
+        "nav2_msgs/action/NavigateToPose",
+        "/navigator",
+        "drive to a pose; feedback: distance remaining",
+    ),
+]
+
+_NODES = (
+    "/astibot_base",
+    "/lidar_driver",
+    "/battery_monitor",
+    "/navigator",
+    "/obstacle_detector",
+    "/conveyor_plc",
+    "/astiop_agent",
+)
+
+_PARAMS = [
+    ParamSpec("/astibot_base", "max_linear_speed", 0.8, True, 0.05, 1.4, "m/s"),
+    ParamSpec("/astibot_base", "max_angular_speed", 1.0, True, 0.1, 3.0, "rad/s"),
+    ParamSpec("/astibot_base", "wheel_radius", 0.0762, description="m"),
+    ParamSpec("/lidar_driver", "frequency", 10.0, description="Hz"),
+    ParamSpec("/lidar_driver", "range_max", 25.0, description="m"),
+    ParamSpec("/navigator", "goal_tolerance", 0.03, description="m"),
+    ParamSpec("/navigator", "inflation_radius", 0.72, description="m"),
+    ParamSpec("/battery_monitor", "capacity_ah", 22.0),
+]
+
+
+def astibot_catalog() -> Catalog:
+    return Catalog(
+        topics={t.name: t for t in _TOPICS},
+        services={s.name: s for s in _SERVICES},
+        actions={a.name: a for a in _ACTIONS},
+        nodes=_NODES,
+        params={(p.node, p.name): p for p in _PARAMS},
+    )

@@ -1,0 +1,39 @@
+"""Build the robot graph the settings ask for: the simulator (default) or the real robot."""
+
+from __future__ import annotations
+
+from astiop.config import Settings
+from astiop.robot.graph import RobotGraph
+from astiop.robot.safety import SafetyPolicy
+from astiop.sim.simulator import Simulator
+from astiop.store import Store
+
+
+def make_safety(settings: Settings, store: Store | None) -> SafetyPolicy:
+    bounds = store.warehouse.bounds if store else (0.0, 0.0, 40.0, 25.0)
+    return SafetyPolicy(
+        max_linear=settings.robot.max_linear_speed,
+        max_angular=settings.robot.max_angular_speed,
+        geofence=bounds,
+        confirm_actuation=settings.robot.confirm_actuation,
+    )
+
+
+def make_sim_graph(
+    settings: Settings, store: Store | None, *, realtime: bool = False, sim: Simulator | None = None
+) -> RobotGraph:
+    from astiop.robot.sim_backend import SimBackend
+
+    sim = sim or Simulator(seed=settings.sim.seed, v_max=settings.robot.max_linear_speed)
+    return RobotGraph(SimBackend(sim, store, realtime=realtime), make_safety(settings, store))
+
+
+def make_robot_graph(
+    settings: Settings, store: Store | None, *, realtime: bool = False
+) -> RobotGraph:
+    if settings.robot.backend == "ros2":
+        from astiop.robot.ros2_backend import Ros2Backend
+
+        backend = Ros2Backend(settings.robot.ros2_executable, settings.robot.ros2_timeout_s)
+        return RobotGraph(backend, make_safety(settings, store), settings.robot.ros2_timeout_s)
+    return make_sim_graph(settings, store, realtime=realtime)

@@ -1,0 +1,65 @@
+"""Text as the `ros2` CLI prints it, and the result record of one command."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import yaml
+
+TRUNCATE = 128
+
+
+class BackendError(Exception):
+    """The command was valid but running it failed (timeout, no message, process error)."""
+
+
+@dataclass
+class Execution:
+    command: str
+    valid: bool
+    reason: str = ""
+    kind: str = "read"
+    executed: bool = False
+    output: str = ""
+    values: Any = None
+    notes: list[str] = field(default_factory=list)
+    error: str = ""
+    duration_s: float = 0.0
+
+    def as_json(self) -> dict[str, Any]:
+        keys = ("command", "valid", "reason", "kind", "executed", "output", "values")
+        data = {k: v for k, v in asdict(self).items() if k in keys}
+        if self.notes:
+            data["notes"] = self.notes
+        if self.error:
+            data["error"] = self.error
+        return data
+
+
+def _prepare(value: Any, no_arr: bool, key: str = "") -> Any:
+    if isinstance(value, dict):
+        return {k: _prepare(v, no_arr, k) for k, v in value.items()}
+    if isinstance(value, list):
+        if no_arr and value and not isinstance(value[0], dict):
+            kind = "double" if isinstance(value[0], float) else type(value[0]).__name__
+            return f"<sequence type: {kind}, length: {len(value)}>"
+        items = [_prepare(v, no_arr) for v in value[:TRUNCATE]]
+        return items + ["..."] if len(value) > TRUNCATE else items
+    if isinstance(value, float) and math.isnan(value):
+        return float("nan")
+    return value
+
+
+def echo_yaml(message: dict[str, Any], no_arr: bool = False) -> str:
+    body = yaml.safe_dump(
+        _prepare(message, no_arr), sort_keys=False, default_flow_style=False, width=1000
+    )
+    return body + "---\n"
+
+
+def indent_yaml(message: dict[str, Any], spaces: int = 4) -> str:
+    text = yaml.safe_dump(message, sort_keys=False, default_flow_style=False, width=1000)
+    pad = " " * spaces
+    return "".join(pad + line + "\n" for line in text.splitlines())

@@ -1,0 +1,99 @@
+"""Safety in code, on by default: speed limits, a geofence, the e-stop, confirmation."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+from astiop.robot.validation import Checked
+
+# Services that only ever make the robot safer: never held by the e-stop, never confirmed.
+ALWAYS_ALLOWED = {"/stop"}
+
+
+@dataclass(frozen=True)
+class Review:
+    allowed: bool
+    reason: str
+    checked: Checked  # possibly with clamped values and notes
+    needs_confirmation: bool
+
+
+@dataclass
+class SafetyPolicy:
+    max_linear: float = 0.8
+    max_angular: float = 1.0
+    geofence: tuple[float, float, float, float] = (0.0, 0.0, 40.0, 25.0)
+    geofence_margin: float = 0.5
+    confirm_actuation: bool = True
+
+    def inside_geofence(self, x: float, y: float) -> bool:
+        x0, y0, x1, y1 = self.geofence
+        m = self.geofence_margin
+        return x0 + m <= x <= x1 - m and y0 + m <= y <= y1 - m
+
+    def _fence_reason(self, x: float, y: float) -> str:
+        x0, y0, x1, y1 = self.geofence
+        m = self.geofence_margin
+        return (
+            f"goal ({x:.2f}, {y:.2f}) is outside the geofence "
+            f"(x {x0 + m:g}..{x1 - m:g}, y {y0 + m:g}..{y1 - m:g} m)"
+        )
+
+    def review(self, checked: Checked, e_stopped: bool) -> Review:
+        if not checked.valid or checked.kind != "actuate":
+            return Review(checked.valid, checked.reason, checked, False)
+        cmd = checked.command
+        name = cmd.name or ""
+        if name in ALWAYS_ALLOWED:
+            return Review(True, "", checked, False)
+        if e_stopped:
+            return Review(
+                False,
+                "the E-STOP is engaged: no motion command runs until the operator releases it",
+                checked,
+                False,
+            )
+        msg = checked.message or {}
+        notes: list[str] = list(checked.notes)
+        if cmd.key == ("topic", "pub") and name == "/cmd_vel":
+            msg, notes = self._clamp_twist(msg, notes)
+        elif cmd.key == ("service", "call") and name == "/goto_position" and not msg.get("name"):
+            if not self.inside_geofence(msg["x"], msg["y"]):
+                return Review(False, self._fence_reason(msg["x"], msg["y"]), checked, False)
+        elif cmd.key == ("action", "send_goal"):
+            pose = msg["pose"]
+            frame = pose["header"]["frame_id"]
+            if frame not in ("", "map"):
+                return Review(
+                    False, f"goals must be in the map frame, not '{frame}'", checked, False
+                )
+            p = pose["pose"]["position"]
+            if not self.inside_geofence(p["x"], p["y"]):
+                return Review(False, self._fence_reason(p["x"], p["y"]), checked, False)
+        elif cmd.key == ("param", "set") and cmd.args.get("param") in (
+            "max_linear_speed",
+            "max_angular_speed",
+        ):
+            limit = 1.4 if cmd.args["param"] == "max_linear_speed" else 3.0
+            if msg["value"] > limit:
+                return Review(False, f"{cmd.args['param']} may not exceed {limit}", checked, False)
+        out = replace(checked, message=msg, notes=tuple(notes))
+        return Review(True, "", out, self.confirm_actuation)
+
+    def _clamp_twist(self, msg: dict, notes: list[str]) -> tuple[dict, list[str]]:
+        lin, ang = dict(msg["linear"]), dict(msg["angular"])
+        if lin["z"] or ang["x"] or ang["y"]:
+            notes.append("a ground robot ignores linear.z, angular.x and angular.y: set to 0")
+            lin["z"] = ang["x"] = ang["y"] = 0.0
+        speed = math.hypot(lin["x"], lin["y"])
+        if speed > self.max_linear:
+            s = self.max_linear / speed
+            notes.append(f"linear speed clamped {speed:.2f} -> {self.max_linear:.2f} m/s")
+            lin["x"], lin["y"] = lin["x"] * s, lin["y"] * s
+        if abs(ang["z"]) > self.max_angular:
+            notes.append(
+                f"angular speed clamped {abs(ang['z']):.2f} -> {self.max_angular:.2f} rad/s"
+            )
+            ang["z"] = math.copysign(self.max_angular, ang["z"])
+        return {"linear": lin, "angular": ang}, notes

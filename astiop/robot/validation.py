@@ -1,0 +1,145 @@
+"""Before anything runs: the command parses, names exist, types match, values fit the fields."""
+
+from __future__ import annotations
+
+import difflib
+from dataclasses import dataclass, field
+from typing import Any
+
+from astiop.robot.catalog import Catalog
+from astiop.robot.grammar import CommandSyntaxError, Ros2Command, parse
+from astiop.robot.interfaces import InterfaceError, fill, known_type, normalize_type
+
+MAX_PUBLISH_S = 30.0
+
+
+@dataclass(frozen=True)
+class Checked:
+    text: str
+    command: Ros2Command | None
+    valid: bool
+    reason: str = ""
+    kind: str = "read"  # read | actuate
+    type: str | None = None  # the resolved interface type, where one applies
+    message: dict[str, Any] | None = None  # checked values with defaults filled
+    notes: tuple[str, ...] = field(default_factory=tuple)
+
+
+def _suggest(name: str, known) -> str:
+    close = difflib.get_close_matches(name, list(known), n=1, cutoff=0.5)
+    return f"; did you mean {close[0]}?" if close else ""
+
+
+def _check_type(given: str | None, expected: str, what: str) -> None:
+    if given and normalize_type(given) != expected:
+        raise InterfaceError(f"{what} has type {expected}, not {given}")
+
+
+def validate(text: str, catalog: Catalog) -> Checked:
+    try:
+        cmd = parse(text)
+    except CommandSyntaxError as exc:
+        return Checked(text, None, False, str(exc))
+    try:
+        return _validate(cmd, catalog)
+    except (InterfaceError, CommandSyntaxError) as exc:
+        return Checked(text, cmd, False, str(exc))
+
+
+def _topic(cmd: Ros2Command, catalog: Catalog):
+    spec = catalog.topics.get(cmd.name)
+    if spec is None:
+        raise InterfaceError(
+            f"there is no topic {cmd.name} on this robot"
+            + _suggest(cmd.name, catalog.topics)
+            + " (ros2 topic list shows them)"
+        )
+    return spec
+
+
+def _validate(cmd: Ros2Command, catalog: Catalog) -> Checked:
+    key, text = cmd.key, cmd.text
+    if key in (("topic", "info"), ("topic", "type"), ("topic", "hz"), ("topic", "echo")):
+        spec = _topic(cmd, catalog)
+        _check_type(cmd.args.get("type"), spec.type, spec.name)
+        return Checked(text, cmd, True, type=spec.type)
+    if key == ("topic", "pub"):
+        spec = _topic(cmd, catalog)
+        if not spec.subscriber:
+            raise InterfaceError(
+                f"nothing on the robot listens to {spec.name}; the only topic "
+                "you may publish to is /cmd_vel"
+            )
+        _check_type(cmd.args["type"], spec.type, spec.name)
+        if "once" not in cmd.flags and "times" not in cmd.options:
+            raise InterfaceError("add --once or -t TIMES: astiop does not publish forever")
+        rate = cmd.options.get("rate", 1.0)
+        times = 1 if "once" in cmd.flags else cmd.options["times"]
+        if rate <= 0 or rate > 50:
+            raise InterfaceError(f"-r must be within 0..50 Hz, got {rate}")
+        if times < 1 or (times - 1) / rate > MAX_PUBLISH_S:
+            raise InterfaceError(
+                f"-t {times} at {rate:g} Hz would publish for longer than {MAX_PUBLISH_S:g} s"
+            )
+        msg = fill(spec.type, cmd.args.get("values"))
+        return Checked(text, cmd, True, kind="actuate", type=spec.type, message=msg)
+    if key in (("service", "type"), ("service", "call")):
+        spec = catalog.services.get(cmd.name)
+        if spec is None:
+            raise InterfaceError(
+                f"there is no service {cmd.name} on this robot"
+                + _suggest(cmd.name, catalog.services)
+                + " (ros2 service list shows them)"
+            )
+        if key == ("service", "type"):
+            return Checked(text, cmd, True, type=spec.type)
+        _check_type(cmd.args.get("type"), spec.type, spec.name)
+        if not known_type(spec.type):
+            raise InterfaceError(f"astiop cannot check requests of type {spec.type}")
+        msg = fill(spec.type, cmd.args.get("values"), part=0)
+        kind = "actuate" if spec.actuating else "read"
+        return Checked(text, cmd, True, kind=kind, type=spec.type, message=msg)
+    if key in (("action", "info"), ("action", "send_goal")):
+        spec = catalog.actions.get(cmd.name)
+        if spec is None:
+            raise InterfaceError(
+                f"there is no action {cmd.name} on this robot" + _suggest(cmd.name, catalog.actions)
+            )
+        if key == ("action", "info"):
+            return Checked(text, cmd, True, type=spec.type)
+        _check_type(cmd.args["type"], spec.type, spec.name)
+        msg = fill(spec.type, cmd.args.get("values"), part=0)
+        return Checked(text, cmd, True, kind="actuate", type=spec.type, message=msg)
+    if key == ("node", "info") and cmd.name not in catalog.nodes:
+        raise InterfaceError(f"there is no node {cmd.name}" + _suggest(cmd.name, catalog.nodes))
+    if key == ("interface", "show") and not known_type(cmd.args["type"]):
+        raise InterfaceError(f"unknown interface type {cmd.args['type']}")
+    if cmd.verb == "param":
+        return _validate_param(cmd, catalog)
+    return Checked(text, cmd, True)
+
+
+def _validate_param(cmd: Ros2Command, catalog: Catalog) -> Checked:
+    node = cmd.args.get("node")
+    if node and node not in catalog.nodes:
+        raise InterfaceError(f"there is no node {node}" + _suggest(node, catalog.nodes))
+    if cmd.sub == "list":
+        return Checked(cmd.text, cmd, True)
+    spec = catalog.params.get((node, cmd.args["param"]))
+    if spec is None:
+        names = [p for n, p in catalog.params if n == node]
+        raise InterfaceError(
+            f"node {node} has no parameter '{cmd.args['param']}'"
+            + (f" (it has: {', '.join(names)})" if names else "")
+        )
+    if cmd.sub == "get":
+        return Checked(cmd.text, cmd, True)
+    if not spec.writable:
+        raise InterfaceError(f"parameter {spec.name} of {node} is read-only")
+    try:
+        value = float(cmd.args["value"])
+    except ValueError:
+        raise InterfaceError(f"{spec.name} takes a number, got '{cmd.args['value']}'") from None
+    if not (spec.minimum <= value <= spec.maximum):
+        raise InterfaceError(f"{spec.name} must be within {spec.minimum}..{spec.maximum}")
+    return Checked(cmd.text, cmd, True, kind="actuate", message={"value": value})

@@ -1,0 +1,370 @@
+"""The robot graph: every catalog entry, valid and invalid; nothing rejected ever runs."""
+
+import contextlib
+import math
+import os
+import stat
+import sys
+import textwrap
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from astiop.robot.catalog import astibot_catalog
+from astiop.robot.grammar import CommandSyntaxError, parse
+from astiop.robot.graph import RobotGraph
+from astiop.robot.interfaces import interface_show
+from astiop.robot.safety import SafetyPolicy
+from astiop.robot.sim_backend import SimBackend
+from astiop.robot.validation import validate
+from astiop.sim.simulator import Simulator
+
+CAT = astibot_catalog()
+YES = lambda _c: True  # noqa: E731
+
+VALID = [
+    "ros2 topic list",
+    "ros2 topic list -t",
+    "ros2 topic info /scan",
+    "ros2 topic type /odom",
+    "ros2 topic hz /scan",
+    "ros2 topic echo /robot_pose --once",
+    "ros2 topic echo robot_pose -1",
+    "ros2 topic echo /odom nav_msgs/msg/Odometry --once",
+    "ros2 topic echo /scan --once --no-arr",
+    "ros2 topic echo /battery_status",
+    "ros2 topic echo /robot_status --once",
+    "ros2 topic echo /obstacles --once",
+    "ros2 topic echo /diagnostics --once",
+    "ros2 topic echo /conveyor/status --once",
+    "ros2 topic echo /tf --once",
+    "ros2 topic echo /tf_static --once",
+    "ros2 topic info /plan",
+    'ros2 topic pub --once /cmd_vel geometry_msgs/msg/Twist "{linear: {x: 0.2}}"',
+    "ros2 topic pub -r 10 -t 5 /cmd_vel geometry_msgs/Twist '{angular: {z: 0.3}}'",
+    "ros2 service list -t",
+    "ros2 service type /dock",
+    "ros2 service call /goto_position astiop_msgs/srv/GotoPosition \"{name: 'shipping'}\"",
+    'ros2 service call /goto_position "{x: 20.0, y: 12.25, theta: 0.0}"',
+    "ros2 service call /stop std_srvs/srv/Trigger",
+    "ros2 service call /dock std_srvs/srv/Trigger",
+    "ros2 service call /undock std_srvs/srv/Trigger",
+    "ros2 service call /conveyor/load std_srvs/srv/Trigger '{}'",
+    "ros2 service call /conveyor/unload std_srvs/srv/Trigger",
+    'ros2 service call /save_location astiop_msgs/srv/SaveLocation "{name: bay_3}"',
+    "ros2 service call /list_locations astiop_msgs/srv/ListLocations",
+    "ros2 action list -t",
+    "ros2 action info /navigate_to_pose",
+    "ros2 action send_goal /navigate_to_pose nav2_msgs/action/NavigateToPose "
+    '"{pose: {header: {frame_id: map}, pose: {position: {x: 5.0, y: 12.0}}}}" --feedback',
+    "ros2 node list",
+    "ros2 node info /navigator",
+    "ros2 interface show sensor_msgs/msg/LaserScan",
+    "ros2 interface list",
+    "ros2 param list",
+    "ros2 param get /astibot_base max_linear_speed",
+    "ros2 param set /astibot_base max_linear_speed 0.5",
+]
+
+INVALID = [
+    ("", "empty"),
+    ("ls -la", "start with 'ros2'"),
+    ("ros2", "incomplete"),
+    ("ros2 topic echo /scan | head", "shell"),
+    ("ros2 topic echo /scan; rm -rf /", "shell"),
+    ("ros2 topic frobnicate /scan", "not supported"),
+    ("ros2 run teleop teleop", "not supported"),
+    ("ros2 topic echo /batery_status", "did you mean /battery_status"),
+    ("ros2 topic echo /odom sensor_msgs/msg/LaserScan", "has type nav_msgs/msg/Odometry"),
+    ("ros2 topic echo /scan --qos-reliability best_effort", "unknown option"),
+    ("ros2 topic pub /cmd_vel geometry_msgs/msg/Twist '{linear: {x: 0.2}}'", "--once"),
+    ("ros2 topic pub --once /odom nav_msgs/msg/Odometry '{}'", "only topic you may publish"),
+    ("ros2 topic pub --once /cmd_vel geometry_msgs/msg/Twist '{linear: {x: fast}}'", "number"),
+    ("ros2 topic pub --once /cmd_vel geometry_msgs/msg/Twist '{speed: 1}'", "no field 'speed'"),
+    ("ros2 topic pub --once /cmd_vel geometry_msgs/msg/Twist '{linear: [}'", "not valid YAML"),
+    ("ros2 topic pub --once /cmd_vel geometry_msgs/msg/Twist '[1, 2]'", "mapping"),
+    ("ros2 topic pub -t 1000 -r 1 /cmd_vel geometry_msgs/msg/Twist '{}'", "longer than"),
+    ("ros2 topic pub -r abc --once /cmd_vel geometry_msgs/msg/Twist '{}'", "needs a float"),
+    ("ros2 service call /goto std_srvs/srv/Trigger", "no service /goto"),
+    ("ros2 service call /goto_position std_srvs/srv/Trigger", "has type"),
+    ("ros2 service call /goto_position '{place: dock}'", "no field 'place'"),
+    ("ros2 service call /goto_position '{x: .inf}'", "finite"),
+    ("ros2 service call /dock std_srvs/srv/Trigger '{force: true}'", "no field"),
+    ("ros2 action send_goal /navigate nav2_msgs/action/NavigateToPose '{}'", "no action"),
+    ("ros2 action send_goal /navigate_to_pose nav2_msgs/action/NavigateToPose", "needs"),
+    ("ros2 node info /teleop", "no node"),
+    ("ros2 interface show foo_msgs/msg/Bar", "unknown"),
+    ("ros2 param get /astibot_base turbo", "no parameter"),
+    ("ros2 param set /lidar_driver frequency 20", "read-only"),
+    ("ros2 param set /astibot_base max_linear_speed 9", "within"),
+    ("ros2 topic echo '/scan", "quoting"),
+]
+
+
+def test_every_catalog_entry_has_a_valid_case():
+    names = {parse(c).name for c in VALID}
+    assert set(CAT.topics) <= names and set(CAT.services) <= names and set(CAT.actions) <= names
+
+
+@pytest.mark.parametrize("command", VALID)
+def test_valid_commands(command):
+    checked = validate(command, CAT)
+    assert checked.valid, checked.reason
+
+
+@pytest.mark.parametrize("command,why", INVALID)
+def test_invalid_commands_have_a_reason(command, why):
+    checked = validate(command, CAT)
+    assert not checked.valid
+    assert why.lower() in checked.reason.lower(), checked.reason
+
+
+class RecordingBackend(SimBackend):
+    def __init__(self, *a, **k):
+        super().__init__(*a, **k)
+        self.ran = []
+
+    def execute(self, checked, timeout=10.0):
+        self.ran.append(checked.text)
+        return super().execute(checked, timeout)
+
+
+@pytest.fixture
+def graph(store):
+    backend = RecordingBackend(Simulator(seed=0), store)
+    return RobotGraph(backend, SafetyPolicy())
+
+
+@pytest.mark.parametrize("command,why", INVALID)
+def test_rejected_commands_never_reach_the_backend(graph, command, why):
+    result = graph.run(command, confirm=YES)
+    assert not result.executed and result.reason and graph.backend.ran == []
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.text(max_size=120))
+def test_parser_never_crashes(text):
+    with contextlib.suppress(CommandSyntaxError):
+        parse(text)
+
+
+_SHARED = RobotGraph(RecordingBackend(Simulator(seed=0, lidar_enabled=False)), SafetyPolicy())
+_pieces = st.sampled_from(
+    [
+        "ros2",
+        "topic",
+        "service",
+        "action",
+        "echo",
+        "pub",
+        "call",
+        "send_goal",
+        "/cmd_vel",
+        "/goto_position",
+        "/scan",
+        "--once",
+        "-t",
+        "-r",
+        "5",
+        "{x: 1}",
+        "'{linear: {x: 9}}'",
+        "|",
+        ";",
+        "rm",
+        "geometry_msgs/msg/Twist",
+        "std_srvs/srv/Trigger",
+        "-1",
+        '"',
+        "{",
+    ]
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(_pieces, max_size=8))
+def test_no_rejected_command_reaches_a_backend(words):
+    backend = _SHARED.backend
+    backend.ran = []
+    graph = _SHARED
+    text = " ".join(words)
+    result = graph.run(text, confirm=YES)
+    if not result.valid or result.reason:
+        assert backend.ran == []
+    else:
+        assert backend.ran == [text.strip()]
+
+
+def test_actuating_commands_need_confirmation(graph):
+    cmd = "ros2 service call /dock std_srvs/srv/Trigger"
+    assert graph.run(cmd).reason.startswith("this command moves the robot")
+    assert graph.run(cmd, confirm=lambda c: False).reason == "not confirmed by the operator"
+    assert graph.backend.ran == []
+    assert graph.run("ros2 service call /stop std_srvs/srv/Trigger").executed  # never held
+
+
+def test_echo_battery_matches_the_sim(graph):
+    result = graph.run("ros2 topic echo /battery_status --once")
+    assert result.executed and "percentage:" in result.output and result.output.endswith("---\n")
+    assert result.values["percentage"] == pytest.approx(graph.backend.sim.battery.soc, abs=1e-3)
+
+
+def test_speed_clamping(graph):
+    sim = graph.backend.sim
+    sim.undock()
+    sim.run_goal(60)
+    r = graph.run(
+        "ros2 topic pub -r 10 -t 20 /cmd_vel geometry_msgs/msg/Twist "
+        "'{linear: {x: 2.0, y: 2.0}, angular: {z: 5.0}}'",
+        confirm=YES,
+    )
+    assert r.executed and any("clamped" in n for n in r.notes)
+    twist = r.values["twist"]
+    assert math.hypot(twist["linear"]["x"], twist["linear"]["y"]) == pytest.approx(0.8)
+    assert twist["angular"]["z"] == pytest.approx(1.0)
+    assert sim.snapshot().speed <= 0.8 + 1e-6
+
+
+def test_goto_named_location_service(graph):
+    r = graph.run(
+        "ros2 service call /goto_position astiop_msgs/srv/GotoPosition "
+        "\"{name: 'inspection_zone_a'}\"",
+        confirm=YES,
+    )
+    assert r.values["success"] is True
+    result = graph.backend.sim.run_goal(300)
+    assert result.status == "succeeded"
+    r = graph.run("ros2 service call /goto_position \"{name: 'mars'}\"", confirm=YES)
+    assert (
+        r.executed and r.values["success"] is False and "no location named" in r.values["message"]
+    )
+
+
+def test_geofence(graph):
+    r = graph.run("ros2 service call /goto_position '{x: 39.9, y: 3.0}'", confirm=YES)
+    assert not r.executed and "geofence" in r.reason
+
+
+def test_action_goal_with_feedback_until_arrival(graph):
+    r = graph.run(
+        "ros2 action send_goal /navigate_to_pose nav2_msgs/action/NavigateToPose "
+        '"{pose: {header: {frame_id: map}, pose: {position: {x: 15.0, y: 3.5}, '
+        'orientation: {z: 0.0, w: 1.0}}}}" --feedback',
+        confirm=YES,
+    )
+    assert r.executed, r.reason
+    assert "Goal accepted with ID" in r.output and "distance_remaining" in r.output
+    assert r.output.rstrip().endswith("Goal finished with status: SUCCEEDED")
+    p = r.values["final_pose"]
+    assert math.hypot(p["x"] - 15.0, p["y"] - 3.5) < 0.3
+
+
+def test_estop_during_navigation(graph):
+    sim = graph.backend.sim
+    graph.run('ros2 service call /goto_position "{name: shipping}"', confirm=YES)
+    sim.step(5.0)
+    graph.estop()
+    held = graph.run('ros2 service call /goto_position "{name: shipping}"', confirm=YES)
+    assert not held.executed and "E-STOP" in held.reason
+    pose = sim.pose
+    sim.step(2.0)
+    assert math.dist(pose[:2], sim.pose[:2]) < 0.02
+    status = graph.run("ros2 topic echo /robot_status --once").values
+    assert status["state"] == "e_stopped" and status["e_stopped"] is True
+    graph.release_estop()
+    assert graph.run('ros2 service call /goto_position "{name: shipping}"', confirm=YES).values[
+        "success"
+    ]
+
+
+def test_obstacles_topic_reports_a_person(graph):
+    sim = graph.backend.sim
+    sim.undock()
+    sim.run_goal(60)
+    sim.add_obstacle("person", 5.5, 3.0)
+    r = graph.run("ros2 topic echo /obstacles --once")
+    assert r.values["count"] == 1 and r.values["obstacles"][0]["kind"] == "person"
+    assert r.values["obstacles"][0]["distance"] == pytest.approx(2.7, abs=0.15)
+
+
+def test_topic_stats_rates(graph):
+    backend = graph.backend
+    assert backend.sim.t == 0.0
+    backend.topic_stats()
+    backend.sim.step(1.0)
+    stats = {s.name: s for s in backend.topic_stats()}
+    assert stats["/odom"].count == 50 and stats["/scan"].count == 10
+    assert stats["/battery_status"].count == 1
+    assert stats["/scan"].nominal_hz == 10 and stats["/scan"].age_s < 0.1
+    assert stats["/cmd_vel"].age_s == math.inf and stats["/plan"].count == 0
+
+
+def test_interface_show_like_ros2():
+    text = interface_show("geometry_msgs/msg/Twist")
+    assert "Vector3  linear\n\tfloat64 x\n\tfloat64 y\n\tfloat64 z\n" in text
+    scan = interface_show("sensor_msgs/msg/LaserScan")
+    assert "std_msgs/Header header\n\tbuiltin_interfaces/Time stamp\n\t\tint32 sec" in scan
+    assert "---" in interface_show("std_srvs/srv/Trigger")
+
+
+FAKE_ROS2 = textwrap.dedent("""\
+    #!{python}
+    import json, os, sys
+    with open(os.environ["ROS2_ARGV_LOG"], "a") as fh:
+        fh.write(json.dumps(sys.argv[1:]) + "\\n")
+    args = sys.argv[1:]
+    if args[:2] == ["topic", "list"]:
+        print("/battery_status [sensor_msgs/msg/BatteryState]")
+        print("/cmd_vel [geometry_msgs/msg/Twist]")
+        print("/camera/image [sensor_msgs/msg/Image]")
+    elif args[:2] == ["service", "list"]:
+        print("/goto_position [astiop_msgs/srv/GotoPosition]")
+        print("/stop [std_srvs/srv/Trigger]")
+    elif args[:2] == ["action", "list"]:
+        pass
+    elif args[:2] == ["topic", "echo"]:
+        print("header:\\n  frame_id: base\\npercentage: 0.42\\n---")
+    elif args[:2] == ["service", "call"]:
+        print("requester: making request: x\\n\\nresponse:")
+        print("astiop_msgs.srv.GotoPosition_Response(success=True, message='on my way')")
+    elif args[:2] == ["topic", "pub"]:
+        print("publisher: beginning loop")
+    else:
+        sys.exit(3)
+""")
+
+
+@pytest.fixture
+def fake_ros2(tmp_path, monkeypatch):
+    exe = tmp_path / "bin" / "ros2"
+    exe.parent.mkdir()
+    exe.write_text(FAKE_ROS2.format(python=sys.executable))
+    exe.chmod(exe.stat().st_mode | stat.S_IEXEC)
+    log = tmp_path / "argv.log"
+    monkeypatch.setenv("PATH", f"{exe.parent}{os.pathsep}{os.environ['PATH']}")
+    monkeypatch.setenv("ROS2_ARGV_LOG", str(log))
+    return log
+
+
+def test_ros2_backend_runs_argv_without_a_shell(fake_ros2):
+    import json
+
+    from astiop.robot.ros2_backend import Ros2Backend
+
+    backend = Ros2Backend("ros2")
+    assert "/camera/image" in backend.catalog.topics and "/dock" not in backend.catalog.services
+    graph = RobotGraph(backend, SafetyPolicy())
+    r = graph.run("ros2 topic echo /battery_status")
+    assert r.values["percentage"] == 0.42
+    r = graph.run("ros2 service call /goto_position \"{name: 'shipping; rm -rf /'}\"", confirm=YES)
+    assert r.values == {"success": True, "message": "on my way"}
+    graph.run(
+        "ros2 topic pub --once /cmd_vel geometry_msgs/msg/Twist '{linear: {x: 5.0}}'", confirm=YES
+    )
+    assert not graph.run("ros2 service call /dock std_srvs/srv/Trigger", confirm=YES).executed
+    calls = [json.loads(line) for line in fake_ros2.read_text().splitlines()]
+    assert ["topic", "echo", "/battery_status", "--once"] in calls
+    assert ["service", "call", "/goto_position", "{name: 'shipping; rm -rf /'}"] in calls
+    pub = next(c for c in calls if c[:2] == ["topic", "pub"])
+    assert "x: 0.8" in pub[-1]  # the clamped message went out, not the typed one
+    assert not any(c[:2] == ["service", "call"] and c[2] == "/dock" for c in calls)
