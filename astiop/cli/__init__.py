@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 
 from astiop import __version__
-from astiop.cli import config_cmd, locations, robot, sim
+from astiop.cli import agent, config_cmd, locations, robot, sim
 from astiop.cli.common import CliState
 
 app = typer.Typer(
@@ -20,6 +20,8 @@ app.add_typer(config_cmd.app, name="config")
 app.add_typer(locations.app, name="locations")
 app.add_typer(sim.app, name="sim")
 app.command("exec")(robot.exec_command)
+app.command("chat")(agent.chat)
+app.command("models")(agent.models)
 
 
 def _version(value: bool) -> None:

@@ -50,6 +50,12 @@ class RobotGraph:
     def release_estop(self) -> None:
         self.backend.release_estop()
 
+    def wait_until_idle(self, timeout_s: float) -> None:
+        """Block until the robot has no active goal (or the timeout); backends may lack it."""
+        wait = getattr(self.backend, "wait_until_idle", None)
+        if wait is not None:
+            wait(timeout_s)
+
     def review(self, text: str) -> Review:
         return self.safety.review(validate(text, self.catalog), self.backend.e_stopped)
 

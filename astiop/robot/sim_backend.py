@@ -67,6 +67,14 @@ class SimBackend:
                 raise BackendError(f"timed out after {wall_timeout:g} s waiting for the robot")
             time.sleep(0.01)
 
+    def wait_until_idle(self, timeout_s: float) -> None:
+        if not self.realtime:
+            self.sim.run_goal(timeout_s)
+            return
+        deadline = time.monotonic() + timeout_s
+        while self.sim.goal is not None and time.monotonic() < deadline:
+            time.sleep(0.05)
+
     # -- topics ---------------------------------------------------------------------
     def _last_publish(self, name: str) -> float:
         spec = self.catalog.topics[name]

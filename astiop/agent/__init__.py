@@ -1,0 +1,1 @@
+"""The agent: LLM clients, the embedded model, the rules baseline, and the turn."""

@@ -1,0 +1,345 @@
+"""Streaming chat clients over httpx: OpenAI-compatible servers and Ollama's native API.
+
+Every call yields text as it arrives and ends with a `Completion` carrying time to first token
+(first non-empty content, measured here), total time, token counts and tokens/s.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import time
+from collections.abc import AsyncIterator, Callable
+from dataclasses import dataclass
+from typing import Any
+
+import httpx
+
+Messages = list[dict[str, str]]
+OnToken = Callable[[str], None]
+
+
+class LLMError(Exception):
+    """A one-line reason the model could not answer."""
+
+
+class LLMUnavailable(LLMError):
+    pass
+
+
+class LLMTimeout(LLMError):
+    pass
+
+
+class LLMHTTPError(LLMError):
+    def __init__(self, status: int, message: str):
+        super().__init__(message)
+        self.status = status
+
+
+class LLMProtocolError(LLMError):
+    pass
+
+
+@dataclass
+class Completion:
+    text: str
+    ttft_s: float | None
+    total_s: float
+    prompt_tokens: int | None = None
+    completion_tokens: int | None = None
+    tokens_per_s: float | None = None
+    finish_reason: str | None = None
+    cached_tokens: int | None = None
+
+
+@dataclass(frozen=True)
+class ModelInfo:
+    name: str
+    detail: str = ""
+
+
+class ChatClient:
+    """Shared plumbing; subclasses speak one wire format."""
+
+    kind = "base"
+
+    def __init__(
+        self,
+        base_url: str,
+        model: str,
+        *,
+        timeout_s: float = 120.0,
+        connect_timeout_s: float = 5.0,
+        api_key: str | None = None,
+    ):
+        self.base_url = base_url.rstrip("/")
+        self.model = model
+        self.timeout_s = timeout_s
+        self.connect_timeout_s = connect_timeout_s
+        self.api_key = api_key
+
+    @property
+    def label(self) -> str:
+        return f"{self.kind}:{self.model}@{self.base_url}"
+
+    def _timeout(self) -> httpx.Timeout:
+        # read timeout: the longest silence allowed between two chunks
+        return httpx.Timeout(self.timeout_s, connect=self.connect_timeout_s)
+
+    def _headers(self) -> dict[str, str]:
+        return {"Authorization": f"Bearer {self.api_key}"} if self.api_key else {}
+
+    async def chat(
+        self,
+        messages: Messages,
+        *,
+        max_tokens: int = 256,
+        temperature: float = 0.0,
+        schema: dict | None = None,
+        on_token: OnToken | None = None,
+        seed: int | None = 0,
+    ) -> Completion:
+        """Stream a reply; `on_token` sees each piece of text. One retry if refused."""
+        for attempt in (0, 1):
+            try:
+                return await self._chat_once(
+                    messages, max_tokens, temperature, schema, on_token, seed
+                )
+            except LLMUnavailable:
+                if attempt == 1:
+                    raise
+                await asyncio.sleep(0.5)
+        raise AssertionError("unreachable")
+
+    async def _chat_once(
+        self, messages, max_tokens, temperature, schema, on_token, seed
+    ) -> Completion:
+        url, body = self._request(messages, max_tokens, temperature, schema, seed)
+        t0 = time.perf_counter()
+        state = _StreamState(t0)
+        try:
+            async with (
+                httpx.AsyncClient(timeout=self._timeout(), headers=self._headers()) as cl,
+                cl.stream("POST", url, json=body) as resp,
+            ):
+                if resp.status_code >= 400:
+                    detail = (await resp.aread()).decode("utf-8", "replace")[:200]
+                    raise LLMHTTPError(
+                        resp.status_code,
+                        f"{self.label}: HTTP {resp.status_code}: {_one_line(detail)}",
+                    )
+                async for piece in self._pieces(resp, state):
+                    if piece:
+                        state.add(piece)
+                        if on_token:
+                            on_token(piece)
+        except httpx.ConnectError as exc:
+            raise LLMUnavailable(f"{self.label}: cannot connect ({_one_line(str(exc))})") from None
+        except httpx.TimeoutException:
+            raise LLMTimeout(f"{self.label}: no answer within {self.timeout_s:g} s") from None
+        except httpx.HTTPError as exc:
+            raise LLMProtocolError(
+                f"{self.label}: {type(exc).__name__}: {_one_line(str(exc))}"
+            ) from None
+        if not state.done:
+            raise LLMProtocolError(f"{self.label}: the stream ended before the reply was complete")
+        return state.completion()
+
+    async def list_models(self) -> list[ModelInfo]:
+        raise NotImplementedError
+
+    async def _get_json(self, path: str) -> Any:
+        try:
+            async with httpx.AsyncClient(timeout=httpx.Timeout(5.0), headers=self._headers()) as cl:
+                resp = await cl.get(f"{self.base_url}{path}")
+        except httpx.HTTPError as exc:
+            detail = _one_line(str(exc)) or type(exc).__name__
+            raise LLMUnavailable(f"{self.label}: {detail}") from None
+        if resp.status_code >= 400:
+            raise LLMHTTPError(resp.status_code, f"{self.label}: HTTP {resp.status_code}")
+        try:
+            return resp.json()
+        except ValueError:
+            raise LLMProtocolError(f"{self.label}: {path} did not return JSON") from None
+
+    async def _get_json(self, path: str) -> Any:
+        try:
+            async with httpx.AsyncClient(timeout=httpx.Timeout(5.0), headers=self._headers()) as cl:
+                resp = await cl.get(f"{self.base_url}{path}")
+        except httpx.HTTPError as exc:
+            detail = _one_line(str(exc)) or type(exc).__name__
+            raise LLMUnavailable(f"{self.label}: {detail}") from None
+        if resp.status_code >= 400:
+            raise LLMHTTPError(resp.status_code, f"{self.label}: HTTP {resp.status_code}")
+        try:
+            return resp.json()
+        except ValueError:
+            raise LLMProtocolError(f"{self.label}: {path} did not return JSON") from None
+
+    def _request(self, messages, max_tokens, temperature, schema, seed) -> tuple[str, dict]:
+        raise NotImplementedError
+
+    def _pieces(self, resp: httpx.Response, state: _StreamState) -> AsyncIterator[str]:
+        raise NotImplementedError
+
+
+def _one_line(text: str) -> str:
+    return " ".join(text.split())[:200]
+
+
+class _StreamState:
+    def __init__(self, t0: float):
+        self.t0 = t0
+        self.parts: list[str] = []
+        self.ttft: float | None = None
+        self.done = False
+        self.finish_reason: str | None = None
+        self.prompt_tokens: int | None = None
+        self.completion_tokens: int | None = None
+        self.cached_tokens: int | None = None
+        self.gen_seconds: float | None = None
+
+    def add(self, piece: str) -> None:
+        if self.ttft is None and piece.strip():
+            self.ttft = time.perf_counter() - self.t0
+        self.parts.append(piece)
+
+    def completion(self) -> Completion:
+        total = time.perf_counter() - self.t0
+        tps = None
+        if self.completion_tokens and self.gen_seconds:
+            tps = self.completion_tokens / self.gen_seconds
+        elif self.completion_tokens and self.ttft is not None and total > self.ttft:
+            tps = max(self.completion_tokens - 1, 1) / (total - self.ttft)
+        return Completion(
+            "".join(self.parts),
+            self.ttft,
+            total,
+            self.prompt_tokens,
+            self.completion_tokens,
+            tps,
+            self.finish_reason,
+            self.cached_tokens,
+        )
+
+
+class OpenAIClient(ChatClient):
+    """llama.cpp's server, vLLM, Docker Model Runner, LM Studio, Ollama's /v1."""
+
+    kind = "openai"
+
+    def _request(self, messages, max_tokens, temperature, schema, seed):
+        body: dict[str, Any] = {
+            "model": self.model,
+            "messages": messages,
+            "stream": True,
+            "stream_options": {"include_usage": True},
+            "max_tokens": max_tokens,
+            "temperature": temperature,
+        }
+        if seed is not None:
+            body["seed"] = seed
+        if schema is not None:
+            body["response_format"] = {
+                "type": "json_schema",
+                "json_schema": {"name": "reply", "strict": True, "schema": schema},
+            }
+        return f"{self.base_url}/chat/completions", body
+
+    async def _pieces(self, resp, state):
+        async for line in resp.aiter_lines():
+            line = line.strip()
+            if not line or line.startswith(":"):
+                continue
+            if not line.startswith("data:"):
+                raise LLMProtocolError(f"{self.label}: unexpected line in stream: {line[:80]!r}")
+            data = line[5:].strip()
+            if data == "[DONE]":
+                state.done = True
+                return
+            try:
+                chunk = json.loads(data)
+            except json.JSONDecodeError:
+                raise LLMProtocolError(
+                    f"{self.label}: malformed JSON in stream: {data[:80]!r}"
+                ) from None
+            if "error" in chunk:
+                raise LLMHTTPError(500, f"{self.label}: {_one_line(str(chunk['error']))}")
+            usage = chunk.get("usage")
+            if usage:
+                state.prompt_tokens = usage.get("prompt_tokens")
+                state.completion_tokens = usage.get("completion_tokens")
+                details = usage.get("prompt_tokens_details") or {}
+                state.cached_tokens = details.get("cached_tokens")
+            timings = chunk.get("timings")
+            if timings and timings.get("predicted_ms"):
+                state.gen_seconds = timings["predicted_ms"] / 1000.0
+                state.completion_tokens = timings.get("predicted_n", state.completion_tokens)
+            for choice in chunk.get("choices") or []:
+                delta = choice.get("delta") or {}
+                if choice.get("finish_reason"):
+                    state.finish_reason = choice["finish_reason"]
+                content = delta.get("content")
+                if content:
+                    yield content
+        # some servers end without [DONE] after a finish_reason
+        state.done = state.finish_reason is not None
+
+    async def list_models(self) -> list[ModelInfo]:
+        data = await self._get_json("/models")
+        return [ModelInfo(m.get("id", "?")) for m in data.get("data", [])]
+
+
+class OllamaClient(ChatClient):
+    """Ollama's native /api/chat: its eval counts and durations give exact tokens/s."""
+
+    kind = "ollama"
+
+    def _request(self, messages, max_tokens, temperature, schema, seed):
+        options: dict[str, Any] = {"num_predict": max_tokens, "temperature": temperature}
+        if seed is not None:
+            options["seed"] = seed
+        body: dict[str, Any] = {
+            "model": self.model,
+            "messages": messages,
+            "stream": True,
+            "options": options,
+        }
+        if schema is not None:
+            body["format"] = schema
+        return f"{self.base_url}/api/chat", body
+
+    async def _pieces(self, resp, state):
+        async for line in resp.aiter_lines():
+            if not line.strip():
+                continue
+            try:
+                chunk = json.loads(line)
+            except json.JSONDecodeError:
+                raise LLMProtocolError(
+                    f"{self.label}: malformed JSON in stream: {line[:80]!r}"
+                ) from None
+            if "error" in chunk:
+                raise LLMHTTPError(500, f"{self.label}: {_one_line(str(chunk['error']))}")
+            content = (chunk.get("message") or {}).get("content")
+            if content:
+                yield content
+            if chunk.get("done"):
+                state.done = True
+                state.finish_reason = chunk.get("done_reason", "stop")
+                cached = chunk.get("prompt_eval_cached_count") or 0
+                if "prompt_eval_count" in chunk:
+                    state.prompt_tokens = max(chunk["prompt_eval_count"] - cached, 0)
+                state.cached_tokens = cached
+                state.completion_tokens = chunk.get("eval_count")
+                if chunk.get("eval_duration"):
+                    state.gen_seconds = chunk["eval_duration"] / 1e9
+                return
+
+    async def list_models(self) -> list[ModelInfo]:
+        data = await self._get_json("/api/tags")
+        return [
+            ModelInfo(m.get("name", "?"), m.get("details", {}).get("parameter_size", ""))
+            for m in data.get("models", [])
+        ]

@@ -1,0 +1,44 @@
+"""System prompts from `prompts/`, filled with the catalog and the named locations."""
+
+from __future__ import annotations
+
+from functools import cache
+
+from astiop.agent.tools import READABLE_EXCLUDED, Tool, tool_lines
+from astiop.resources import prompts_path
+from astiop.robot.catalog import Catalog
+
+
+@cache
+def template(name: str) -> str:
+    return prompts_path(f"{name}.md").read_text(encoding="utf-8")
+
+
+def fill(text: str, **values: str) -> str:
+    """Replace {name} placeholders; every other brace (JSON examples) stays as written."""
+    for key, value in values.items():
+        text = text.replace("{" + key + "}", value)
+    return text
+
+
+def command_prompt(catalog: Catalog, locations: list[str]) -> str:
+    topics = "\n".join(
+        f"- {t.name}: {t.description}"
+        for t in catalog.topics.values()
+        if t.name not in READABLE_EXCLUDED
+    )
+    services = "\n".join(f"- {s.name} {s.type}: {s.description}" for s in catalog.services.values())
+    return fill(
+        template("agent_command"),
+        topics=topics,
+        services=services,
+        locations=", ".join(locations) or "none",
+    )
+
+
+def tool_prompt(tools: list[Tool]) -> str:
+    return fill(template("agent_tool"), tools=tool_lines(tools))
+
+
+def interpret_prompt() -> str:
+    return template("agent_interpret")

@@ -1,0 +1,88 @@
+"""Short, factual summaries of command results for the interpretation call and the rules.
+
+Small models copy numbers well and read long YAML badly; every number here comes from the
+command's own values, so the answer cannot cite telemetry no command returned.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from astiop.robot.output import Execution
+
+STATUS_WORDS = {0: "unknown", 1: "charging", 2: "discharging", 3: "not charging", 4: "full"}
+
+
+def summarize(ex: Execution) -> str:
+    if not ex.executed:
+        return f"{ex.command}\n  NOT RUN: {ex.reason}"
+    if ex.error:
+        return f"{ex.command}\n  FAILED: {ex.error}"
+    body = _summary(ex.command, ex.values)
+    if body is None:
+        body = ex.output.strip()
+        if len(body) > 600:
+            body = body[:600] + " ..."
+    return f"{ex.command}\n  " + body.replace("\n", "\n  ")
+
+
+def _deg(rad: float) -> float:
+    return math.degrees(rad)
+
+
+def _summary(command: str, v: Any) -> str | None:
+    if not isinstance(v, dict):
+        return None
+    if "/battery_status" in command:
+        pct = v["percentage"] * 100
+        state = STATUS_WORDS.get(v.get("power_supply_status"), "unknown")
+        return f"battery {pct:.1f} %, {v['voltage']:.2f} V, {v['current']:.2f} A, {state}"
+    if "/robot_pose" in command:
+        return f"position x {v['x']:.2f} m, y {v['y']:.2f} m, heading {_deg(v['theta']):.0f} deg"
+    if "/robot_status" in command:
+        return (
+            f"state {v['state']}, mode {v['mode']}, goal {v['active_goal'] or 'none'}, "
+            f"fault {v['fault'] or 'none'}, speed {v['speed']:.2f} m/s"
+        )
+    if "/obstacles" in command:
+        if not v["count"]:
+            return "0 obstacles detected"
+        items = "; ".join(
+            f"{o['kind']} at {o['distance']:.1f} m, bearing {_deg(o['bearing']):.0f} deg"
+            for o in v["obstacles"][:5]
+        )
+        return f"{v['count']} obstacle(s) detected: {items}"
+    if "/scan" in command and "ranges" in v:
+        finite = [
+            (r, i) for i, r in enumerate(v["ranges"]) if isinstance(r, float) and math.isfinite(r)
+        ]
+        if not finite:
+            return "scan: nothing within range"
+        r, i = min(finite)
+        bearing = _deg(v["angle_min"] + i * v["angle_increment"])
+        return f"scan of {len(v['ranges'])} beams: nearest return {r:.2f} m at {bearing:.0f} deg"
+    if "/diagnostics" in command and "status" in v:
+        levels = {0: "OK", 1: "WARN", 2: "ERROR", 3: "STALE"}
+        return "; ".join(
+            f"{s['name']}: {levels.get(s['level'], s['level'])} ({s['message']})"
+            for s in v["status"]
+        )
+    if "/conveyor/status" in command:
+        return (
+            f"conveyor {'running' if v['running'] else 'stopped'}, "
+            f"{'loaded' if v['loaded'] else 'empty'}, lamp {v['lamp']}"
+        )
+    if "/odom" in command and "twist" in v:
+        p = v["pose"]["pose"]["position"]
+        t = v["twist"]["twist"]["linear"]
+        return f"odometry x {p['x']:.2f} m, y {p['y']:.2f} m, speed {math.hypot(t['x'], t['y']):.2f} m/s"
+    if "names" in v and "poses" in v:
+        return "locations: " + ", ".join(
+            f"{n} ({p['x']:.1f}, {p['y']:.1f})" for n, p in zip(v["names"], v["poses"])
+        )
+    if "success" in v:
+        return f"{'succeeded' if v['success'] else 'FAILED'}: {v.get('message', '')}"
+    if "status" in v and "accepted" in v:
+        return f"navigation goal {v['status']}"
+    return None

@@ -1,0 +1,286 @@
+"""One agent turn: plan commands with the model, check and run them, explain the results.
+
+Only the planning reply, written before any robot output is seen, is turned into commands; the
+interpretation reply never is. So nothing a robot prints can make a command run.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import functools
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from astiop.agent import prompts, rules
+from astiop.agent.llm import Completion, LLMError, LLMHTTPError, LLMProtocolError
+from astiop.agent.replies import ReplyError, commands_from_reply, steps_from_reply
+from astiop.agent.specs import LLMEndpoint
+from astiop.agent.summaries import summarize
+from astiop.agent.tools import build_tools, command_schema, tool_schema
+from astiop.robot.graph import Confirm, RobotGraph
+from astiop.robot.output import Execution
+from astiop.store import Store
+
+OnEvent = Callable[[str, Any], None]  # ("plan_token" | "command" | "answer_token" | "status", x)
+HISTORY_TURNS = 3
+NAVIGATING = ("/goto_position", "/dock", "/undock", "send_goal")
+
+
+@dataclass
+class TurnResult:
+    model: str
+    mode: str
+    prompt: str
+    commands: list[Execution] = field(default_factory=list)
+    answer: str = ""
+    ttft_s: float | None = None
+    total_s: float = 0.0
+    llm_s: float = 0.0
+    exec_s: float = 0.0
+    prompt_tokens: int = 0
+    completion_tokens: int = 0
+    error: str = ""
+    raw_replies: list[str] = field(default_factory=list)
+    interaction_id: int | None = None
+    repaired: bool = False
+
+    @property
+    def overhead_s(self) -> float:
+        return max(self.total_s - self.llm_s - self.exec_s, 0.0)
+
+    def as_json(self) -> dict[str, Any]:
+        return {
+            "model": self.model,
+            "mode": self.mode,
+            "prompt": self.prompt,
+            "commands": [
+                {
+                    "command": c.command,
+                    "valid": c.valid,
+                    "reason": c.reason,
+                    "executed": c.executed,
+                    "output": c.output,
+                }
+                for c in self.commands
+            ],
+            "answer": self.answer,
+            "timings": {"ttft_s": self.ttft_s, "total_s": round(self.total_s, 4)},
+            "tokens": {"prompt": self.prompt_tokens, "completion": self.completion_tokens},
+            "error": self.error or None,
+        }
+
+
+class Agent:
+    def __init__(
+        self,
+        graph: RobotGraph,
+        endpoint: LLMEndpoint,
+        store: Store | None = None,
+        *,
+        mode: str = "tool",
+        max_tokens: int = 256,
+        confirm: Confirm | None = None,
+        session: str = "",
+        nav_wait_s: float = 600.0,
+    ):
+        if mode not in ("command", "tool"):
+            raise ValueError(f"mode must be 'command' or 'tool', not '{mode}'")
+        self.graph = graph
+        self.endpoint = endpoint
+        self.store = store
+        self.mode = "rules" if endpoint.is_rules else mode
+        self.max_tokens = max_tokens
+        self.confirm = confirm
+        self.session = session
+        self.nav_wait_s = nav_wait_s
+        self.history: list[tuple[str, str]] = []
+        self._schema_ok = True
+
+    @property
+    def model(self) -> str:
+        return self.endpoint.spec.raw
+
+    def locations(self) -> list[str]:
+        if self.store is not None:
+            return [loc.name for loc in self.store.list_locations()]
+        sim = getattr(self.graph.backend, "sim", None)
+        return [s.name for s in sim.map.stations] if sim is not None else []
+
+    # -- the turn ------------------------------------------------------------------------
+    async def turn(self, request: str, on_event: OnEvent | None = None) -> TurnResult:
+        emit = on_event or (lambda kind, data: None)
+        t0 = time.perf_counter()
+        result = TurnResult(self.model, self.mode, request)
+        if self.store:
+            result.interaction_id = self.store.start_interaction(
+                model=self.model, mode=self.mode, prompt=request, session=self.session
+            )
+        try:
+            commands = await self._plan(request, result, emit)
+            await self._execute(commands, result, emit)
+            result.answer = await self._interpret(request, result, emit)
+        except LLMError as exc:
+            result.error = str(exc)
+            if not result.answer:
+                result.answer = f"The model could not answer: {exc}"
+        except asyncio.CancelledError:
+            result.error = "canceled by the operator"
+            self._finish(result, t0, status="canceled")
+            raise
+        self._finish(result, t0)
+        self.history.append((request, result.answer))
+        return result
+
+    def _finish(self, result: TurnResult, t0: float, status: str | None = None) -> None:
+        result.total_s = time.perf_counter() - t0
+        if self.store and result.interaction_id:
+            self.store.update_interaction(
+                result.interaction_id,
+                finished_at=time.time(),
+                answer=result.answer,
+                raw_replies=result.raw_replies,
+                ttft_s=result.ttft_s,
+                total_s=result.total_s,
+                llm_s=result.llm_s,
+                prompt_tokens=result.prompt_tokens,
+                completion_tokens=result.completion_tokens,
+                error=result.error or None,
+                status=status or ("error" if result.error else "done"),
+            )
+
+    def _account(self, result: TurnResult, c: Completion) -> None:
+        result.raw_replies.append(c.text)
+        result.llm_s += c.total_s
+        result.prompt_tokens += c.prompt_tokens or 0
+        result.completion_tokens += c.completion_tokens or 0
+        if result.ttft_s is None:
+            result.ttft_s = c.ttft_s
+        if self.store and result.interaction_id:
+            self.store.update_interaction(result.interaction_id, raw_replies=result.raw_replies)
+
+    async def _ask(self, messages, schema, result: TurnResult, emit, kind: str) -> Completion:
+        client = await asyncio.to_thread(self.endpoint.client)
+        on_token = functools.partial(emit, kind)
+        try:
+            c = await client.chat(
+                messages,
+                max_tokens=self.max_tokens,
+                schema=schema if self._schema_ok else None,
+                on_token=on_token,
+            )
+        except LLMHTTPError as exc:
+            if schema is None or exc.status not in (400, 422, 501) or not self._schema_ok:
+                raise
+            self._schema_ok = False  # this server does not take a JSON schema
+            c = await client.chat(messages, max_tokens=self.max_tokens, on_token=on_token)
+        self._account(result, c)
+        return c
+
+    # -- planning ------------------------------------------------------------------------
+    async def _plan(self, request: str, result: TurnResult, emit) -> list[str]:
+        locations = self.locations()
+        if self.endpoint.is_rules:
+            return rules.plan(request, locations)
+        if self.mode == "tool":
+            tools = build_tools(self.graph.catalog, locations)
+            system, schema = prompts.tool_prompt(tools), tool_schema(tools)
+
+            def parse(text):
+                return steps_from_reply(text, tools)
+        else:
+            system, schema = prompts.command_prompt(self.graph.catalog, locations), command_schema()
+            parse = commands_from_reply
+        messages = [{"role": "system", "content": system}]
+        for past_request, past_answer in self.history[-HISTORY_TURNS:]:
+            messages += [
+                {"role": "user", "content": f"Operator: {past_request}"},
+                {"role": "assistant", "content": past_answer},
+            ]
+        messages.append({"role": "user", "content": f"Operator: {request}"})
+        c = await self._ask(messages, schema, result, emit, "plan_token")
+        try:
+            commands = parse(c.text)
+        except ReplyError as exc:
+            commands = await self._repair(messages, c.text, str(exc), schema, parse, result, emit)
+        if commands and not result.repaired:
+            commands = await self._repair_invalid(
+                messages, c.text, commands, schema, parse, result, emit
+            )
+        return commands
+
+    async def _repair(self, messages, reply, reason, schema, parse, result, emit) -> list[str]:
+        result.repaired = True
+        retry = messages + [
+            {"role": "assistant", "content": reply},
+            {
+                "role": "user",
+                "content": f"That reply could not be used: {reason}. Answer again with JSON only.",
+            },
+        ]
+        c = await self._ask(retry, schema, result, emit, "plan_token")
+        try:
+            return parse(c.text)
+        except ReplyError as exc:
+            raise LLMProtocolError(f"the model's reply could not be used: {exc}") from None
+
+    async def _repair_invalid(
+        self, messages, reply, commands, schema, parse, result, emit
+    ) -> list[str]:
+        for cmd in commands:
+            review = self.graph.review(cmd)
+            if not review.checked.valid:
+                reason = f"the command `{cmd}` was rejected: {review.checked.reason}"
+                try:
+                    return await self._repair(messages, reply, reason, schema, parse, result, emit)
+                except LLMProtocolError:
+                    return commands  # keep the first plan; its rejection is recorded
+        return commands
+
+    # -- execution -----------------------------------------------------------------------
+    async def _execute(self, commands: list[str], result: TurnResult, emit) -> None:
+        for seq, cmd in enumerate(commands):
+            t0 = time.perf_counter()
+            ex = await asyncio.to_thread(self.graph.run, cmd, self.confirm)
+            result.exec_s += time.perf_counter() - t0
+            result.commands.append(ex)
+            if self.store and result.interaction_id:
+                self.store.add_command(
+                    result.interaction_id,
+                    seq=seq,
+                    command=ex.command,
+                    valid=int(ex.valid),
+                    reason=ex.reason or ex.error or None,
+                    kind=ex.kind,
+                    executed=int(ex.executed),
+                    output=ex.output,
+                    values=ex.values,
+                )
+            emit("command", ex)
+            more = seq + 1 < len(commands)
+            if more and ex.executed and any(k in ex.command for k in NAVIGATING):
+                emit("status", "waiting for the robot to arrive")
+                t1 = time.perf_counter()
+                await asyncio.to_thread(self.graph.wait_until_idle, self.nav_wait_s)
+                result.exec_s += time.perf_counter() - t1
+
+    # -- interpretation ------------------------------------------------------------------
+    async def _interpret(self, request: str, result: TurnResult, emit) -> str:
+        if self.endpoint.is_rules:
+            answer = rules.interpret(request, result.commands)
+            emit("answer_token", answer)
+            return answer
+        if result.commands:
+            results = "\n".join(summarize(ex) for ex in result.commands)
+        else:
+            results = "(no robot command was run)"
+        messages = [
+            {"role": "system", "content": prompts.interpret_prompt()},
+            {
+                "role": "user",
+                "content": f"Operator request: {request}\n\nResults:\n{results}\n\nAnswer:",
+            },
+        ]
+        c = await self._ask(messages, None, result, emit, "answer_token")
+        return c.text.strip()

@@ -1,0 +1,137 @@
+"""`astiop chat` (one agent turn) and `astiop models` (which endpoints answer)."""
+
+from __future__ import annotations
+
+import asyncio
+import sys
+
+import typer
+
+from astiop.cli.common import fail, print_json, state
+from astiop.robot.output import BackendError
+
+
+def chat(
+    ctx: typer.Context,
+    text: str = typer.Argument(..., help="What you want, in plain language."),
+    model: str = typer.Option(None, "--model", "-m", help="Model spec (default: settings)."),
+    mode: str = typer.Option(None, "--mode", help="command (model writes ros2 lines) or tool."),
+    yes: bool = typer.Option(False, "--yes", "-y", help="Do not ask before moving the robot."),
+    as_json: bool = typer.Option(False, "--json"),
+) -> None:
+    """Run one agent turn against the robot (the simulator by default) and print the answer."""
+    from astiop.agent.embedded import EmbeddedModelError
+    from astiop.agent.specs import SpecError, open_endpoint
+    from astiop.agent.turn import Agent
+    from astiop.robot.factory import make_robot_graph
+
+    st = state(ctx)
+    settings = st.settings
+    mode = mode or settings.llm.mode
+    if mode not in ("command", "tool"):
+        fail(f"--mode must be 'command' or 'tool', not '{mode}'")
+    try:
+        endpoint = open_endpoint(
+            model or settings.llm.model,
+            threads=settings.llm.threads,
+            n_ctx=settings.llm.context,
+            timeout_s=settings.llm.timeout_s,
+        )
+        graph = make_robot_graph(settings, st.store)
+    except (SpecError, BackendError) as exc:
+        fail(str(exc))
+
+    def ask(checked) -> bool:
+        return typer.confirm(f"run '{checked.command.display()}' (it moves the robot)?", err=True)
+
+    confirm = (lambda _c: True) if yes else (ask if sys.stdin.isatty() else None)
+    agent = Agent(
+        graph,
+        endpoint,
+        st.store,
+        mode=mode,
+        max_tokens=settings.llm.max_tokens,
+        confirm=confirm,
+        session="cli",
+    )
+
+    def on_event(kind: str, data) -> None:
+        if as_json:
+            return
+        if kind == "command":
+            mark = "ran" if data.executed else "REJECTED"
+            typer.echo(
+                f"[{mark}] {data.command}" + (f" — {data.reason}" if data.reason else ""), err=True
+            )
+        elif kind == "answer_token":
+            typer.echo(data, nl=False)
+        elif kind == "status":
+            typer.echo(f"... {data}", err=True)
+
+    try:
+        result = asyncio.run(agent.turn(text, on_event))
+    except EmbeddedModelError as exc:
+        fail(str(exc))
+    finally:
+        endpoint.close()
+    sim = getattr(graph.backend, "sim", None)
+    if sim is not None and sim.goal is not None:
+        sim.run_goal(900.0)  # let a started goal finish: the sim lives only for this command
+    if as_json:
+        print_json(result.as_json())
+    else:
+        typer.echo("")
+        if result.error:
+            typer.echo(f"astiop: {result.error}", err=True)
+    if result.error:
+        raise typer.Exit(1)
+
+
+def models(ctx: typer.Context, as_json: bool = typer.Option(False, "--json")) -> None:
+    """List the configured model endpoints, whether each answers, and what it serves."""
+    from astiop.agent.embedded import EmbeddedModelError, smollm2_path
+    from astiop.agent.llm import LLMError
+    from astiop.agent.specs import SpecError, open_endpoint
+
+    settings = state(ctx).settings
+    specs = list(dict.fromkeys([settings.llm.model, "rules", "embedded", *settings.llm.endpoints]))
+    rows = []
+
+    async def probe(spec: str) -> dict:
+        row = {"spec": spec, "answers": False, "serves": [], "detail": ""}
+        try:
+            ep = open_endpoint(spec)
+        except SpecError as exc:
+            row["detail"] = str(exc)
+            return row
+        if ep.is_rules:
+            row.update(answers=True, detail="rule-based baseline, no LLM")
+        elif ep.local:
+            try:
+                path = smollm2_path() if ep.spec.kind == "embedded" else ep.spec.path
+                row.update(
+                    answers=True, serves=[path.stem], detail=f"started on demand from {path}"
+                )
+            except EmbeddedModelError as exc:
+                row["detail"] = str(exc)
+        else:
+            try:
+                found = await ep.client().list_models()
+                row.update(answers=True, serves=[m.name for m in found])
+                if ep.spec.name and ep.spec.name not in row["serves"]:
+                    row["detail"] = f"{ep.spec.name} is not among the served models"
+            except LLMError as exc:
+                row["detail"] = str(exc)
+        return row
+
+    async def run_all():
+        return await asyncio.gather(*(probe(s) for s in specs))
+
+    rows = asyncio.run(run_all())
+    if as_json:
+        print_json(rows)
+        return
+    for row in rows:
+        mark = "ok  " if row["answers"] else "DOWN"
+        serves = ", ".join(row["serves"][:5])
+        typer.echo(f"{mark} {row['spec']:<40} {serves}  {row['detail']}".rstrip())
