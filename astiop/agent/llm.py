@@ -54,6 +54,15 @@ class Completion:
 
 
 @dataclass(frozen=True)
+class _Options:
+    max_tokens: int
+    temperature: float
+    schema: dict | None
+    seed: int | None
+    grammar: str | None
+
+
+@dataclass(frozen=True)
 class ModelInfo:
     name: str
     detail: str = ""
@@ -99,23 +108,24 @@ class ChatClient:
         schema: dict | None = None,
         on_token: OnToken | None = None,
         seed: int | None = 0,
+        grammar: str | None = None,
     ) -> Completion:
-        """Stream a reply; `on_token` sees each piece of text. One retry if refused."""
+        """Stream a reply; `on_token` sees each piece of text. One retry if refused.
+
+        `schema` constrains the reply to a JSON schema; `grammar` (llama.cpp servers only)
+        to a GBNF grammar, and wins over `schema`."""
+        opts = _Options(max_tokens, temperature, schema, seed, grammar)
         for attempt in (0, 1):
             try:
-                return await self._chat_once(
-                    messages, max_tokens, temperature, schema, on_token, seed
-                )
+                return await self._chat_once(messages, opts, on_token)
             except LLMUnavailable:
                 if attempt == 1:
                     raise
                 await asyncio.sleep(0.5)
         raise AssertionError("unreachable")
 
-    async def _chat_once(
-        self, messages, max_tokens, temperature, schema, on_token, seed
-    ) -> Completion:
-        url, body = self._request(messages, max_tokens, temperature, schema, seed)
+    async def _chat_once(self, messages, opts: _Options, on_token) -> Completion:
+        url, body = self._request(messages, opts)
         t0 = time.perf_counter()
         state = _StreamState(t0)
         try:
@@ -177,7 +187,7 @@ class ChatClient:
         except ValueError:
             raise LLMProtocolError(f"{self.label}: {path} did not return JSON") from None
 
-    def _request(self, messages, max_tokens, temperature, schema, seed) -> tuple[str, dict]:
+    def _request(self, messages: Messages, opts: _Options) -> tuple[str, dict]:
         raise NotImplementedError
 
     def _pieces(self, resp: httpx.Response, state: _StreamState) -> AsyncIterator[str]:
@@ -229,21 +239,23 @@ class OpenAIClient(ChatClient):
 
     kind = "openai"
 
-    def _request(self, messages, max_tokens, temperature, schema, seed):
+    def _request(self, messages, opts):
         body: dict[str, Any] = {
             "model": self.model,
             "messages": messages,
             "stream": True,
             "stream_options": {"include_usage": True},
-            "max_tokens": max_tokens,
-            "temperature": temperature,
+            "max_tokens": opts.max_tokens,
+            "temperature": opts.temperature,
         }
-        if seed is not None:
-            body["seed"] = seed
-        if schema is not None:
+        if opts.seed is not None:
+            body["seed"] = opts.seed
+        if opts.grammar is not None:
+            body["grammar"] = opts.grammar  # llama.cpp's server extension
+        elif opts.schema is not None:
             body["response_format"] = {
                 "type": "json_schema",
-                "json_schema": {"name": "reply", "strict": True, "schema": schema},
+                "json_schema": {"name": "reply", "strict": True, "schema": opts.schema},
             }
         return f"{self.base_url}/chat/completions", body
 
@@ -296,18 +308,18 @@ class OllamaClient(ChatClient):
 
     kind = "ollama"
 
-    def _request(self, messages, max_tokens, temperature, schema, seed):
-        options: dict[str, Any] = {"num_predict": max_tokens, "temperature": temperature}
-        if seed is not None:
-            options["seed"] = seed
+    def _request(self, messages, opts):
+        options: dict[str, Any] = {"num_predict": opts.max_tokens, "temperature": opts.temperature}
+        if opts.seed is not None:
+            options["seed"] = opts.seed
         body: dict[str, Any] = {
             "model": self.model,
             "messages": messages,
             "stream": True,
             "options": options,
         }
-        if schema is not None:
-            body["format"] = schema
+        if opts.schema is not None:
+            body["format"] = opts.schema
         return f"{self.base_url}/api/chat", body
 
     async def _pieces(self, resp, state):

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
-from functools import cache
+import json
+from functools import cache, lru_cache
 
-from astiop.agent.tools import READABLE_EXCLUDED, Tool, tool_lines
+import yaml
+
+from astiop.agent.tools import READABLE_EXCLUDED, Tool
 from astiop.resources import prompts_path
 from astiop.robot.catalog import Catalog
 
@@ -37,7 +40,24 @@ def command_prompt(catalog: Catalog, locations: list[str]) -> str:
 
 
 def tool_prompt(tools: list[Tool]) -> str:
-    return fill(template("agent_tool"), tools=tool_lines(tools))
+    return fill(template("agent_tool"), tools=", ".join(t.id for t in tools))
+
+
+@lru_cache(maxsize=1)
+def examples() -> list[dict]:
+    return yaml.safe_load(prompts_path("agent_examples.yaml").read_text(encoding="utf-8"))
+
+
+def example_messages(mode: str) -> list[dict[str, str]]:
+    """The examples as earlier chat turns, in the reply format of `mode`."""
+    messages = []
+    for ex in examples():
+        reply = {"steps": [ex["tool"]]} if mode == "tool" else {"commands": [ex["command"]]}
+        messages += [
+            {"role": "user", "content": ex["request"]},
+            {"role": "assistant", "content": json.dumps(reply, separators=(",", ":"))},
+        ]
+    return messages
 
 
 def interpret_prompt() -> str:

@@ -18,7 +18,13 @@ from astiop.agent.llm import Completion, LLMError, LLMHTTPError, LLMProtocolErro
 from astiop.agent.replies import ReplyError, commands_from_reply, steps_from_reply
 from astiop.agent.specs import LLMEndpoint
 from astiop.agent.summaries import summarize
-from astiop.agent.tools import build_tools, command_schema, tool_schema
+from astiop.agent.tools import (
+    build_tools,
+    command_grammar,
+    command_schema,
+    tool_grammar,
+    tool_schema,
+)
 from astiop.robot.graph import Confirm, RobotGraph
 from astiop.robot.output import Execution
 from astiop.store import Store
@@ -160,15 +166,20 @@ class Agent:
         if self.store and result.interaction_id:
             self.store.update_interaction(result.interaction_id, raw_replies=result.raw_replies)
 
-    async def _ask(self, messages, schema, result: TurnResult, emit, kind: str) -> Completion:
+    async def _ask(
+        self, messages, schema, result: TurnResult, emit, kind: str, grammar: str | None = None
+    ) -> Completion:
         client = await asyncio.to_thread(self.endpoint.client)
         on_token = functools.partial(emit, kind)
+        if not self.endpoint.local:
+            grammar = None  # GBNF is llama.cpp's; other servers get the JSON schema
         try:
             c = await client.chat(
                 messages,
                 max_tokens=self.max_tokens,
-                schema=schema if self._schema_ok else None,
                 on_token=on_token,
+                schema=schema if self._schema_ok else None,
+                grammar=grammar,
             )
         except LLMHTTPError as exc:
             if schema is None or exc.status not in (400, 422, 501) or not self._schema_ok:
@@ -186,31 +197,34 @@ class Agent:
         if self.mode == "tool":
             tools = build_tools(self.graph.catalog, locations)
             system, schema = prompts.tool_prompt(tools), tool_schema(tools)
+            grammar = tool_grammar(tools)
 
             def parse(text):
                 return steps_from_reply(text, tools)
         else:
             system, schema = prompts.command_prompt(self.graph.catalog, locations), command_schema()
+            grammar = command_grammar()
             parse = commands_from_reply
-        messages = [{"role": "system", "content": system}]
+        messages = [{"role": "system", "content": system}, *prompts.example_messages(self.mode)]
         for past_request, past_answer in self.history[-HISTORY_TURNS:]:
             messages += [
-                {"role": "user", "content": f"Operator: {past_request}"},
+                {"role": "user", "content": past_request},
                 {"role": "assistant", "content": past_answer},
             ]
-        messages.append({"role": "user", "content": f"Operator: {request}"})
-        c = await self._ask(messages, schema, result, emit, "plan_token")
+        messages.append({"role": "user", "content": request})
+        ask = functools.partial(
+            self._ask, schema=schema, result=result, emit=emit, kind="plan_token", grammar=grammar
+        )
+        c = await ask(messages)
         try:
             commands = parse(c.text)
         except ReplyError as exc:
-            commands = await self._repair(messages, c.text, str(exc), schema, parse, result, emit)
+            commands = await self._repair(messages, c.text, str(exc), ask, parse, result)
         if commands and not result.repaired:
-            commands = await self._repair_invalid(
-                messages, c.text, commands, schema, parse, result, emit
-            )
+            commands = await self._repair_invalid(messages, c.text, commands, ask, parse, result)
         return commands
 
-    async def _repair(self, messages, reply, reason, schema, parse, result, emit) -> list[str]:
+    async def _repair(self, messages, reply, reason, ask, parse, result) -> list[str]:
         result.repaired = True
         retry = messages + [
             {"role": "assistant", "content": reply},
@@ -219,21 +233,19 @@ class Agent:
                 "content": f"That reply could not be used: {reason}. Answer again with JSON only.",
             },
         ]
-        c = await self._ask(retry, schema, result, emit, "plan_token")
+        c = await ask(retry)
         try:
             return parse(c.text)
         except ReplyError as exc:
             raise LLMProtocolError(f"the model's reply could not be used: {exc}") from None
 
-    async def _repair_invalid(
-        self, messages, reply, commands, schema, parse, result, emit
-    ) -> list[str]:
+    async def _repair_invalid(self, messages, reply, commands, ask, parse, result) -> list[str]:
         for cmd in commands:
             review = self.graph.review(cmd)
             if not review.checked.valid:
                 reason = f"the command `{cmd}` was rejected: {review.checked.reason}"
                 try:
-                    return await self._repair(messages, reply, reason, schema, parse, result, emit)
+                    return await self._repair(messages, reply, reason, ask, parse, result)
                 except LLMProtocolError:
                     return commands  # keep the first plan; its rejection is recorded
         return commands

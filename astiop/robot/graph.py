@@ -66,9 +66,8 @@ class RobotGraph:
         t0 = time.perf_counter()
         review = self.review(text)
         checked = review.checked
-        shown = checked.command.display() if checked.command else text
         result = Execution(
-            shown, checked.valid, checked.reason, checked.kind, notes=list(checked.notes)
+            text.strip(), checked.valid, checked.reason, checked.kind, notes=list(checked.notes)
         )
         if not review.allowed:
             result.reason = review.reason
