@@ -14,7 +14,14 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from astiop.agent import prompts, rules
-from astiop.agent.llm import Completion, LLMError, LLMHTTPError, LLMProtocolError
+from astiop.agent.llm import (
+    Completion,
+    LLMError,
+    LLMHTTPError,
+    LLMProtocolError,
+    LLMTimeout,
+    LLMUnavailable,
+)
 from astiop.agent.replies import ReplyError, commands_from_reply, steps_from_reply
 from astiop.agent.specs import LLMEndpoint
 from astiop.agent.summaries import summarize
@@ -124,7 +131,17 @@ class Agent:
                 model=self.model, mode=self.mode, prompt=request, session=self.session
             )
         try:
-            commands = await self._plan(request, result, emit)
+            try:
+                commands = await self._plan(request, result, emit)
+            except (LLMUnavailable, LLMTimeout) as exc:
+                # the baseline answers instead, labelled so; the turn still records the error
+                result.error = f"{exc}; answered by the rules fallback"
+                commands = rules.plan(request, self.locations())
+                await self._execute(commands, result, emit)
+                result.answer = "[rules fallback] " + rules.interpret(request, result.commands)
+                emit("answer_token", result.answer)
+                self._finish(result, t0)
+                return result
             await self._execute(commands, result, emit)
             result.answer = await self._interpret(request, result, emit)
         except LLMError as exc:

@@ -1,0 +1,94 @@
+"""The embedded model: a real llama.cpp server (xllamacpp) with SmolLM2-135M on 127.0.0.1."""
+
+import json
+
+import httpx
+import pytest
+
+from astiop.agent.embedded import EmbeddedServer, smollm2_path
+from astiop.agent.llm import OpenAIClient
+from astiop.agent.specs import LLMEndpoint, parse_spec
+from astiop.agent.turn import Agent
+from astiop.robot.graph import RobotGraph
+from astiop.robot.safety import SafetyPolicy
+from astiop.robot.sim_backend import SimBackend
+from astiop.sim.simulator import Simulator
+
+pytestmark = pytest.mark.slow
+
+
+@pytest.fixture(scope="module")
+def server():
+    s = EmbeddedServer(smollm2_path(), threads=1, n_ctx=2048).start()
+    yield s
+    s.stop()
+
+
+@pytest.fixture(scope="module")
+def endpoint(server):
+    ep = LLMEndpoint(parse_spec("embedded"), threads=1, n_ctx=2048)
+    ep.server = server  # share the one server across the module
+    ep._client = OpenAIClient(server.base_url, server.model_name)
+    return ep
+
+
+def test_health_and_models(server):
+    assert httpx.get(f"http://127.0.0.1:{server.port}/health").status_code == 200
+    assert server.startup_s < 30
+
+
+def test_non_streaming_reply_carries_usage_and_timings(server):
+    body = {"messages": [{"role": "user", "content": "Say hello."}], "max_tokens": 8}
+    data = httpx.post(f"{server.base_url}/chat/completions", json=body, timeout=60).json()
+    assert data["choices"][0]["message"]["content"]
+    assert data["usage"]["completion_tokens"] > 0 and data["timings"]["predicted_n"] > 0
+
+
+async def test_streaming_with_usage(server):
+    client = OpenAIClient(server.base_url, server.model_name)
+    pieces = []
+    c = await client.chat(
+        [{"role": "user", "content": "Name a colour."}], max_tokens=12, on_token=pieces.append
+    )
+    assert len(pieces) >= 2 and "".join(pieces) == c.text
+    assert c.prompt_tokens and c.completion_tokens and c.tokens_per_s > 1
+    assert c.ttft_s < c.total_s
+
+
+async def test_json_schema_reply_validates(server):
+    schema = {
+        "type": "object",
+        "properties": {"level": {"enum": ["low", "high"]}},
+        "required": ["level"],
+    }
+    client = OpenAIClient(server.base_url, server.model_name)
+    c = await client.chat(
+        [{"role": "user", "content": "Is 90% battery low or high?"}], schema=schema, max_tokens=64
+    )
+    assert json.loads(c.text)["level"] in ("low", "high")
+
+
+def make_agent(endpoint, store):
+    graph = RobotGraph(SimBackend(Simulator(seed=0), store), SafetyPolicy())
+    return Agent(graph, endpoint, store, mode="tool", max_tokens=96, confirm=lambda c: True)
+
+
+async def test_agent_reads_the_battery(endpoint, store):
+    result = await make_agent(endpoint, store).turn("What is the battery level?")
+    assert [c.command for c in result.commands] == ["ros2 topic echo /battery_status --once"]
+    assert result.commands[0].executed and result.answer
+
+
+async def test_agent_reads_the_position(endpoint, store):
+    result = await make_agent(endpoint, store).turn("Where is the robot right now?")
+    assert [c.command for c in result.commands] == ["ros2 topic echo /robot_pose --once"]
+
+
+async def test_agent_sends_the_robot_to_a_named_location(endpoint, store):
+    agent = make_agent(endpoint, store)
+    result = await agent.turn("Send the robot to the assembly station")
+    assert result.commands and result.commands[0].values["success"] is True
+    sim = agent.graph.backend.sim
+    outcome = sim.run_goal(300)
+    assert outcome.status == "succeeded" and outcome.name == "assembly_station"
+    assert abs(sim.pose[0] - 8.0) < 0.1 and abs(sim.pose[1] - 22.6) < 0.1
