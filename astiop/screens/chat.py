@@ -1,0 +1,149 @@
+"""Chat (Fig. 16c): a request becomes ros2 commands, each shown checked, run and explained."""
+
+from __future__ import annotations
+
+from rich.text import Text
+from textual import work
+from textual.app import ComposeResult
+from textual.binding import Binding
+from textual.containers import VerticalScroll
+from textual.screen import Screen
+from textual.widgets import Collapsible, Footer, Header, Input, Static
+
+from astiop.agent.embedded import EmbeddedModelError
+from astiop.agent.specs import SpecError, open_endpoint
+from astiop.agent.turn import Agent, TurnResult
+from astiop.robot.output import Execution
+
+HELP = (
+    "Ask in plain language, e.g. 'what is the battery level?' or 'send the robot to "
+    "shipping'.  /model SPEC switches the model, /mode command|tool the reply mode."
+)
+
+
+class CommandView(Static):
+    def __init__(self, ex: Execution):
+        ok = ex.executed and not ex.error
+        mark = "✓" if ok else "✗"
+        line = Text(f"{mark} {ex.command}", style="green" if ok else "red")
+        why = ex.reason or ex.error
+        if why:
+            line.append(f"\n  {why}", style="italic")
+        for note in ex.notes:
+            line.append(f"\n  note: {note}", style="yellow")
+        super().__init__(line, classes="cmd-ok" if ok else "cmd-bad")
+
+
+class ChatScreen(Screen):
+    BINDINGS = [Binding("escape", "cancel", "Cancel reply")]
+
+    def compose(self) -> ComposeResult:
+        yield Header(show_clock=False)
+        yield VerticalScroll(Static(HELP, classes="answer"), id="chat-log")
+        yield Input(
+            placeholder="Ask the robot…  (/model SPEC, /mode command|tool)", id="chat-input"
+        )
+        yield Footer()
+
+    def on_mount(self) -> None:
+        services = self.app.services
+        self.agent = self._make_agent(services.endpoint, services.settings.llm.mode)
+        self.query_one(Input).focus()
+
+    def _make_agent(self, endpoint, mode: str) -> Agent:
+        services = self.app.services
+        return Agent(
+            services.graph,
+            endpoint,
+            services.store,
+            mode=mode,
+            max_tokens=services.settings.llm.max_tokens,
+            confirm=self.app.confirm_from_thread,
+            session="console",
+        )
+
+    def _log(self, widget) -> None:
+        log = self.query_one("#chat-log", VerticalScroll)
+        log.mount(widget)
+        log.scroll_end(animate=False)
+
+    def on_input_submitted(self, event: Input.Submitted) -> None:
+        text = event.value.strip()
+        event.input.value = ""
+        if not text:
+            return
+        if text.startswith("/model"):
+            self._switch_model(text.removeprefix("/model").strip())
+        elif text.startswith("/mode"):
+            mode = text.removeprefix("/mode").strip()
+            if mode not in ("command", "tool"):
+                self.notify("/mode takes 'command' or 'tool'", severity="error")
+                return
+            self.agent = self._make_agent(self.agent.endpoint, mode)
+            self.notify(f"reply mode: {mode}")
+        else:
+            self._log(Static(Text(f"you: {text}"), classes="user-msg"))
+            self.run_turn(text)
+
+    def _switch_model(self, spec: str) -> None:
+        try:
+            endpoint = open_endpoint(spec or "rules")
+        except SpecError as exc:
+            self.notify(str(exc), severity="error")
+            return
+        old = self.app.services.endpoint
+        self.app.services.endpoint = endpoint
+        self.agent = self._make_agent(
+            endpoint,
+            self.agent.mode if self.agent.mode != "rules" else self.app.services.settings.llm.mode,
+        )
+        self.app.sub_title = f"robot: {self.app.services.graph.backend.name}  model: {spec}"
+        self.run_worker(old.close, thread=True, group="model")
+        self.notify(f"model: {endpoint.spec.raw}")
+
+    @work(exclusive=True, group="llm")
+    async def run_turn(self, text: str) -> None:
+        status = Static(Text("thinking…", style="dim"), classes="answer")
+        self._log(status)
+        answer = Static("", classes="answer")
+        parts: list[str] = []
+
+        def on_event(kind: str, data) -> None:
+            if kind == "command":
+                ex: Execution = data
+                self.query_one("#chat-log").mount(CommandView(ex), before=status)
+                if ex.output:
+                    out = Collapsible(
+                        Static(ex.output.rstrip(), markup=False), title="output", collapsed=True
+                    )
+                    self.query_one("#chat-log").mount(out, before=status)
+            elif kind == "answer_token":
+                if not parts:
+                    self._log(answer)
+                parts.append(data)
+                answer.update(Text("".join(parts)))
+            elif kind == "status":
+                status.update(Text(str(data), style="dim"))
+            self.query_one("#chat-log", VerticalScroll).scroll_end(animate=False)
+
+        try:
+            result: TurnResult = await self.agent.turn(text, on_event)
+        except EmbeddedModelError as exc:
+            status.update(Text(str(exc), style="red"))
+            return
+        self.app.last_turn = result
+        if not parts:
+            self._log(answer)
+            answer.update(Text(result.answer))
+        info = f"{result.model} · {result.mode} · {result.total_s:.1f} s"
+        if result.completion_tokens:
+            info += f" · {result.completion_tokens} tokens"
+        if result.error:
+            info += f" · {result.error}"
+        status.update(Text(info, style="dim red" if result.error else "dim"))
+        self._log(status)
+
+    def action_cancel(self) -> None:
+        cancelled = self.workers.cancel_group(self, "llm")
+        if cancelled:
+            self.notify("reply cancelled")

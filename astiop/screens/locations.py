@@ -1,0 +1,133 @@
+"""Locations (Fig. 16d): named waypoints; add, rename, delete and send the robot there."""
+
+from __future__ import annotations
+
+import math
+
+from textual.app import ComposeResult
+from textual.binding import Binding
+from textual.screen import Screen
+from textual.widgets import DataTable, Footer, Header
+
+from astiop.screens.modals import ConfirmModal, FormModal
+from astiop.store import Location, LocationError
+
+
+class LocationsScreen(Screen):
+    BINDINGS = [
+        Binding("a", "add", "Add"),
+        Binding("r", "rename", "Rename"),
+        Binding("delete,d", "delete", "Delete"),
+        Binding("g", "goto", "Go to"),
+    ]
+
+    def __init__(self):
+        super().__init__()
+        self.locations: list[Location] = []
+
+    def compose(self) -> ComposeResult:
+        yield Header(show_clock=False)
+        yield DataTable(id="locations-table", cursor_type="row", zebra_stripes=True)
+        yield Footer()
+
+    def on_mount(self) -> None:
+        self.query_one(DataTable).add_columns("name", "x (m)", "y (m)", "θ (°)", "description")
+        self.reload()
+
+    def reload(self) -> None:
+        self.locations = self.app.services.store.list_locations()
+        table = self.query_one(DataTable)
+        table.clear()
+        for loc in self.locations:
+            table.add_row(
+                loc.name,
+                f"{loc.x:.2f}",
+                f"{loc.y:.2f}",
+                f"{math.degrees(loc.theta):.1f}",
+                loc.description,
+            )
+
+    def selected(self) -> Location | None:
+        table = self.query_one(DataTable)
+        if not self.locations:
+            return None
+        return self.locations[min(table.cursor_row, len(self.locations) - 1)]
+
+    def action_add(self) -> None:
+        st = self.app.state
+        x, y, th = (st.x, st.y, math.degrees(st.theta)) if st else (0.0, 0.0, 0.0)
+        fields = [
+            ("name", "name (letters, digits, _ or -)", ""),
+            ("x", "x (m) — the robot's pose by default", f"{x:.2f}"),
+            ("y", "y (m)", f"{y:.2f}"),
+            ("theta", "θ (degrees)", f"{th:.1f}"),
+            ("description", "description", ""),
+        ]
+
+        def done(values: dict | None) -> None:
+            if values is None:
+                return
+            try:
+                x, y, th = (float(values[k]) for k in ("x", "y", "theta"))
+            except ValueError:
+                self.notify("x, y and θ must be numbers", severity="error")
+                return
+            try:
+                loc = self.app.services.store.add_location(
+                    values["name"].strip(), x, y, math.radians(th), values["description"]
+                )
+            except LocationError as exc:
+                self.notify(str(exc), severity="error")
+                return
+            self.notify(f"added {loc.name}")
+            self.reload()
+
+        self.app.push_screen(FormModal("Add a named location", fields), done)
+
+    def action_rename(self) -> None:
+        loc = self.selected()
+        if loc is None:
+            return
+
+        def done(values: dict | None) -> None:
+            if values is None:
+                return
+            try:
+                new = self.app.services.store.rename_location(loc.name, values["name"].strip())
+            except LocationError as exc:
+                self.notify(str(exc), severity="error")
+                return
+            self.notify(f"renamed {loc.name} to {new.name}")
+            self.reload()
+
+        self.app.push_screen(
+            FormModal(f"Rename {loc.name}", [("name", "new name", loc.name)]), done
+        )
+
+    def action_delete(self) -> None:
+        loc = self.selected()
+        if loc is None:
+            return
+
+        def done(ok: bool | None) -> None:
+            if ok:
+                self.app.services.store.remove_location(loc.name)
+                self.notify(f"removed {loc.name}")
+                self.reload()
+
+        self.app.push_screen(ConfirmModal(f"Delete the location {loc.name}?"), done)
+
+    def action_goto(self) -> None:
+        loc = self.selected()
+        if loc is None:
+            return
+        cmd = (
+            f"ros2 service call /goto_position astiop_msgs/srv/GotoPosition "
+            f"\"{{name: '{loc.name}'}}\""
+        )
+        result = self.app.services.graph.run(cmd, confirm=lambda _c: True)  # g is consent
+        values = result.values or {}
+        if result.executed and values.get("success"):
+            self.notify(values["message"])
+        else:
+            self.notify(result.reason or values.get("message", "refused"), severity="error")

@@ -1,0 +1,51 @@
+"""Small text gauges: the battery, and the four wheel speeds."""
+
+from __future__ import annotations
+
+from rich.text import Text
+from textual.widgets import Static
+
+from astiop.sim.kinematics import ASTIBOT
+
+
+def bar(fraction: float, width: int, color: str) -> Text:
+    fraction = min(max(fraction, 0.0), 1.0)
+    filled = int(round(fraction * width))
+    return Text("█" * filled, style=color) + Text("░" * (width - filled), style="grey37")
+
+
+class BatteryGauge(Static):
+    def show(self, soc: float, voltage: float, current: float, charging: bool) -> None:
+        color = "green" if soc > 0.4 else "yellow" if soc > 0.2 else "red"
+        text = (
+            Text("battery ")
+            + bar(soc, 20, color)
+            + Text(
+                f" {soc * 100:5.1f} %  {voltage:5.2f} V  {current:+5.2f} A"
+                + ("  charging" if charging else "")
+            )
+        )
+        self.update(text)
+
+
+class WheelBars(Static):
+    """Signed bars around a centre line, scaled to the motor limit."""
+
+    NAMES = ("FL", "FR", "RL", "RR")
+
+    def show(self, wheels) -> None:
+        limit = ASTIBOT.max_wheel_speed
+        half = 12
+        lines = Text()
+        for name, w in zip(self.NAMES, wheels):
+            n = int(round(min(abs(w) / limit, 1.0) * half))
+            left = " " * (half - n) + ("█" * n if w < 0 else "")
+            right = ("█" * n if w > 0 else "") + " " * (half - (n if w > 0 else 0))
+            lines += (
+                Text(f"{name} ")
+                + Text(left.rjust(half), style="red")
+                + Text("│")
+                + Text(right.ljust(half), style="green")
+                + Text(f" {w:+6.2f} rad/s\n")
+            )
+        self.update(lines)

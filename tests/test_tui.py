@@ -1,0 +1,136 @@
+"""The console driven with Pilot: what an operator does on each screen."""
+
+import math
+
+from textual.widgets import DataTable, Input
+
+from tests.tui_helpers import console
+
+SIZE = (120, 40)
+
+
+async def test_function_keys_switch_screens(tmp_path):
+    app = console(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+        for key, name in [
+            ("f2", "ChatScreen"),
+            ("f3", "LogsScreen"),
+            ("f4", "LocationsScreen"),
+            ("f5", "TeleopScreen"),
+            ("f1", "DashboardScreen"),
+        ]:
+            await pilot.press(key)
+            await pilot.pause()
+            assert type(app.screen).__name__ == name
+
+
+async def test_chat_answers_and_logs_it(tmp_path):
+    app = console(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.press("f2")
+        await pilot.pause()
+        app.screen.query_one(Input).value = "what is the battery level?"
+        await pilot.press("enter")
+        await app.workers.wait_for_complete()
+        await pilot.pause()
+        text = " ".join(str(w.render()) for w in app.screen.query(".answer"))
+        assert "battery 85.0 %" in text
+        assert app.last_turn.commands[0].command == "ros2 topic echo /battery_status --once"
+        rows = app.services.store.interactions()
+        assert rows[0]["prompt"] == "what is the battery level?"
+        await pilot.press("f3")
+        await app.workers.wait_for_complete()
+        await pilot.pause()
+        assert app.screen.query_one(DataTable).row_count >= 1
+
+
+async def test_chat_actuation_waits_for_the_operator(tmp_path):
+    app = console(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.press("f2")
+        await pilot.pause()
+        app.screen.query_one(Input).value = "send the robot to shipping"
+        await pilot.press("enter")
+        for _ in range(50):
+            await pilot.pause(0.05)
+            if type(app.screen).__name__ == "ConfirmModal":
+                break
+        assert type(app.screen).__name__ == "ConfirmModal"
+        assert app.services.sim.goal is None  # nothing moved yet
+        await pilot.press("y")
+        await app.workers.wait_for_complete()
+        assert app.services.sim.goal is not None and app.services.sim.goal.name == "shipping"
+
+
+async def test_add_and_remove_a_location(tmp_path):
+    app = console(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.press("f4")
+        await pilot.pause()
+        await pilot.press("a")
+        await pilot.pause()
+        app.screen.query_one("#field-name", Input).value = "bay_9"
+        app.screen.query_one("#field-x", Input).value = "12.5"
+        await pilot.click("#ok")
+        await pilot.pause()
+        loc = app.services.store.get_location("bay_9")
+        assert loc is not None and loc.x == 12.5 and loc.y == 3.0
+        table = app.screen.query_one(DataTable)
+        names = [loc.name for loc in app.screen.locations]
+        table.move_cursor(row=names.index("bay_9"))
+        await pilot.press("d")
+        await pilot.pause()
+        await pilot.press("y")
+        await pilot.pause()
+        assert app.services.store.get_location("bay_9") is None
+
+
+async def test_bad_location_input_is_refused(tmp_path):
+    app = console(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.press("f4")
+        await pilot.press("a")
+        await pilot.pause()
+        app.screen.query_one("#field-name", Input).value = "shipping"
+        await pilot.click("#ok")
+        await pilot.pause()
+        assert len(app.services.store.list_locations()) == 6
+
+
+async def test_teleop_drives_the_robot(tmp_path):
+    app = console(tmp_path)
+    sim = app.services.sim
+    sim.undock()
+    sim.run_goal(60)
+    x0 = sim.pose[0]
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.press("f5")
+        await pilot.pause()
+        await pilot.press("plus", "plus")  # 0.8 m/s steps
+        for _ in range(20):
+            await pilot.press("s")  # backwards: the robot faces west, so +x
+            sim.step(0.1)
+        assert sim.pose[0] > x0 + 0.5
+        sim.step(2.0)  # no more key presses: the command lapses, the base ramps down
+        assert sim.speed() < 0.01
+
+
+async def test_estop_works_from_any_screen_and_wins(tmp_path):
+    app = console(tmp_path)
+    sim = app.services.sim
+    async with app.run_test(size=SIZE) as pilot:
+        sim.goto(37.6, 4.0, 0.0, "shipping")
+        sim.step(3.0)
+        await pilot.press("f2")  # the chat input has focus
+        await pilot.pause()
+        await pilot.press("ctrl+e")
+        await pilot.pause()
+        assert sim.e_stopped and sim.goal is None
+        pose = sim.pose
+        sim.step(2.0)
+        assert math.dist(pose[:2], sim.pose[:2]) < 0.02
+        await pilot.press("ctrl+r")
+        await pilot.pause()
+        await pilot.press("y")
+        await pilot.pause()
+        assert not sim.e_stopped

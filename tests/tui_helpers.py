@@ -1,0 +1,13 @@
+"""A console built as the CLI builds it, but on a seeded, paused simulator and a temp store."""
+
+from astiop.app import make_app
+from astiop.config import load_settings
+from astiop.sim.simulator import Simulator
+from astiop.store import Store
+
+
+def console(tmp_path, model: str = "rules", sim: Simulator | None = None, **settings):
+    overrides = {"llm": {"model": model}, **settings}
+    cfg = load_settings(overrides, env={}, path=tmp_path / "none.toml")
+    store = Store(tmp_path / "console.db")
+    return make_app(cfg, store, sim=sim or Simulator(seed=0), realtime=False)
