@@ -119,7 +119,7 @@ class ChatScreen(Screen):
                     self.query_one("#chat-log").mount(out, before=status)
             elif kind == "answer_token":
                 if not parts:
-                    self._log(answer)
+                    self.query_one("#chat-log").mount(answer, before=status)
                 parts.append(data)
                 answer.update(Text("".join(parts)))
             elif kind == "status":
@@ -133,7 +133,7 @@ class ChatScreen(Screen):
             return
         self.app.last_turn = result
         if not parts:
-            self._log(answer)
+            self.query_one("#chat-log").mount(answer, before=status)
             answer.update(Text(result.answer))
         info = f"{result.model} · {result.mode} · {result.total_s:.1f} s"
         if result.completion_tokens:
@@ -141,7 +141,7 @@ class ChatScreen(Screen):
         if result.error:
             info += f" · {result.error}"
         status.update(Text(info, style="dim red" if result.error else "dim"))
-        self._log(status)
+        self.query_one("#chat-log", VerticalScroll).scroll_end(animate=False)
 
     def action_cancel(self) -> None:
         cancelled = self.workers.cancel_group(self, "llm")

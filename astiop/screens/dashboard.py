@@ -106,7 +106,9 @@ class DashboardScreen(Screen):
             f"{'  running' if st.conveyor_direction else ''}  lamp {st.lamp}"
             f"  obstacles seen {len(st.detected)}",
         )
-        self.query_one("#robot", Static).update(text)
+        if text.plain != getattr(self, "_robot_text", None):
+            self._robot_text = text.plain
+            self.query_one("#robot", Static).update(text)
         self.query_one("#battery", BatteryGauge).show(
             st.battery_soc, st.battery_voltage, st.battery_current, st.battery_charging
         )

@@ -25,7 +25,9 @@ class BatteryGauge(Static):
                 + ("  charging" if charging else "")
             )
         )
-        self.update(text)
+        if text.plain != getattr(self, "_shown", None):
+            self._shown = text.plain
+            self.update(text)
 
 
 class WheelBars(Static):

@@ -7,6 +7,7 @@ import math
 import numpy as np
 from rich.segment import Segment
 from rich.style import Style
+from textual.geometry import Region
 from textual.strip import Strip
 from textual.widget import Widget
 
@@ -47,8 +48,20 @@ class WarehouseMapView(Widget):
 
     def show(self, state: SimState) -> None:
         self.robot_state = state
-        self._pixels = None
-        self.refresh()
+        w, h = self.size.width, self.size.height
+        if w <= 0 or h <= 0:
+            return
+        pixels = self._raster(w, 2 * h)
+        # lidar noise rarely moves a half-metre pixel: redraw only what changed
+        if self._pixels is None or self._pixels.shape != pixels.shape:
+            self._pixels = pixels
+            self.refresh()
+            return
+        rows = np.nonzero((pixels != self._pixels).any(axis=1))[0]
+        self._pixels = pixels
+        if len(rows):
+            y0, y1 = int(rows.min()) // 2, int(rows.max()) // 2
+            self.refresh(Region(0, y0, w, y1 - y0 + 1))
 
     # -- rasterising ----------------------------------------------------------------------
     def _scale(self, w: int, h: int) -> tuple[float, float, float]:
