@@ -16,6 +16,7 @@ from astiop.config import Settings
 from astiop.robot.factory import make_robot_graph, make_sim_graph
 from astiop.robot.graph import RobotGraph
 from astiop.robot.validation import Checked
+from astiop.screens.bench import BenchScreen
 from astiop.screens.chat import ChatScreen
 from astiop.screens.dashboard import DashboardScreen
 from astiop.screens.locations import LocationsScreen
@@ -47,14 +48,16 @@ class AstiopApp(App):
         "logs": LogsScreen,
         "locations": LocationsScreen,
         "teleop": TeleopScreen,
+        "bench": BenchScreen,
     }
     BINDINGS = [
+        Binding("ctrl+e", "estop", "E-STOP", priority=True),
         Binding("f1", "switch_mode('dashboard')", "Dashboard"),
         Binding("f2", "switch_mode('chat')", "Chat"),
         Binding("f3", "switch_mode('logs')", "Logs"),
         Binding("f4", "switch_mode('locations')", "Locations"),
         Binding("f5", "switch_mode('teleop')", "Teleop"),
-        Binding("ctrl+e", "estop", "E-STOP", priority=True),
+        Binding("f6", "switch_mode('bench')", "Bench"),
         Binding("ctrl+r", "release_estop", "Release e-stop", priority=True),
         Binding("ctrl+q", "quit", "Quit", priority=True),
     ]

@@ -16,7 +16,7 @@ def scene() -> Simulator:
     return sim
 
 
-@pytest.mark.parametrize("key", ["f1", "f2", "f4", "f5"])
+@pytest.mark.parametrize("key", ["f1", "f2", "f4", "f5", "f6"])
 def test_screen_snapshots(snap_compare, tmp_path, key):
     app = console(tmp_path, sim=scene())
     assert snap_compare(app, terminal_size=SIZE, press=[key, "wait:300"])

@@ -134,3 +134,22 @@ async def test_estop_works_from_any_screen_and_wins(tmp_path):
         await pilot.press("y")
         await pilot.pause()
         assert not sim.e_stopped
+
+
+async def test_bench_screen_runs_and_ranks(tmp_path):
+    app = console(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.press("f6")
+        await pilot.pause()
+        app.screen.query_one("#bench-models", Input).value = "rules"
+        app.screen.query_one("#bench-limit", Input).value = "3"
+        await pilot.press("ctrl+b")
+        await app.workers.wait_for_complete()
+        await pilot.pause()
+        ranking = app.screen.query_one("#bench-ranking", DataTable)
+        assert ranking.row_count == 1
+        assert app.screen.query_one("#bench-runs", DataTable).row_count == 1
+        app.screen.query_one("#bench-models", Input).value = "bogus:thing"
+        await pilot.press("ctrl+b")
+        await pilot.pause()
+        assert app.screen.query_one("#bench-runs", DataTable).row_count == 1

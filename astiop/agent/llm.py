@@ -173,20 +173,6 @@ class ChatClient:
         except ValueError:
             raise LLMProtocolError(f"{self.label}: {path} did not return JSON") from None
 
-    async def _get_json(self, path: str) -> Any:
-        try:
-            async with httpx.AsyncClient(timeout=httpx.Timeout(5.0), headers=self._headers()) as cl:
-                resp = await cl.get(f"{self.base_url}{path}")
-        except httpx.HTTPError as exc:
-            detail = _one_line(str(exc)) or type(exc).__name__
-            raise LLMUnavailable(f"{self.label}: {detail}") from None
-        if resp.status_code >= 400:
-            raise LLMHTTPError(resp.status_code, f"{self.label}: HTTP {resp.status_code}")
-        try:
-            return resp.json()
-        except ValueError:
-            raise LLMProtocolError(f"{self.label}: {path} did not return JSON") from None
-
     def _request(self, messages: Messages, opts: _Options) -> tuple[str, dict]:
         raise NotImplementedError
 

@@ -97,8 +97,10 @@ class Agent:
         confirm: Confirm | None = None,
         session: str = "",
         nav_wait_s: float = 600.0,
+        fallback: bool = True,
+        location_names: list[str] | None = None,
     ):
-        if mode not in ("command", "tool"):
+        if mode not in ("command", "tool") and not endpoint.is_rules:
             raise ValueError(f"mode must be 'command' or 'tool', not '{mode}'")
         self.graph = graph
         self.endpoint = endpoint
@@ -109,6 +111,8 @@ class Agent:
         self.session = session
         self.nav_wait_s = nav_wait_s
         self.history: list[tuple[str, str]] = []
+        self.fallback = fallback  # the rules answer when the model is unreachable
+        self.location_names = location_names
         self._schema_ok = True
 
     @property
@@ -116,6 +120,8 @@ class Agent:
         return self.endpoint.spec.raw
 
     def locations(self) -> list[str]:
+        if self.location_names is not None:
+            return self.location_names
         if self.store is not None:
             return [loc.name for loc in self.store.list_locations()]
         sim = getattr(self.graph.backend, "sim", None)
@@ -134,6 +140,8 @@ class Agent:
             try:
                 commands = await self._plan(request, result, emit)
             except (LLMUnavailable, LLMTimeout) as exc:
+                if not self.fallback:
+                    raise
                 # the baseline answers instead, labelled so; the turn still records the error
                 result.error = f"{exc}; answered by the rules fallback"
                 commands = rules.plan(request, self.locations())

@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 
 from astiop import __version__
-from astiop.cli import agent, config_cmd, locations, robot, sim
+from astiop.cli import agent, bench, config_cmd, locations, robot, sim
 from astiop.cli.common import CliState
 
 app = typer.Typer(
@@ -19,6 +19,7 @@ app = typer.Typer(
 app.add_typer(config_cmd.app, name="config")
 app.add_typer(locations.app, name="locations")
 app.add_typer(sim.app, name="sim")
+app.add_typer(bench.app, name="bench")
 app.command("exec")(robot.exec_command)
 app.command("chat")(agent.chat)
 app.command("models")(agent.models)

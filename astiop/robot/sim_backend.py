@@ -152,9 +152,13 @@ class SimBackend:
         return handler(checked, timeout)
 
     def _topic_list(self, c: Checked, timeout: float):
+        return self._listing(self.catalog.topics, c)
+
+    @staticmethod
+    def _listing(entries: dict, c: Checked) -> tuple[str, list[str]]:
         types = "show_types" in c.command.flags
-        names = sorted(self.catalog.topics)
-        lines = [f"{n} [{self.catalog.topics[n].type}]" if types else n for n in names]
+        names = sorted(entries)
+        lines = [f"{n} [{entries[n].type}]" if types else n for n in names]
         return "\n".join(lines) + "\n", names
 
     def _topic_type(self, c: Checked, timeout: float):
@@ -206,13 +210,9 @@ class SimBackend:
         return "\n".join(lines) + "\n", {"published": times, "twist": twist}
 
     def _service_list(self, c: Checked, timeout: float):
-        types = "show_types" in c.command.flags
-        names = sorted(self.catalog.services)
-        lines = [f"{n} [{self.catalog.services[n].type}]" if types else n for n in names]
-        return "\n".join(lines) + "\n", names
+        return self._listing(self.catalog.services, c)
 
-    def _service_type(self, c: Checked, timeout: float):
-        return c.type + "\n", c.type
+    _service_type = _topic_type
 
     def _service_call(self, c: Checked, timeout: float):
         name, req = c.command.name, c.message
@@ -279,10 +279,7 @@ class SimBackend:
         return (*st.pose, st.name)
 
     def _action_list(self, c: Checked, timeout: float):
-        types = "show_types" in c.command.flags
-        names = sorted(self.catalog.actions)
-        lines = [f"{n} [{self.catalog.actions[n].type}]" if types else n for n in names]
-        return "\n".join(lines) + "\n", names
+        return self._listing(self.catalog.actions, c)
 
     def _action_info(self, c: Checked, timeout: float):
         spec = self.catalog.actions[c.command.name]

@@ -1,0 +1,241 @@
+"""Runs a benchmark: models × modes × cases, each result stored as it finishes.
+
+An interrupted run keeps what it finished; `resume` picks up the cases still missing. The
+same seed gives the same simulator set-ups and the same sampling seed for the models.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+
+from astiop.agent.llm import LLMError, LLMTimeout
+from astiop.agent.specs import LLMEndpoint, open_endpoint
+from astiop.agent.turn import Agent
+from astiop.bench import stage1, stage2, suites
+from astiop.config import Settings
+from astiop.robot.factory import make_safety
+from astiop.robot.graph import RobotGraph
+from astiop.robot.sim_backend import SimBackend
+from astiop.store import Store
+
+
+@dataclass
+class RunConfig:
+    stage: int
+    models: list[str]
+    modes: list[str] = field(default_factory=lambda: ["tool"])
+    limit: int | None = None
+    seed: int = 0
+    timeout_s: float = 120.0
+    max_tokens: int = 384
+    concurrency: int = 1
+
+
+@dataclass(frozen=True)
+class Progress:
+    done: int
+    total: int
+    model: str
+    mode: str
+    case_id: str
+    outcome: str
+    elapsed_s: float
+
+    @property
+    def eta_s(self) -> float:
+        return self.elapsed_s / self.done * (self.total - self.done) if self.done else 0.0
+
+
+class BenchError(ValueError):
+    pass
+
+
+def create_run(store: Store, config: RunConfig) -> int:
+    if config.stage not in (1, 2):
+        raise BenchError("--stage is 1 or 2")
+    with store.db.conn:
+        row = store.db["bench_runs"].insert(
+            {
+                "started_at": time.time(),
+                "stage": config.stage,
+                "models": json.dumps(config.models),
+                "modes": json.dumps(config.modes),
+                "seed": config.seed,
+                "case_limit": config.limit,
+                "status": "running",
+                "config": json.dumps(asdict(config)),
+            }
+        )
+    return int(row.last_pk)
+
+
+def load_config(store: Store, run_id: int) -> RunConfig:
+    rows = list(store.db.query("SELECT config FROM bench_runs WHERE id = ?", [run_id]))
+    if not rows:
+        raise BenchError(f"there is no benchmark run {run_id} (astiop bench list shows them)")
+    return RunConfig(**json.loads(rows[0]["config"]))
+
+
+def _done(store: Store, run_id: int) -> set[tuple[str, str, str]]:
+    rows = store.db.query(
+        "SELECT model, mode, case_id FROM bench_results WHERE run_id = ?", [run_id]
+    )
+    return {(r["model"], r["mode"], r["case_id"]) for r in rows}
+
+
+def _save(
+    store: Store,
+    run_id: int,
+    model: str,
+    mode: str,
+    case,
+    outcome: str,
+    metrics: dict,
+    response: str,
+) -> None:
+    with store.db.conn:
+        store.db["bench_results"].insert(
+            {
+                "run_id": run_id,
+                "model": model,
+                "mode": mode,
+                "case_id": case.id,
+                "level": case.level,
+                "category": case.category,
+                "outcome": outcome,
+                "metrics": json.dumps(metrics, default=str),
+                "response": response,
+                "created_at": time.time(),
+            },
+            replace=True,
+        )
+
+
+async def run(
+    store: Store,
+    settings: Settings,
+    config: RunConfig,
+    run_id: int,
+    on_progress: Callable[[Progress], None] | None = None,
+) -> int:
+    """Run (or resume) `run_id`; returns how many cases ran now."""
+    system, knowledge = suites.stage1()
+    cases = list(knowledge if config.stage == 1 else suites.stage2())[: config.limit or None]
+    modes = ["chat"] if config.stage == 1 else config.modes
+    done = _done(store, run_id)
+
+    def modes_of(model: str) -> list[str]:
+        return ["rules"] if model == "rules" else modes
+
+    todo = [
+        (m, mode, c)
+        for m in config.models
+        for mode in modes_of(m)
+        for c in cases
+        if (m, mode, c.id) not in done
+    ]
+    finished = 0
+    status = "interrupted"
+    try:
+        finished = await _run_todo(store, settings, config, run_id, system, todo, on_progress)
+        status = "done"
+    finally:
+        with store.db.conn:
+            store.db["bench_runs"].update(run_id, {"finished_at": time.time(), "status": status})
+    return finished
+
+
+async def _run_todo(store, settings, config, run_id, system, todo, on_progress) -> int:
+    total, finished, t0 = len(todo), 0, time.perf_counter()
+    models = list(dict.fromkeys(m for m, _, _ in todo))
+    for model in models:
+        endpoint = open_endpoint(
+            model,
+            threads=settings.llm.threads,
+            n_ctx=settings.llm.context,
+            timeout_s=config.timeout_s,
+        )
+        try:
+            for mode in dict.fromkeys(md for m, md, _ in todo if m == model):
+                batch = [c for m, md, c in todo if m == model and md == mode]
+                sem = asyncio.Semaphore(1 if endpoint.local else max(1, config.concurrency))
+
+                async def one(case, mode=mode, endpoint=endpoint, model=model, sem=sem):
+                    nonlocal finished
+                    async with sem:
+                        outcome, metrics, response = await _run_case(
+                            store, settings, config, endpoint, system, case, mode
+                        )
+                    await asyncio.to_thread(
+                        _save, store, run_id, model, mode, case, outcome, metrics, response
+                    )
+                    finished += 1
+                    if on_progress:
+                        on_progress(
+                            Progress(
+                                finished,
+                                total,
+                                model,
+                                mode,
+                                case.id,
+                                outcome,
+                                time.perf_counter() - t0,
+                            )
+                        )
+
+                await asyncio.gather(*(one(c) for c in batch))
+        finally:
+            endpoint.close()
+    return finished
+
+
+async def _run_case(store, settings, config, endpoint: LLMEndpoint, system, case, mode):
+    try:
+        if config.stage == 1:
+            return await asyncio.wait_for(
+                stage1.run_case(endpoint, system, case, config.max_tokens), config.timeout_s
+            )
+        return await asyncio.wait_for(
+            _robot_case(store, settings, config, endpoint, case, mode), config.timeout_s
+        )
+    except (asyncio.TimeoutError, LLMTimeout):
+        return "timeout", {"total_s": config.timeout_s}, ""
+    except LLMError as exc:
+        return "error", {"total_s": 0.0}, str(exc)
+
+
+async def _robot_case(store, settings, config, endpoint, case, mode):
+    sim = stage2.build_sim(case, store, config.seed)
+    graph = RobotGraph(SimBackend(sim, store), make_safety(settings, store))
+    agent = Agent(
+        graph,
+        endpoint,
+        None,
+        mode=mode,
+        max_tokens=min(config.max_tokens, 160),
+        confirm=lambda _c: True,
+        fallback=False,
+        location_names=[loc.name for loc in store.list_locations()],
+    )
+    turn = await agent.turn(case.request)
+    truth = sim.snapshot()
+    if sim.goal is not None:
+        await asyncio.to_thread(sim.run_goal, 600.0)
+    await asyncio.to_thread(sim.step, 5.0)  # let a conveyor transfer finish
+    score = stage2.score_case(case, turn, truth, sim, store)
+    metrics = {
+        "command": score.command,
+        "interpretation": score.interpretation,
+        "c_valid": score.c_valid,
+        "i_valid": score.i_valid,
+        "total_s": turn.total_s,
+        "ttft_s": turn.ttft_s,
+        "tokens": turn.completion_tokens,
+        **score.details,
+    }
+    outcome = "error" if turn.error and not turn.commands else "ok"
+    return outcome, metrics, turn.answer

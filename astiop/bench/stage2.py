@@ -1,0 +1,186 @@
+"""Stage 2: one operator request against a seeded simulator, checked against its ground truth."""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+from typing import Any
+
+from astiop.agent.turn import TurnResult
+from astiop.bench.suites import RobotCase
+from astiop.robot.grammar import CommandSyntaxError, parse
+from astiop.sim.simulator import Simulator
+from astiop.sim.state import SimState
+from astiop.store import Store
+
+ARRIVE_TOLERANCE_M = 0.3
+NUMBER = re.compile(r"-?\d+(?:\.\d+)?")
+COUNT_WORDS = {
+    "no": 0,
+    "zero": 0,
+    "none": 0,
+    "one": 1,
+    "two": 2,
+    "three": 3,
+    "four": 4,
+    "five": 5,
+    "six": 6,
+    "seven": 7,
+    "eight": 8,
+    "nine": 9,
+    "ten": 10,
+}
+HEALTHY = re.compile(r"\b(ok|healthy|normal|fine|no (motor )?faults?|no errors?|nominal)\b", re.I)
+
+
+class SetupError(ValueError):
+    pass
+
+
+def _pose_of(store: Store, where) -> tuple[float, float, float]:
+    if isinstance(where, str):
+        loc = store.require_location(where)
+        return loc.x, loc.y, loc.theta
+    x, y, *rest = (float(v) for v in where)
+    return x, y, math.radians(rest[0]) if rest else 0.0
+
+
+def build_sim(case: RobotCase, store: Store, seed: int) -> Simulator:
+    setup = case.setup
+    start = setup.get("start", "docked")
+    sim = Simulator(
+        seed=seed,
+        start=None if start == "docked" else _pose_of(store, start),
+        battery_soc=float(setup.get("battery", 0.85)),
+    )
+    for ob in setup.get("obstacles", []):
+        sim.add_obstacle(
+            ob["kind"],
+            float(ob["x"]),
+            float(ob["y"]),
+            math.radians(float(ob.get("theta_deg", 0.0))),
+        )
+    sim.conveyor.loaded = bool(setup.get("loaded", False))
+    if setup.get("goal"):
+        x, y, th = _pose_of(store, setup["goal"])
+        sim.goto(x, y, th, str(setup["goal"]))
+        sim.step(3.0)
+    sim.step(0.2)  # a fresh scan and status before the request
+    return sim
+
+
+@dataclass
+class CaseScore:
+    command: float
+    interpretation: float
+    c_valid: bool
+    i_valid: bool
+    details: dict[str, Any] = field(default_factory=dict)
+
+
+def _matches(expected: str, command: str, store: Store) -> bool:
+    words = expected.split()
+    verb, sub, name, args = words[0], words[1], words[2], dict(w.split("=", 1) for w in words[3:])
+    try:
+        cmd = parse(command)
+    except CommandSyntaxError:
+        return False
+    if cmd.key != (verb, sub) or cmd.name != name:
+        return False
+    values = cmd.args.get("values") or {}
+    if "name" in args:
+        return str(values.get("name", "")).lower() == args["name"].lower()
+    if "x" in args:
+        try:
+            return (
+                abs(float(values.get("x", math.nan)) - float(args["x"])) <= 0.3
+                and abs(float(values.get("y", math.nan)) - float(args["y"])) <= 0.3
+            )
+        except (TypeError, ValueError):
+            return False
+    return True
+
+
+def check_outcome(case: RobotCase, sim: Simulator, store: Store) -> dict[str, bool]:
+    checks = {}
+    for key, want in case.outcome.items():
+        if key == "arrive":
+            x, y, _ = _pose_of(store, want)
+            checks[key] = math.dist(sim.pose[:2], (x, y)) <= ARRIVE_TOLERANCE_M
+        elif key == "loaded":
+            checks[key] = sim.conveyor.loaded == bool(want)
+        elif key == "docked":
+            checks[key] = sim.docked() == bool(want)
+        elif key == "stopped":
+            checks[key] = sim.goal is None and sim.speed() < 0.05
+        else:
+            raise SetupError(f"case {case.id}: unknown outcome check '{key}'")
+    return checks
+
+
+def check_answer(case: RobotCase, answer: str, truth: SimState) -> dict[str, bool]:
+    text = answer.lower()
+    numbers = [float(n) for n in NUMBER.findall(answer)]
+    checks = {}
+    for key in case.answer:
+        if key == "battery":
+            pct = truth.battery_soc * 100
+            checks[key] = any(abs(n - pct) <= 1.0 or abs(n * 100 - pct) <= 1.0 for n in numbers)
+        elif key == "position":
+            checks[key] = any(abs(n - truth.x) <= 0.2 for n in numbers) and any(
+                abs(n - truth.y) <= 0.2 for n in numbers
+            )
+        elif key == "obstacles":
+            count = len(truth.detected)
+            said = {int(n) for n in numbers if n == int(n) and 0 <= n <= 50}
+            said |= {v for w, v in COUNT_WORDS.items() if re.search(rf"\b{w}\b", text)}
+            clear = bool(re.search(r"\b(no obstacles?|nothing|clear|none)\b", text))
+            checks[key] = (clear or 0 in said) if count == 0 else (count in said and not clear)
+        elif key == "state":
+            word = truth.state
+            checks[key] = (
+                word in text
+                or word.replace("_", " ") in text
+                or (word == "e_stopped" and "e-stop" in text)
+            )
+        elif key == "loaded":
+            empty = bool(re.search(r"\b(empty|not loaded|no load|unloaded)\b", text))
+            checks[key] = ("loaded" in text and not empty) if truth.conveyor_loaded else empty
+        elif key == "healthy":
+            checks[key] = bool(HEALTHY.search(answer)) if not truth.fault else "fault" in text
+        else:
+            raise SetupError(f"case {case.id}: unknown answer check '{key}'")
+    return checks
+
+
+def score_case(
+    case: RobotCase, turn: TurnResult, truth: SimState, sim: Simulator, store: Store
+) -> CaseScore:
+    ran = [c.command for c in turn.commands if c.executed and not c.error]
+    matched = [any(_matches(e, c, store) for c in ran) for e in case.expect]
+    outcome = check_outcome(case, sim, store)
+    # full marks need every expected command and the outcome; half for part of it
+    if all(matched) and all(outcome.values()):
+        command = 100.0
+    elif any(matched):
+        command = 50.0
+    else:
+        command = 0.0
+    answer_checks = check_answer(case, turn.answer, truth)
+    if answer_checks:
+        interpretation = 100.0 * sum(answer_checks.values()) / len(answer_checks)
+    else:
+        interpretation = 100.0 if turn.answer.strip() and not turn.error else 0.0
+    return CaseScore(
+        command,
+        interpretation,
+        command == 100.0,
+        interpretation == 100.0,
+        {
+            "matched": dict(zip(case.expect, matched)),
+            "outcome": outcome,
+            "answer_checks": answer_checks,
+            "commands": ran,
+        },
+    )

@@ -1,0 +1,183 @@
+"""`astiop bench`: rank models on ROS knowledge (stage 1) and robot commands (stage 2)."""
+
+from __future__ import annotations
+
+import asyncio
+import sys
+import time
+
+import typer
+
+from astiop.cli.common import fail, print_json, state
+
+app = typer.Typer(
+    help="Benchmark LLMs: stage 1 ROS knowledge, stage 2 robot commands.", no_args_is_help=True
+)
+
+
+def _bar(done: int, total: int, width: int = 24) -> str:
+    filled = int(width * done / total) if total else width
+    return "█" * filled + "░" * (width - filled)
+
+
+def _fmt_s(s: float) -> str:
+    return f"{int(s // 60)}m{int(s % 60):02d}s"
+
+
+@app.command("run")
+def run_bench(
+    ctx: typer.Context,
+    stage: int = typer.Option(None, "--stage", help="1 (ROS knowledge) or 2 (robot commands)."),
+    models: list[str] = typer.Option(None, "--model", "-m", help="Model spec; repeat for more."),
+    mode: str = typer.Option("tool", help="Stage 2 reply mode: command, tool or both."),
+    limit: int = typer.Option(None, help="Only the first N cases."),
+    seed: int = typer.Option(0),
+    timeout: float = typer.Option(120.0, help="Seconds a case may take."),
+    max_tokens: int = typer.Option(384, help="Longest reply, in tokens."),
+    concurrency: int = typer.Option(1, help="Cases at once, for servers that allow it."),
+    resume: int = typer.Option(None, help="Finish an interrupted run by its id."),
+    as_json: bool = typer.Option(False, "--json"),
+) -> None:
+    """Run a benchmark; each case's result is stored as it finishes."""
+    from astiop.agent.specs import SpecError, parse_spec
+    from astiop.bench import runner
+    from astiop.bench.report import load_report
+
+    st = state(ctx)
+    store = st.store
+    try:
+        if resume is not None:
+            config = runner.load_config(store, resume)
+            run_id = resume
+        else:
+            if stage not in (1, 2):
+                fail("--stage 1 or --stage 2 is required")
+            if not models:
+                fail("give at least one --model (e.g. --model rules --model embedded)")
+            if mode not in ("command", "tool", "both"):
+                fail("--mode is command, tool or both")
+            if limit is not None and limit < 1:
+                fail("--limit must be at least 1")
+            for spec in models:
+                parse_spec(spec)
+            modes = ["command", "tool"] if mode == "both" else [mode]
+            config = runner.RunConfig(
+                stage,
+                list(dict.fromkeys(models)),
+                modes,
+                limit,
+                seed,
+                timeout,
+                max_tokens,
+                concurrency,
+            )
+            run_id = runner.create_run(store, config)
+    except (runner.BenchError, SpecError) as exc:
+        fail(str(exc))
+
+    def progress(p: runner.Progress) -> None:
+        if not as_json:
+            typer.echo(
+                f"\r{_bar(p.done, p.total)} {p.done}/{p.total} {p.model} {p.mode} "
+                f"{p.case_id} {p.outcome:<7} ETA {_fmt_s(p.eta_s)}   ",
+                err=True,
+                nl=p.done == p.total,
+            )
+
+    if not as_json:
+        typer.echo(
+            f"benchmark run {run_id}: stage {config.stage}, models {', '.join(config.models)}",
+            err=True,
+        )
+    t0 = time.perf_counter()
+    try:
+        asyncio.run(runner.run(store, st.settings, config, run_id, progress))
+    except KeyboardInterrupt:
+        with store.db.conn:
+            store.db["bench_runs"].update(run_id, {"status": "interrupted"})
+        typer.echo(
+            f"\ninterrupted; finished cases are stored. Resume with: astiop bench run "
+            f"--resume {run_id}",
+            err=True,
+        )
+        raise typer.Exit(130) from None
+    except Exception as exc:  # noqa: BLE001 - the model or suite failing must not lose the run
+        if "EmbeddedModelError" in type(exc).__name__:
+            fail(str(exc))
+        raise
+    rep = load_report(store, run_id)
+    if as_json:
+        data = rep.as_json()
+        print_json(
+            {
+                "run_id": run_id,
+                "stage": config.stage,
+                "results": [
+                    {
+                        k: r[k]
+                        for k in (
+                            "model",
+                            "mode",
+                            "components",
+                            "composite",
+                            "cases",
+                            "errors",
+                            "timeouts",
+                        )
+                    }
+                    for r in data["results"]
+                ],
+            }
+        )
+        return
+    from astiop.bench.report import to_markdown
+
+    typer.echo(to_markdown(rep))
+    typer.echo(
+        f"wall time {time.perf_counter() - t0:.1f} s; astiop bench report {run_id}", err=True
+    )
+
+
+@app.command("list")
+def list_cmd(ctx: typer.Context, as_json: bool = typer.Option(False, "--json")) -> None:
+    """List benchmark runs."""
+    from astiop.bench.report import list_runs
+
+    runs = list_runs(state(ctx).store)
+    if as_json:
+        print_json(runs)
+        return
+    if not runs:
+        typer.echo("no benchmark runs yet (astiop bench run --stage 2 --model rules)")
+        return
+    for r in runs:
+        when = time.strftime("%Y-%m-%d %H:%M", time.localtime(r["started_at"]))
+        typer.echo(
+            f"{r['id']:>4}  {when}  stage {r['stage']}  {r['status']:<11} "
+            f"{r['results']:>4} results  {', '.join(r['models'])} "
+            f"({', '.join(r['modes'])})"
+        )
+
+
+@app.command("report")
+def report_cmd(
+    ctx: typer.Context,
+    run_id: int = typer.Argument(..., help="The run's id (astiop bench list)."),
+    fmt: str = typer.Option("md", "--format", "-f", help="md, csv or json."),
+) -> None:
+    """Print a run's ranking and breakdowns as Markdown, its cases as CSV, or JSON."""
+    from astiop.bench.report import load_report, to_csv, to_markdown
+    from astiop.bench.runner import BenchError
+
+    if fmt not in ("md", "csv", "json"):
+        fail("--format is md, csv or json")
+    try:
+        rep = load_report(state(ctx).store, run_id)
+    except BenchError as exc:
+        fail(str(exc))
+    if fmt == "json":
+        print_json(rep.as_json())
+    elif fmt == "csv":
+        sys.stdout.write(to_csv(rep))
+    else:
+        typer.echo(to_markdown(rep), nl=False)

@@ -1,0 +1,181 @@
+"""Goals for the base: checking, planning, the goto-pose control loop's targets, re-planning.
+
+A mixin of `Simulator`: it works on the simulator's world, planner, pose and lock.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from astiop.sim.controller import ControllerGains, arrived, goto_pose_command, tracking_error
+from astiop.sim.geometry import path_length, segments_hit_boxes, wrap_angle
+from astiop.sim.navigator import Goal, GoalResult, Leg
+from astiop.sim.planner import PlanningError
+
+ROBOT_LENGTH, ROBOT_WIDTH = 1.0, 0.735
+INFLATION = math.hypot(ROBOT_LENGTH, ROBOT_WIDTH) / 2 + 0.1  # circumscribed radius + margin
+BLOCKED_GIVE_UP_S = 60.0
+
+
+class GoalError(ValueError):
+    """A goal or command was refused; the robot's state is unchanged."""
+
+
+class NavigationMixin:
+    def check_goal(self, x: float, y: float, theta: float) -> None:
+        """Raise GoalError if the robot could never stand at this pose."""
+        if not all(math.isfinite(v) for v in (x, y, theta)):
+            raise GoalError("goal coordinates must be finite numbers")
+        if not self.map.inside_bounds(x, y):
+            x0, y0, x1, y1 = self.map.bounds
+            raise GoalError(
+                f"goal ({x:.2f}, {y:.2f}) is outside the map (x {x0:g}..{x1:g}, y {y0:g}..{y1:g} m)"
+            )
+        hit = self.world.footprint_collides(x, y, theta, ROBOT_LENGTH, ROBOT_WIDTH, margin=0.05)
+        if hit:
+            raise GoalError(
+                f"the robot does not fit at ({x:.2f}, {y:.2f}): it would overlap a "
+                f"{hit.split(':')[0]}"
+            )
+
+    def _plan(self, start, goal_xy, extra=()) -> tuple[tuple[float, float], ...]:
+        plan = self.planner.plan(start, goal_xy, extra)
+        self.plan_ms.append(plan.ms)
+        return plan.waypoints
+
+    def goto(self, x: float, y: float, theta: float, name: str = "") -> Goal:
+        with self.lock:
+            self._check_can_move()
+            self.check_goal(x, y, theta)
+            px, py, _ = self.pose
+            try:
+                path = self._plan((px, py), (x, y))
+            except PlanningError as exc:
+                raise GoalError(f"no path to ({x:.2f}, {y:.2f}): {exc}") from None
+            leg = Leg("navigate", (x, y, wrap_angle(theta)), list(path[1:]), self.gains.v_max)
+            return self._start_goal(name or f"({x:.2f}, {y:.2f})", [leg])
+
+    def dock(self) -> Goal:
+        with self.lock:
+            self._check_can_move()
+            st = self.map.station("charging_dock")
+            if st is None or st.docked_pose is None:
+                raise GoalError("this map has no charging dock")
+            if self.docked():
+                raise GoalError("the robot is already docked")
+            legs = []
+            ex, ey, _ = tracking_error(self.pose, st.pose)
+            if math.hypot(ex, ey) > 0.05:
+                try:
+                    path = self._plan(self.pose[:2], st.pose[:2])
+                except PlanningError as exc:
+                    raise GoalError(f"no path to the dock: {exc}") from None
+                legs.append(Leg("navigate", st.pose, list(path[1:]), self.gains.v_max))
+            legs.append(Leg("dock", st.docked_pose, [st.docked_pose[:2]], 0.2, planned=False))
+            return self._start_goal("dock", legs)
+
+    def undock(self) -> Goal:
+        with self.lock:
+            self._check_can_move()
+            st = self.map.station("charging_dock")
+            if not self.docked() or st is None:
+                raise GoalError("the robot is not docked")
+            leg = Leg("undock", st.pose, [st.pose[:2]], 0.2, planned=False)
+            return self._start_goal("undock", [leg])
+
+    def _start_goal(self, name: str, legs: list[Leg]) -> Goal:
+        if self.goal is not None:
+            self._finish("canceled", f"replaced by a new goal: {name}")
+        self._clear_teleop()
+        self._goal_ids += 1
+        self.goal = Goal(self._goal_ids, name, legs, self.t)
+        self._refresh_plan()
+        self._event("goal", f"goal {self._goal_ids} accepted: {name}")
+        return self.goal
+
+    def _refresh_plan(self) -> None:
+        g = self.goal
+        self.plan = tuple(g.remaining_path(*self.pose[:2])) if g else ()
+
+    def _finish(self, status: str, message: str) -> None:
+        g = self.goal
+        if g is None:
+            return
+        ex, ey, _ = tracking_error(self.pose, g.final_pose)
+        self.last_result = GoalResult(g.id, g.name, status, message, self.t, math.hypot(ex, ey))
+        self.goal = None
+        self.plan = ()
+        self._target = (0.0, 0.0, 0.0)
+        severity = "info" if status == "succeeded" else "warning"
+        self._event("goal", f"goal {g.id} {status}: {message}", severity)
+
+    def cancel(self, reason: str = "canceled by the operator") -> bool:
+        with self.lock:
+            had = self.goal is not None
+            self._finish("canceled", reason)
+            return had
+
+    def _navigate(self) -> tuple[float, float, float]:
+        g = self.goal
+        leg = g.current
+        pose = self.pose
+        if g.blocked_since is not None:
+            return (0.0, 0.0, 0.0)
+        # advance past waypoints already reached
+        while (
+            leg.waypoint < len(leg.path) - 1
+            and math.dist(pose[:2], leg.path[leg.waypoint]) < self.gains.waypoint_radius
+        ):
+            leg.waypoint += 1
+        if arrived(pose, leg.target, self.gains):
+            if g.leg + 1 < len(g.legs):
+                g.leg += 1
+                self._refresh_plan()
+                return (0.0, 0.0, 0.0)
+            self._finish("succeeded", f"reached {g.name}")
+            return (0.0, 0.0, 0.0)
+        final = leg.waypoint == len(leg.path) - 1
+        gains = (
+            self.gains
+            if leg.v_max >= self.gains.v_max
+            else ControllerGains(v_max=leg.v_max, w_max=0.3)
+        )
+        remaining = path_length([pose[:2]] + leg.path[leg.waypoint :])
+        return goto_pose_command(
+            pose, leg.path[leg.waypoint], leg.target[2], remaining, final, gains
+        )
+
+    def _check_path(self) -> None:
+        g = self.goal
+        if not g.current.planned:
+            return
+        x, y, _ = self.pose
+        for ob in self.detected:
+            if ob.distance < 12.0:
+                bx0, by0, bx1, by1 = ob.bbox
+                g.remember((bx0 - 0.15, by0 - 0.15, bx1 + 0.15, by1 + 0.15))
+        if not g.known_boxes:
+            return
+        pts = np.array(g.remaining_path(x, y))
+        boxes = np.array(g.known_boxes) + np.array([-1, -1, 1, 1]) * INFLATION
+        cut = segments_hit_boxes(pts[:-1], pts[1:], boxes).any()
+        if not cut and g.blocked_since is None:
+            return
+        leg = g.current
+        try:
+            path = self._plan((x, y), leg.target[:2], g.known_boxes)
+        except PlanningError:
+            if g.blocked_since is None:
+                g.blocked_since = self.t
+                self._event("nav", f"path to {g.name} blocked; waiting", "warning")
+            elif self.t - g.blocked_since > BLOCKED_GIVE_UP_S:
+                self._finish("aborted", f"path blocked for {BLOCKED_GIVE_UP_S:.0f} s")
+            return
+        if g.blocked_since is not None:
+            self._event("nav", f"path to {g.name} clear again")
+        g.blocked_since = None
+        g.replans += 1
+        leg.path, leg.waypoint = list(path[1:]), 0
+        self._refresh_plan()
