@@ -1,5 +1,7 @@
 from __future__ import annotations
 
+import gc
+
 import pytest
 
 from astiop.store import Store
@@ -19,3 +21,12 @@ def _isolated_config(tmp_path, monkeypatch):
     monkeypatch.setenv("ASTIOP_DB", str(tmp_path / "default.db"))
     for name in ("ASTIOP_MODEL", "ASTIOP_ROBOT"):
         monkeypatch.delenv(name, raising=False)
+
+
+@pytest.fixture(autouse=True)
+def _collect_garbage():
+    # CPython 3.11.7 bug (fixed in 3.11.8): a finalizer that runs during ast.parse, as pytest's
+    # failure report calls it, raises "AST constructor recursion depth mismatch" and turns
+    # a plain test failure into an INTERNALERROR. Finalize each test's garbage here instead.
+    yield
+    gc.collect()
