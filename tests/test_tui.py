@@ -153,3 +153,16 @@ async def test_bench_screen_runs_and_ranks(tmp_path):
         await pilot.press("ctrl+b")
         await pilot.pause()
         assert app.screen.query_one("#bench-runs", DataTable).row_count == 1
+
+
+async def test_dashboard_says_when_the_model_server_is_down(tmp_path):
+    import socket
+
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        port = sock.getsockname()[1]
+    app = console(tmp_path, model=f"openai:m@http://127.0.0.1:{port}/v1")
+    async with app.run_test(size=SIZE) as pilot:
+        await app.workers.wait_for_complete()
+        await pilot.pause()
+        assert "DOWN" in str(app.screen.query_one("#agent").render())

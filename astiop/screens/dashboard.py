@@ -5,11 +5,13 @@ from __future__ import annotations
 import math
 
 from rich.text import Text
+from textual import work
 from textual.app import ComposeResult
 from textual.containers import Vertical, VerticalScroll
 from textual.screen import Screen
 from textual.widgets import DataTable, Footer, Header, Static
 
+from astiop.agent.llm import LLMError
 from astiop.sim.state import SimState
 from astiop.widgets.gauges import BatteryGauge
 from astiop.widgets.warehouse_map import WarehouseMapView
@@ -53,6 +55,7 @@ class DashboardScreen(Screen):
         lines += [f"{a.name}  [dim]{a.type}[/] (action)" for a in cat.actions.values()]
         self.query_one("#services", Static).update("[b]services & actions[/]\n" + "\n".join(lines))
         self.show_agent()
+        self.check_endpoint()
         self.set_interval(1.0, self.show_topics)
         self.show_topics()
         if self.app.state is not None:
@@ -66,7 +69,7 @@ class DashboardScreen(Screen):
         elif ep.local:
             reach = "ready" if ep.server else "starts on first request"
         else:
-            reach = ep.spec.url
+            reach = getattr(self, "_reach", f"checking {ep.spec.url}…")
         latency = (
             f"last turn {turn.total_s:.1f} s, first token {turn.ttft_s or 0:.1f} s"
             if turn
@@ -75,6 +78,18 @@ class DashboardScreen(Screen):
         self.query_one("#agent", Static).update(
             f"[b]agent[/]   model {ep.spec.raw}  ({reach})\n{latency}"
         )
+
+    @work(exclusive=True, group="reach")
+    async def check_endpoint(self) -> None:
+        ep = self.app.services.endpoint
+        if ep.is_rules or ep.local:
+            return
+        try:
+            served = await ep.client().list_models()
+            self._reach = f"answers at {ep.spec.url}, serving {len(served)} model(s)"
+        except LLMError as exc:
+            self._reach = f"DOWN: {exc}"
+        self.show_agent()
 
     def show_topics(self) -> None:
         backend = self.app.services.graph.backend
