@@ -39,6 +39,7 @@ def run_bench(
     as_json: bool = typer.Option(False, "--json"),
 ) -> None:
     """Run a benchmark; each case's result is stored as it finishes."""
+    from astiop.agent.embedded import EmbeddedModelError
     from astiop.agent.specs import SpecError, parse_spec
     from astiop.bench import runner
     from astiop.bench.report import load_report
@@ -101,10 +102,8 @@ def run_bench(
             err=True,
         )
         raise typer.Exit(130) from None
-    except Exception as exc:  # noqa: BLE001 - the model or suite failing must not lose the run
-        if "EmbeddedModelError" in type(exc).__name__:
-            fail(str(exc))
-        raise
+    except EmbeddedModelError as exc:
+        fail(str(exc))
     rep = load_report(store, run_id)
     if as_json:
         data = rep.as_json()

@@ -15,14 +15,14 @@ from textual.screen import Screen
 from textual.widgets import DataTable, Footer, Header, Input, Select, Static
 
 KINDS = [
-    ("interactions and events", "all"),
+    ("all rows", "all"),
     ("interactions", "interaction"),
     ("robot events", "event"),
 ]
 VALIDITY = [
     ("any validity", "any"),
-    ("all commands valid", "valid"),
-    ("some command rejected", "invalid"),
+    ("all valid", "valid"),
+    ("some rejected", "invalid"),
 ]
 
 
