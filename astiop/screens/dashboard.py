@@ -45,7 +45,16 @@ class DashboardScreen(Screen):
                 yield Static(id="services", classes="panel")
         yield Footer()
 
+    def on_screen_resume(self) -> None:
+        # locations may have changed on the Locations screen
+        self.query_one(WarehouseMapView).set_locations(
+            [(loc.x, loc.y) for loc in self.app.services.store.list_locations()]
+        )
+
     def on_mount(self) -> None:
+        self.query_one(WarehouseMapView).set_locations(
+            [(loc.x, loc.y) for loc in self.app.services.store.list_locations()]
+        )
         topics = self.query_one("#topics", DataTable)
         topics.add_columns("topic", "type", "Hz", "age")
         events = self.query_one("#events", DataTable)

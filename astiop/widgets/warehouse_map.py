@@ -42,9 +42,15 @@ class WarehouseMapView(Widget):
         super().__init__(**kwargs)
         self.warehouse = warehouse
         self.robot_state: SimState | None = None
+        self.locations: list[tuple[float, float]] = []  # named locations, drawn as markers
         self._base: np.ndarray | None = None
         self._pixels: np.ndarray | None = None
         self._raster_size = (0, 0)
+
+    def set_locations(self, points: list[tuple[float, float]]) -> None:
+        self.locations = list(points)
+        self._pixels = None
+        self.refresh()
 
     def show(self, state: SimState) -> None:
         self.robot_state = state
@@ -105,10 +111,13 @@ class WarehouseMapView(Widget):
         if self._base is None or self._raster_size != (w, h):
             self._base, self._raster_size = self._base_layer(w, h), (w, h)
         px = self._base.copy()
+        s, x0, y0 = self._scale(w, h)
+        if self.locations:
+            xs, ys = zip(*self.locations)
+            self._plot(px, xs, ys, LABEL, s, x0, y0)
         st = self.robot_state
         if st is None:
             return px
-        s, x0, y0 = self._scale(w, h)
         for ob in st.obstacles:
             pts = ob.outline()
             self._fill_rect(px, (*pts.min(axis=0), *pts.max(axis=0)), OBSTACLE, s, x0, y0)
