@@ -167,12 +167,8 @@ def render(step: dict, tools: list[Tool]) -> str | None:
         x, y = float(step["x"]), float(step["y"])
         theta = math.radians(float(step.get("theta_deg", 0.0)))
     except (KeyError, TypeError, ValueError):
-        raise ToolError('"coordinates" needs numbers "x" and "y"') from None
+        raise ToolError(f'"{COORDINATES}" needs numbers "x" and "y"') from None
     return (
         f"ros2 service call /goto_position {GOTO_TYPE} "
         f'"{{x: {x:.3f}, y: {y:.3f}, theta: {theta:.4f}}}"'
     )
-
-
-def tool_lines(tools: list[Tool]) -> str:
-    return "\n".join(f"- {t.id}: {t.description}" for t in tools)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import sys
 from dataclasses import dataclass, field
 from typing import Any, NoReturn
 
@@ -61,7 +60,3 @@ def state(ctx: typer.Context) -> CliState:
         obj = CliState()
         ctx.find_root().obj = obj
     return obj
-
-
-def stdout_is_tty() -> bool:
-    return sys.stdout.isatty()

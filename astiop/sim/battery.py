@@ -54,7 +54,3 @@ class Battery:
             self.voltage = ocv - amps * R_INTERNAL
             self.charging = False
         self.soc = min(1.0, max(0.0, self.soc + net * dt / 3600.0 / CAPACITY_AH))
-
-    @property
-    def charge_ah(self) -> float:
-        return self.soc * CAPACITY_AH

@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import lru_cache
-from pathlib import Path
 
 import yaml
 
@@ -90,12 +89,6 @@ def parse_map(data: dict) -> WarehouseMap:
         stations=stations,
         zones=tuple(Zone(z["name"], _rect(z["rect"], z["name"])) for z in data.get("zones", [])),
     )
-
-
-def load_map(path: Path | None = None) -> WarehouseMap:
-    if path is None:
-        return default_map()
-    return parse_map(yaml.safe_load(path.read_text(encoding="utf-8")))
 
 
 @lru_cache(maxsize=1)
