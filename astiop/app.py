@@ -129,8 +129,6 @@ class AstiopApp(App):
 
     def confirm_from_thread(self, checked: Checked, timeout_s: float = 120.0) -> bool:
         """The graph's confirmation hook, called from a worker thread: ask with a modal."""
-        if not self.services.settings.robot.confirm_actuation:
-            return True
         answer: list[bool] = []
         ready = threading.Event()
 

@@ -308,6 +308,16 @@ class Store:
             )
         )
 
+    def commands_by_interaction(self, ids: list[int]) -> dict[int, list[dict[str, Any]]]:
+        found: dict[int, list[dict[str, Any]]] = {i: [] for i in ids}
+        if ids:
+            marks = ",".join("?" * len(ids))
+            for row in self.db.query(
+                f"SELECT * FROM commands WHERE interaction_id IN ({marks}) ORDER BY seq, id", ids
+            ):
+                found[row["interaction_id"]].append(row)
+        return found
+
     def events(self, limit: int = 500) -> list[dict[str, Any]]:
         return list(self.db.query("SELECT * FROM events ORDER BY id DESC LIMIT ?", [limit]))
 

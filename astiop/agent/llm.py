@@ -179,6 +179,20 @@ class ChatClient:
     def _pieces(self, resp: httpx.Response, state: _StreamState) -> AsyncIterator[str]:
         raise NotImplementedError
 
+    def _chunk(self, text: str) -> dict[str, Any]:
+        """One streamed JSON object; an error object from the server becomes an exception."""
+        try:
+            chunk = json.loads(text)
+        except json.JSONDecodeError:
+            raise LLMProtocolError(
+                f"{self.label}: malformed JSON in stream: {text[:80]!r}"
+            ) from None
+        if not isinstance(chunk, dict):
+            raise LLMProtocolError(f"{self.label}: unexpected stream item: {text[:80]!r}")
+        if "error" in chunk:
+            raise LLMHTTPError(500, f"{self.label}: {_one_line(str(chunk['error']))}")
+        return chunk
+
 
 def _one_line(text: str) -> str:
     return " ".join(text.split())[:200]
@@ -256,14 +270,7 @@ class OpenAIClient(ChatClient):
             if data == "[DONE]":
                 state.done = True
                 return
-            try:
-                chunk = json.loads(data)
-            except json.JSONDecodeError:
-                raise LLMProtocolError(
-                    f"{self.label}: malformed JSON in stream: {data[:80]!r}"
-                ) from None
-            if "error" in chunk:
-                raise LLMHTTPError(500, f"{self.label}: {_one_line(str(chunk['error']))}")
+            chunk = self._chunk(data)
             usage = chunk.get("usage")
             if usage:
                 state.prompt_tokens = usage.get("prompt_tokens")
@@ -312,14 +319,7 @@ class OllamaClient(ChatClient):
         async for line in resp.aiter_lines():
             if not line.strip():
                 continue
-            try:
-                chunk = json.loads(line)
-            except json.JSONDecodeError:
-                raise LLMProtocolError(
-                    f"{self.label}: malformed JSON in stream: {line[:80]!r}"
-                ) from None
-            if "error" in chunk:
-                raise LLMHTTPError(500, f"{self.label}: {_one_line(str(chunk['error']))}")
+            chunk = self._chunk(line)
             content = (chunk.get("message") or {}).get("content")
             if content:
                 yield content

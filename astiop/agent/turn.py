@@ -137,6 +137,7 @@ class Agent:
                 model=self.model, mode=self.mode, prompt=request, session=self.session
             )
         try:
+            fallback = False
             try:
                 commands = await self._plan(request, result, emit)
             except (LLMUnavailable, LLMTimeout) as exc:
@@ -144,14 +145,9 @@ class Agent:
                     raise
                 # the baseline answers instead, labelled so; the turn still records the error
                 result.error = f"{exc}; answered by the rules fallback"
-                commands = rules.plan(request, self.locations())
-                await self._execute(commands, result, emit)
-                result.answer = "[rules fallback] " + rules.interpret(request, result.commands)
-                emit("answer_token", result.answer)
-                self._finish(result, t0)
-                return result
+                commands, fallback = rules.plan(request, self.locations()), True
             await self._execute(commands, result, emit)
-            result.answer = await self._interpret(request, result, emit)
+            result.answer = await self._interpret(request, result, emit, fallback)
         except LLMError as exc:
             result.error = str(exc)
             if not result.answer:
@@ -303,9 +299,11 @@ class Agent:
                 result.exec_s += time.perf_counter() - t1
 
     # -- interpretation ------------------------------------------------------------------
-    async def _interpret(self, request: str, result: TurnResult, emit) -> str:
-        if self.endpoint.is_rules:
+    async def _interpret(self, request: str, result: TurnResult, emit, fallback: bool) -> str:
+        if self.endpoint.is_rules or fallback:
             answer = rules.interpret(request, result.commands)
+            if fallback:
+                answer = "[rules fallback] " + answer
             emit("answer_token", answer)
             return answer
         if result.commands:

@@ -13,7 +13,7 @@ from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 
 from astiop.agent.llm import LLMError, LLMTimeout
-from astiop.agent.specs import LLMEndpoint, open_endpoint
+from astiop.agent.specs import LLMEndpoint, open_endpoint, parse_spec
 from astiop.agent.turn import Agent
 from astiop.bench import stage1, stage2, suites
 from astiop.config import Settings
@@ -129,7 +129,7 @@ async def run(
     done = _done(store, run_id)
 
     def modes_of(model: str) -> list[str]:
-        return ["rules"] if model == "rules" else modes
+        return ["rules"] if parse_spec(model).kind == "rules" else modes
 
     todo = [
         (m, mode, c)

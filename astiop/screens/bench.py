@@ -71,7 +71,6 @@ class BenchScreen(Screen):
 
     def on_mount(self) -> None:
         self.query_one("#bench-runs", DataTable).add_columns("run", "stage", "status", "models")
-        self.action_reload()
 
     def on_screen_resume(self) -> None:
         self.action_reload()

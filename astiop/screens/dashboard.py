@@ -46,15 +46,12 @@ class DashboardScreen(Screen):
         yield Footer()
 
     def on_screen_resume(self) -> None:
-        # locations may have changed on the Locations screen
+        # on first show too; locations may have changed on the Locations screen
         self.query_one(WarehouseMapView).set_locations(
             [(loc.x, loc.y) for loc in self.app.services.store.list_locations()]
         )
 
     def on_mount(self) -> None:
-        self.query_one(WarehouseMapView).set_locations(
-            [(loc.x, loc.y) for loc in self.app.services.store.list_locations()]
-        )
         topics = self.query_one("#topics", DataTable)
         topics.add_columns("topic", "type", "Hz", "age")
         events = self.query_one("#events", DataTable)
@@ -136,16 +133,14 @@ class DashboardScreen(Screen):
         self.query_one("#battery", BatteryGauge).show(
             st.battery_soc, st.battery_voltage, st.battery_current, st.battery_charging
         )
-        self._show_events()
+        self._show_events(st.event_seq)
 
-    def _show_events(self) -> None:
+    def _show_events(self, seq: int) -> None:
+        if seq == getattr(self, "_event_seq", None):
+            return
+        self._event_seq = seq
         sim = self.app.services.sim
         table = self.query_one("#events", DataTable)
-        events = sim.events_since(0)[-6:] if sim else []
-        if table.row_count == len(events) and (
-            not events or table.get_row_at(0)[2] == (events[-1].message)
-        ):
-            return
         table.clear()
-        for ev in reversed(events):
+        for ev in reversed(sim.events_since(0)[-6:] if sim else []):
             table.add_row(f"{ev.t:.1f}", ev.kind, ev.message)

@@ -56,7 +56,6 @@ class LogsScreen(Screen):
 
     def on_mount(self) -> None:
         self.query_one(DataTable).add_columns("when", "kind", "model", "valid", "summary")
-        self.action_reload()
 
     def on_screen_resume(self) -> None:
         self.action_reload()
@@ -65,8 +64,10 @@ class LogsScreen(Screen):
     def action_reload(self) -> None:
         store = self.app.services.store
         rows = []
-        for it in store.interactions(500):
-            cmds = store.commands_for(it["id"])
+        interactions = store.interactions(500)
+        commands = store.commands_by_interaction([it["id"] for it in interactions])
+        for it in interactions:
+            cmds = commands[it["id"]]
             rows.append(
                 {
                     "kind": "interaction",

@@ -49,15 +49,12 @@ class TeleopScreen(Screen):
         yield Footer()
 
     def on_screen_resume(self) -> None:
-        # locations may have changed on the Locations screen
+        # on first show too; locations may have changed on the Locations screen
         self.query_one(WarehouseMapView).set_locations(
             [(loc.x, loc.y) for loc in self.app.services.store.list_locations()]
         )
 
     def on_mount(self) -> None:
-        self.query_one(WarehouseMapView).set_locations(
-            [(loc.x, loc.y) for loc in self.app.services.store.list_locations()]
-        )
         self._show_help()
         self.query_one(WheelBars).show((0.0, 0.0, 0.0, 0.0))
         if self.app.state is not None:
