@@ -1,31 +1,37 @@
-"""The Textual console: six screens over one set of services (store, robot, model)."""
+"""The Textual console: six screens over one set of services (store, robot gateway, model).
+
+The robot is reached only through the gateway: its state is sampled off the UI thread and
+arrives as `RobotStateSampled`; every robot call runs in a worker; the E-STOP key is handled
+off the UI thread and answers any open confirmation with "no".
+"""
 
 from __future__ import annotations
 
 import contextlib
 import threading
+import time
 from dataclasses import dataclass
+from typing import Any
 
 from textual.app import App
 from textual.binding import Binding
-from textual.css.query import NoMatches
 from textual.worker import Worker, WorkerState
 
 from astiop.agent.specs import LLMEndpoint, open_endpoint
 from astiop.config import Settings
 from astiop.robot.factory import make_robot_graph, make_sim_graph
 from astiop.robot.graph import RobotGraph
+from astiop.robot.render import sent_text
+from astiop.robot.state import RobotState, TopicStat
 from astiop.robot.validation import Checked
 from astiop.screens.bench import BenchScreen
 from astiop.screens.chat import ChatScreen
 from astiop.screens.dashboard import DashboardScreen
 from astiop.screens.locations import LocationsScreen
 from astiop.screens.logs import LogsScreen
+from astiop.screens.messages import EStopChanged, RobotStateSampled, TurnFinished
 from astiop.screens.modals import ConfirmModal
 from astiop.screens.teleop import TeleopScreen
-from astiop.sim.runner import SimRunner
-from astiop.sim.simulator import Simulator
-from astiop.sim.state import SimState
 from astiop.store import Store
 
 
@@ -35,8 +41,42 @@ class Services:
     store: Store
     graph: RobotGraph
     endpoint: LLMEndpoint
-    sim: Simulator | None
-    runner: SimRunner | None
+
+
+class StateSampler(threading.Thread):
+    """Reads the robot's state through the gateway and posts it to the app."""
+
+    def __init__(self, app: AstiopApp, hz: float):
+        super().__init__(name="astiop-sampler", daemon=True)
+        self.app = app
+        self.period = 1.0 / hz
+        self.every = max(int(hz), 1)  # topic statistics about once a second
+        self.halt = threading.Event()
+
+    def run(self) -> None:
+        graph, store = self.app.services.graph, self.app.services.store
+        seq, n, failing = 0, 0, False
+        while not self.halt.wait(self.period):
+            try:
+                state = graph.state()
+                events = graph.events_since(seq)
+                stats = graph.topic_stats() if n % self.every == 0 else None
+                failing = False
+            except Exception as exc:  # noqa: BLE001 - say it once, keep sampling
+                if not failing:
+                    self.app.call_from_thread(
+                        self.app.notify, f"robot state: {exc}", severity="error", markup=False
+                    )
+                failing = True
+                continue
+            n += 1
+            if events:
+                seq = events[-1].seq
+                for ev in events:  # the record must never stop the console
+                    with contextlib.suppress(Exception):
+                        store.add_event(ev.kind, ev.message, severity=ev.severity, sim_t=ev.t)
+            self.app.post_message(RobotStateSampled(state, events, stats))
+        store.close()
 
 
 class AstiopApp(App):
@@ -62,58 +102,68 @@ class AstiopApp(App):
         Binding("ctrl+q", "quit", "Quit", priority=True),
     ]
 
-    def __init__(self, services: Services, *, sample_hz: float = 10.0):
+    def __init__(
+        self, services: Services, *, sample_hz: float = 10.0, confirm_timeout_s: float = 120.0
+    ):
         super().__init__()
         self.services = services
         self.sample_hz = sample_hz
-        self.state: SimState | None = services.sim.snapshot() if services.sim else None
-        self.last_turn = None
-        self._event_seq = 0
+        self.confirm_timeout_s = confirm_timeout_s
+        self.robot_state: RobotState = services.graph.state()
+        self.topic_stats: list[TopicStat] = []
+        self.listeners: list[Any] = []  # screens that take broadcasts
+        self.estop_latency_s: float | None = None
+        self._sampler = StateSampler(self, sample_hz)
 
     def on_mount(self) -> None:
-        self.sub_title = (
-            f"robot: {self.services.graph.backend.name}  model: {self.services.endpoint.spec.raw}"
-        )
+        graph = self.services.graph
+        self.sub_title = f"robot: {graph.backend.name}  model: {self.services.endpoint.spec.raw}"
+        graph.start()
+        self.topic_stats = graph.topic_stats()
         self.switch_mode("dashboard")
-        if self.services.runner is not None:
-            self.services.runner.start()
-        self.set_interval(1.0 / self.sample_hz, self.sample)
+        self._sampler.start()
 
     def on_unmount(self) -> None:
-        if self.services.runner is not None:
-            self.services.runner.stop()
+        self._sampler.halt.set()
+        self._sampler.join(2.0)
+        self.services.graph.close()
         self.services.endpoint.close()
 
-    # -- live state ---------------------------------------------------------------------
-    def sample(self) -> None:
-        sim = self.services.sim
-        if sim is None or not self.screen_stack:
-            return
-        self.state = sim.snapshot()
-        if self.state.event_seq != self._event_seq:
-            events = sim.events_since(self._event_seq)
-            self._event_seq = self.state.event_seq
-            self.run_worker(lambda: self._store_events(events), thread=True, group="events")
-            for ev in events:
-                if ev.severity in ("warning", "error"):
-                    self.notify(ev.message, severity=ev.severity, title=ev.kind)
-        show = getattr(self.screen, "show_state", None)
-        if show is not None:
-            with contextlib.suppress(NoMatches):  # a screen still composing its widgets
-                show(self.state)
+    def broadcast(self, message_factory) -> None:
+        for screen in list(self.listeners):
+            screen.post_message(message_factory())
 
-    def _store_events(self, events) -> None:
-        for ev in events:
-            self.services.store.add_event(ev.kind, ev.message, severity=ev.severity, sim_t=ev.t)
+    # -- live state ---------------------------------------------------------------------
+    def on_robot_state_sampled(self, msg: RobotStateSampled) -> None:
+        self.robot_state = msg.state
+        if msg.stats is not None:
+            self.topic_stats = msg.stats
+        for ev in msg.events:
+            if ev.severity in ("warning", "error"):
+                self.notify(ev.message, severity=ev.severity, title=ev.kind, markup=False)
+        if self.screen_stack and self.screen in self.listeners:  # none while shutting down
+            self.screen.post_message(RobotStateSampled(msg.state, msg.events, msg.stats))
+
+    def on_turn_finished(self, msg: TurnFinished) -> None:
+        self.broadcast(lambda: TurnFinished(msg.result, msg.model, msg.reachable))
 
     # -- safety -------------------------------------------------------------------------
     def action_estop(self) -> None:
-        self.services.graph.estop()
-        self.notify(
-            "E-STOP engaged: all motion stopped. ctrl+r releases it.",
-            severity="error",
-            title="E-STOP",
+        pressed = time.monotonic()
+        if isinstance(self.screen, ConfirmModal):
+            self.screen.dismiss(False)  # the E-STOP answers any open question with "no"
+        self.run_worker(
+            lambda: self._estop(pressed), thread=True, group="estop", exit_on_error=False
         )
+
+    def _estop(self, pressed: float) -> None:
+        failures = self.services.graph.estop()
+        self.estop_latency_s = time.monotonic() - pressed
+        text = "E-STOP engaged: all motion stopped. ctrl+r releases it."
+        if failures:
+            text += "\n" + "\n".join(failures)
+        self.call_from_thread(self.notify, text, severity="error", title="E-STOP", markup=False)
+        self.call_from_thread(self.broadcast, lambda: EStopChanged(True, failures))
 
     def action_release_estop(self) -> None:
         if not self.services.graph.e_stopped:
@@ -122,33 +172,54 @@ class AstiopApp(App):
 
         def done(ok: bool | None) -> None:
             if ok:
-                self.services.graph.release_estop()
-                self.notify("E-stop released.")
+                self.run_worker(self._release, thread=True, group="estop", exit_on_error=False)
 
         self.push_screen(ConfirmModal("Release the e-stop? The robot may move again."), done)
 
-    def confirm_from_thread(self, checked: Checked, timeout_s: float = 120.0) -> bool:
-        """The graph's confirmation hook, called from a worker thread: ask with a modal."""
+    def _release(self) -> None:
+        self.services.graph.release_estop()
+        self.call_from_thread(self.notify, "E-stop released.")
+        self.call_from_thread(self.broadcast, lambda: EStopChanged(False, []))
+
+    def confirm_from_thread(self, checked: Checked, timeout_s: float | None = None) -> bool:
+        """The gateway's confirmation hook, called from a worker thread: ask with a modal that
+        shows the command as it will be sent (after clamping)."""
+        timeout_s = self.confirm_timeout_s if timeout_s is None else timeout_s
         answer: list[bool] = []
         ready = threading.Event()
+        modal = ConfirmModal(f"Run this command? It moves the robot.\n\n{sent_text(checked)}")
 
-        def ask() -> None:
-            def done(ok: bool | None) -> None:
-                answer.append(bool(ok))
-                ready.set()
+        def done(ok: bool | None) -> None:
+            answer.append(bool(ok))
+            ready.set()
 
-            self.push_screen(
-                ConfirmModal(f"Run this command? It moves the robot.\n\n{checked.text}"), done
+        self.call_from_thread(self.push_screen, modal, done)
+        if ready.wait(timeout_s):
+            return bool(answer and answer[0])
+
+        def expire() -> None:
+            if modal in self.screen_stack:
+                modal.dismiss(False)
+            self.notify(
+                f"No answer within {timeout_s:g} s: the command was not sent.",
+                severity="warning",
+                title="confirmation timed out",
             )
 
-        self.call_from_thread(ask)
-        ready.wait(timeout_s)
-        return bool(answer and answer[0])
+        self.call_from_thread(expire)
+        return False
 
+    # -- one handler for every worker's failure --------------------------------------------
     def on_worker_state_changed(self, event: Worker.StateChanged) -> None:
-        if event.state == WorkerState.ERROR:
+        self.worker_failed(event.worker)
+
+    def worker_failed(self, worker: Worker) -> None:
+        if worker.state == WorkerState.ERROR:
             self.notify(
-                f"{event.worker.name}: {event.worker.error}", severity="error", title="error"
+                f"{worker.name or worker.group}: {type(worker.error).__name__}: {worker.error}",
+                severity="error",
+                title="error",
+                markup=False,
             )
 
 
@@ -158,25 +229,28 @@ def make_app(
     *,
     graph: RobotGraph | None = None,
     endpoint: LLMEndpoint | None = None,
-    sim: Simulator | None = None,
+    sim: Any = None,
     realtime: bool = True,
     sample_hz: float = 10.0,
+    confirm_timeout_s: float = 120.0,
 ) -> AstiopApp:
-    """Build the console from its services; the CLI and the tests both come through here."""
-    runner = None
+    """Build the console from its services; the CLI and the tests both come through here.
+
+    `sim` hands a prepared simulator to the sim backend (tests: seeded and paused).
+    """
     if graph is None:
         if settings.robot.backend == "sim":
-            sim = sim or Simulator(seed=settings.sim.seed, v_max=settings.robot.max_linear_speed)
-            graph = make_sim_graph(settings, store, realtime=realtime, sim=sim)
+            graph = make_sim_graph(settings, store, realtime=realtime, sim=sim, who="console")
         else:
-            graph = make_robot_graph(settings, store, realtime=True)
-    sim = sim or getattr(graph.backend, "sim", None)
-    if sim is not None and realtime:
-        runner = SimRunner(sim, speed=settings.sim.speed)
+            graph = make_robot_graph(settings, store, realtime=True, who="console")
     endpoint = endpoint or open_endpoint(
         settings.llm.model,
         threads=settings.llm.threads,
         n_ctx=settings.llm.context,
         timeout_s=settings.llm.timeout_s,
     )
-    return AstiopApp(Services(settings, store, graph, endpoint, sim, runner), sample_hz=sample_hz)
+    return AstiopApp(
+        Services(settings, store, graph, endpoint),
+        sample_hz=sample_hz,
+        confirm_timeout_s=confirm_timeout_s,
+    )

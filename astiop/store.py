@@ -16,7 +16,7 @@ import sqlite_utils
 import yaml
 
 from astiop.resources import data_path
-from astiop.sim.warehouse_map import WarehouseMap, default_map
+from astiop.warehouse import Rect, default_map
 
 SQLITE_HEADER = b"SQLite format 3\x00"
 NAME_RE = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
@@ -119,10 +119,32 @@ def _migrate_v1(db: sqlite_utils.Database) -> None:
     _seed_locations(db)
 
 
+def _migrate_v2(db: sqlite_utils.Database) -> None:
+    # The E-STOP latch: one row, read by every astiop process on this database.
+    db.conn.executescript(
+        """
+        CREATE TABLE estop (
+            id INTEGER PRIMARY KEY CHECK (id = 1),
+            engaged INTEGER NOT NULL DEFAULT 0,
+            engaged_by TEXT, engaged_at REAL, released_by TEXT, released_at REAL
+        );
+        INSERT INTO estop (id, engaged) VALUES (1, 0);
+        """
+    )
+
+
 # Ordered; the database's PRAGMA user_version counts how many have run.
-MIGRATIONS = [_migrate_v1]
+MIGRATIONS = [_migrate_v1, _migrate_v2]
 SCHEMA_VERSION = len(MIGRATIONS)
-_OUR_TABLES = {"locations", "interactions", "commands", "events", "bench_runs", "bench_results"}
+_OUR_TABLES = {
+    "locations",
+    "interactions",
+    "commands",
+    "events",
+    "bench_runs",
+    "bench_results",
+    "estop",
+}
 
 
 def check_database_file(path: Path) -> None:
@@ -138,9 +160,9 @@ def check_database_file(path: Path) -> None:
 class Store:
     """One connection per thread, all to the same file."""
 
-    def __init__(self, path: Path | str, warehouse: WarehouseMap | None = None):
+    def __init__(self, path: Path | str, bounds: Rect | None = None):
         self.path = Path(path).expanduser()
-        self.warehouse = warehouse or default_map()
+        self.bounds = bounds or default_map().bounds  # named locations must lie inside
         self._local = threading.local()
         check_database_file(self.path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
@@ -210,8 +232,8 @@ class Store:
     def _check_pose(self, x: float, y: float, theta: float) -> None:
         if not all(math.isfinite(v) for v in (x, y, theta)):
             raise LocationError("x, y and theta must be finite numbers")
-        if not self.warehouse.inside_bounds(x, y):
-            x0, y0, x1, y1 = self.warehouse.bounds
+        x0, y0, x1, y1 = self.bounds
+        if not (x0 <= x <= x1 and y0 <= y <= y1):
             raise LocationError(
                 f"({x:g}, {y:g}) is outside the warehouse (x {x0:g}..{x1:g}, y {y0:g}..{y1:g} m)"
             )
@@ -317,6 +339,30 @@ class Store:
             ):
                 found[row["interaction_id"]].append(row)
         return found
+
+    # -- the E-STOP latch --------------------------------------------------------------
+    def estop_latch(self) -> dict[str, Any] | None:
+        """The latch while engaged (who, when), else None."""
+        row = self.db.conn.execute(
+            "SELECT engaged, engaged_by, engaged_at FROM estop WHERE id = 1"
+        ).fetchone()
+        if row and row[0]:
+            return {"by": row[1], "at": row[2]}
+        return None
+
+    def latch_estop(self, who: str) -> None:
+        with self.db.conn:
+            self.db.conn.execute(
+                "UPDATE estop SET engaged = 1, engaged_by = ?, engaged_at = ? WHERE id = 1",
+                [who, time.time()],
+            )
+
+    def release_estop(self, who: str) -> None:
+        with self.db.conn:
+            self.db.conn.execute(
+                "UPDATE estop SET engaged = 0, released_by = ?, released_at = ? WHERE id = 1",
+                [who, time.time()],
+            )
 
     def events(self, limit: int = 500) -> list[dict[str, Any]]:
         return list(self.db.query("SELECT * FROM events ORDER BY id DESC LIMIT ?", [limit]))

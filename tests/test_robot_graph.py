@@ -2,10 +2,6 @@
 
 import contextlib
 import math
-import os
-import stat
-import sys
-import textwrap
 
 import pytest
 from hypothesis import given, settings
@@ -305,66 +301,3 @@ def test_interface_show_like_ros2():
     scan = interface_show("sensor_msgs/msg/LaserScan")
     assert "std_msgs/Header header\n\tbuiltin_interfaces/Time stamp\n\t\tint32 sec" in scan
     assert "---" in interface_show("std_srvs/srv/Trigger")
-
-
-FAKE_ROS2 = textwrap.dedent("""\
-    #!{python}
-    import json, os, sys
-    with open(os.environ["ROS2_ARGV_LOG"], "a") as fh:
-        fh.write(json.dumps(sys.argv[1:]) + "\\n")
-    args = sys.argv[1:]
-    if args[:2] == ["topic", "list"]:
-        print("/battery_status [sensor_msgs/msg/BatteryState]")
-        print("/cmd_vel [geometry_msgs/msg/Twist]")
-        print("/camera/image [sensor_msgs/msg/Image]")
-    elif args[:2] == ["service", "list"]:
-        print("/goto_position [astiop_msgs/srv/GotoPosition]")
-        print("/stop [std_srvs/srv/Trigger]")
-    elif args[:2] == ["action", "list"]:
-        pass
-    elif args[:2] == ["topic", "echo"]:
-        print("header:\\n  frame_id: base\\npercentage: 0.42\\n---")
-    elif args[:2] == ["service", "call"]:
-        print("requester: making request: x\\n\\nresponse:")
-        print("astiop_msgs.srv.GotoPosition_Response(success=True, message='on my way')")
-    elif args[:2] == ["topic", "pub"]:
-        print("publisher: beginning loop")
-    else:
-        sys.exit(3)
-""")
-
-
-@pytest.fixture
-def fake_ros2(tmp_path, monkeypatch):
-    exe = tmp_path / "bin" / "ros2"
-    exe.parent.mkdir()
-    exe.write_text(FAKE_ROS2.format(python=sys.executable))
-    exe.chmod(exe.stat().st_mode | stat.S_IEXEC)
-    log = tmp_path / "argv.log"
-    monkeypatch.setenv("PATH", f"{exe.parent}{os.pathsep}{os.environ['PATH']}")
-    monkeypatch.setenv("ROS2_ARGV_LOG", str(log))
-    return log
-
-
-def test_ros2_backend_runs_argv_without_a_shell(fake_ros2):
-    import json
-
-    from astiop.robot.ros2_backend import Ros2Backend
-
-    backend = Ros2Backend("ros2")
-    assert "/camera/image" in backend.catalog.topics and "/dock" not in backend.catalog.services
-    graph = RobotGraph(backend, SafetyPolicy())
-    r = graph.run("ros2 topic echo /battery_status")
-    assert r.values["percentage"] == 0.42
-    r = graph.run("ros2 service call /goto_position \"{name: 'shipping; rm -rf /'}\"", confirm=YES)
-    assert r.values == {"success": True, "message": "on my way"}
-    graph.run(
-        "ros2 topic pub --once /cmd_vel geometry_msgs/msg/Twist '{linear: {x: 5.0}}'", confirm=YES
-    )
-    assert not graph.run("ros2 service call /dock std_srvs/srv/Trigger", confirm=YES).executed
-    calls = [json.loads(line) for line in fake_ros2.read_text().splitlines()]
-    assert ["topic", "echo", "/battery_status", "--once"] in calls
-    assert ["service", "call", "/goto_position", "{name: 'shipping; rm -rf /'}"] in calls
-    pub = next(c for c in calls if c[:2] == ["topic", "pub"])
-    assert "x: 0.8" in pub[-1]  # the clamped message went out, not the typed one
-    assert not any(c[:2] == ["service", "call"] and c[2] == "/dock" for c in calls)

@@ -9,7 +9,7 @@ from astiop.sim.controller import tracking_error
 from astiop.sim.lidar import LidarSpec, cast
 from astiop.sim.planner import Planner, PlanningError
 from astiop.sim.simulator import ROBOT_LENGTH, GoalError, Simulator
-from astiop.sim.warehouse_map import parse_map
+from astiop.warehouse import parse_map
 
 ROOM = parse_map(
     {

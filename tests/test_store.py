@@ -3,8 +3,8 @@ import sqlite3
 
 import pytest
 
-from astiop.sim.warehouse_map import default_map
 from astiop.store import SCHEMA_VERSION, LocationError, Store, StoreError
+from astiop.warehouse import default_map
 
 SEEDED = {
     "charging_dock",

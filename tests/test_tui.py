@@ -4,7 +4,7 @@ import math
 
 from textual.widgets import DataTable, Input
 
-from tests.tui_helpers import console
+from tests.tui_helpers import console, sim_of
 
 SIZE = (120, 40)
 
@@ -35,7 +35,7 @@ async def test_chat_answers_and_logs_it(tmp_path):
         await pilot.pause()
         text = " ".join(str(w.render()) for w in app.screen.query(".answer"))
         assert "battery 85.0 %" in text
-        assert app.last_turn.commands[0].command == "ros2 topic echo /battery_status --once"
+        assert app.services.store.interactions()[0]["status"] == "done"
         rows = app.services.store.interactions()
         assert rows[0]["prompt"] == "what is the battery level?"
         await pilot.press("f3")
@@ -56,10 +56,10 @@ async def test_chat_actuation_waits_for_the_operator(tmp_path):
             if type(app.screen).__name__ == "ConfirmModal":
                 break
         assert type(app.screen).__name__ == "ConfirmModal"
-        assert app.services.sim.goal is None  # nothing moved yet
+        assert sim_of(app).goal is None  # nothing moved yet
         await pilot.press("y")
         await app.workers.wait_for_complete()
-        assert app.services.sim.goal is not None and app.services.sim.goal.name == "shipping"
+        assert sim_of(app).goal is not None and sim_of(app).goal.name == "shipping"
 
 
 async def test_add_and_remove_a_location(tmp_path):
@@ -99,7 +99,7 @@ async def test_bad_location_input_is_refused(tmp_path):
 
 async def test_teleop_drives_the_robot(tmp_path):
     app = console(tmp_path)
-    sim = app.services.sim
+    sim = sim_of(app)
     sim.undock()
     sim.run_goal(60)
     x0 = sim.pose[0]
@@ -117,7 +117,7 @@ async def test_teleop_drives_the_robot(tmp_path):
 
 async def test_estop_works_from_any_screen_and_wins(tmp_path):
     app = console(tmp_path)
-    sim = app.services.sim
+    sim = sim_of(app)
     async with app.run_test(size=SIZE) as pilot:
         sim.goto(37.6, 4.0, 0.0, "shipping")
         sim.step(3.0)

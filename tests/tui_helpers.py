@@ -6,8 +6,14 @@ from astiop.sim.simulator import Simulator
 from astiop.store import Store
 
 
-def console(tmp_path, model: str = "rules", sim: Simulator | None = None, **settings):
+def console(tmp_path, model: str = "rules", sim: Simulator | None = None, **kwargs):
+    settings = kwargs.pop("settings", {})
     overrides = {"llm": {"model": model}, **settings}
     cfg = load_settings(overrides, env={}, path=tmp_path / "none.toml")
     store = Store(tmp_path / "console.db")
-    return make_app(cfg, store, sim=sim or Simulator(seed=0), realtime=False)
+    return make_app(cfg, store, sim=sim or Simulator(seed=0), realtime=False, **kwargs)
+
+
+def sim_of(app) -> Simulator:
+    """The simulator behind the console (tests only: the UI never reaches it)."""
+    return app.services.graph.backend.sim

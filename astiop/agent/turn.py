@@ -35,6 +35,7 @@ from astiop.agent.tools import (
 from astiop.robot.graph import Confirm, RobotGraph
 from astiop.robot.output import Execution
 from astiop.store import Store
+from astiop.warehouse import WarehouseMap
 
 OnEvent = Callable[[str, Any], None]  # ("plan_token" | "command" | "answer_token" | "status", x)
 HISTORY_TURNS = 3
@@ -124,8 +125,8 @@ class Agent:
             return self.location_names
         if self.store is not None:
             return [loc.name for loc in self.store.list_locations()]
-        sim = getattr(self.graph.backend, "sim", None)
-        return [s.name for s in sim.map.stations] if sim is not None else []
+        geometry = self.graph.map_geometry()
+        return [s.name for s in geometry.stations] if isinstance(geometry, WarehouseMap) else []
 
     # -- the turn ------------------------------------------------------------------------
     async def turn(self, request: str, on_event: OnEvent | None = None) -> TurnResult:
@@ -155,6 +156,10 @@ class Agent:
         except asyncio.CancelledError:
             result.error = "canceled by the operator"
             self._finish(result, t0, status="canceled")
+            raise
+        except Exception as exc:  # recorded, then reported by the caller's one handler
+            result.error = f"{type(exc).__name__}: {exc}"
+            self._finish(result, t0, status="error")
             raise
         self._finish(result, t0)
         self.history.append((request, result.answer))

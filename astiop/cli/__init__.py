@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 
 from astiop import __version__
-from astiop.cli import agent, bench, config_cmd, locations, robot, sim
+from astiop.cli import agent, bench, config_cmd, emulate, locations, robot, sim
 from astiop.cli.common import CliState
 
 app = typer.Typer(
@@ -23,6 +23,7 @@ app.add_typer(bench.app, name="bench")
 app.command("exec")(robot.exec_command)
 app.command("chat")(agent.chat)
 app.command("models")(agent.models)
+app.command("emulate-ros2")(emulate.emulate_ros2)
 
 
 def _version(value: bool) -> None:

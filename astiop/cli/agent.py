@@ -74,9 +74,9 @@ def chat(
         fail(str(exc))
     finally:
         endpoint.close()
-    sim = getattr(graph.backend, "sim", None)
-    if sim is not None and sim.goal is not None:
-        sim.run_goal(900.0)  # let a started goal finish: the sim lives only for this command
+    if any(c.executed and c.kind == "actuate" for c in result.commands):
+        graph.wait_until_idle(900.0)  # a started goal ends before this command does
+    graph.close()
     if as_json:
         print_json(result.as_json())
     else:

@@ -18,7 +18,7 @@ def exec_command(
     yes: bool = typer.Option(False, "--yes", "-y", help="Do not ask before moving the robot."),
     as_json: bool = typer.Option(False, "--json"),
     settle: bool = typer.Option(
-        True, help="On the sim, let a started goal finish before exiting (fast mode)."
+        True, help="Let a started goal finish before exiting (on the sim: as fast as it can)."
     ),
 ) -> None:
     """Validate and run one `ros2` command (the subset the agent uses) on the robot."""
@@ -56,10 +56,9 @@ def exec_command(
     # no terminal to ask on and no --yes: the graph refuses actuating commands
     confirm = (lambda _c: True) if yes else (ask if sys.stdin.isatty() else None)
     result = graph.run(command, confirm=confirm)
-    if result.executed and settle and getattr(graph.backend, "sim", None) is not None:
-        sim = graph.backend.sim
-        if sim.goal is not None:
-            sim.run_goal(900.0)
+    if result.executed and settle and result.kind == "actuate":
+        graph.wait_until_idle(900.0)
+    graph.close()
     if as_json:
         print_json(result.as_json())
     else:

@@ -1,4 +1,4 @@
-"""Build the robot graph the settings ask for: the simulator (default) or the real robot."""
+"""Build the robot gateway the settings ask for: the simulator (default) or the real robot."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from astiop.store import Store
 
 
 def make_safety(settings: Settings, store: Store | None) -> SafetyPolicy:
-    bounds = store.warehouse.bounds if store else (0.0, 0.0, 40.0, 25.0)
+    bounds = store.bounds if store else (0.0, 0.0, 40.0, 25.0)
     return SafetyPolicy(
         max_linear=settings.robot.max_linear_speed,
         max_angular=settings.robot.max_angular_speed,
@@ -20,20 +20,32 @@ def make_safety(settings: Settings, store: Store | None) -> SafetyPolicy:
 
 
 def make_sim_graph(
-    settings: Settings, store: Store | None, *, realtime: bool = False, sim: Simulator | None = None
+    settings: Settings,
+    store: Store | None,
+    *,
+    realtime: bool = False,
+    sim: Simulator | None = None,
+    who: str = "astiop",
 ) -> RobotGraph:
     from astiop.robot.sim_backend import SimBackend
 
     sim = sim or Simulator(seed=settings.sim.seed, v_max=settings.robot.max_linear_speed)
-    return RobotGraph(SimBackend(sim, store, realtime=realtime), make_safety(settings, store))
+    backend = SimBackend(sim, store, realtime=realtime, speed=settings.sim.speed)
+    return RobotGraph(backend, make_safety(settings, store), store=store, who=who)
 
 
 def make_robot_graph(
-    settings: Settings, store: Store | None, *, realtime: bool = False
+    settings: Settings, store: Store | None, *, realtime: bool = False, who: str = "astiop"
 ) -> RobotGraph:
     if settings.robot.backend == "ros2":
         from astiop.robot.ros2_backend import Ros2Backend
 
         backend = Ros2Backend(settings.robot.ros2_executable, settings.robot.ros2_timeout_s)
-        return RobotGraph(backend, make_safety(settings, store), settings.robot.ros2_timeout_s)
-    return make_sim_graph(settings, store, realtime=realtime)
+        return RobotGraph(
+            backend,
+            make_safety(settings, store),
+            settings.robot.ros2_timeout_s,
+            store=store,
+            who=who,
+        )
+    return make_sim_graph(settings, store, realtime=realtime, who=who)

@@ -1,63 +1,96 @@
-"""The one door to the robot: validate, review for safety, confirm, execute, record the result."""
+"""The one door to the robot: validate, review for safety, confirm, execute; and its live state.
+
+The E-STOP is latched in the store, so every astiop process on that database refuses actuation
+while it holds, and a restart keeps it. It is checked before the confirmation and again right
+before anything is sent.
+"""
 
 from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from typing import Protocol
 
+from astiop.robot.backend import MapGeometry, RobotBackend
 from astiop.robot.catalog import Catalog
 from astiop.robot.output import BackendError, Execution
-from astiop.robot.safety import Review, SafetyPolicy
+from astiop.robot.safety import ALWAYS_ALLOWED, Review, SafetyPolicy
+from astiop.robot.state import RobotEvent, RobotState, TopicStat
 from astiop.robot.validation import Checked, validate
+from astiop.store import Store
 
 Confirm = Callable[[Checked], bool]
-
-
-class RobotBackend(Protocol):
-    name: str
-    catalog: Catalog
-
-    @property
-    def e_stopped(self) -> bool: ...
-
-    def estop(self) -> None: ...
-
-    def release_estop(self) -> None: ...
-
-    def execute(self, checked: Checked, timeout: float) -> tuple[str, object]: ...
+ESTOP_REASON = "the E-STOP is engaged: no motion command runs until the operator releases it"
 
 
 class RobotGraph:
     def __init__(
-        self, backend: RobotBackend, safety: SafetyPolicy | None = None, timeout_s: float = 10.0
+        self,
+        backend: RobotBackend,
+        safety: SafetyPolicy | None = None,
+        timeout_s: float = 10.0,
+        *,
+        store: Store | None = None,
+        who: str = "astiop",
     ):
         self.backend = backend
         self.safety = safety or SafetyPolicy()
         self.timeout_s = timeout_s
+        self.store = store
+        self.who = who
+        if self.latched and not backend.e_stopped:
+            backend.estop()  # a restart keeps the E-STOP until it is released
 
     @property
     def catalog(self) -> Catalog:
         return self.backend.catalog
 
+    # -- E-STOP -----------------------------------------------------------------------------
+    @property
+    def latched(self) -> bool:
+        return self.store is not None and self.store.estop_latch() is not None
+
     @property
     def e_stopped(self) -> bool:
-        return self.backend.e_stopped
+        return self.backend.e_stopped or self.latched
 
-    def estop(self) -> None:
-        self.backend.estop()
+    def estop(self) -> list[str]:
+        """Stop the robot, then latch it for every process; returns steps that failed."""
+        failures = self.backend.estop()
+        if self.store is not None:
+            self.store.latch_estop(self.who)
+        return failures
 
     def release_estop(self) -> None:
+        if self.store is not None:
+            self.store.release_estop(self.who)
         self.backend.release_estop()
 
-    def wait_until_idle(self, timeout_s: float) -> None:
-        """Block until the robot has no active goal (or the timeout); backends may lack it."""
-        wait = getattr(self.backend, "wait_until_idle", None)
-        if wait is not None:
-            wait(timeout_s)
+    # -- live state ------------------------------------------------------------------------
+    def start(self) -> None:
+        self.backend.start()
 
+    def close(self) -> None:
+        self.backend.close()
+
+    def state(self) -> RobotState:
+        return self.backend.state().with_e_stop(self.latched)
+
+    def events_since(self, seq: int) -> list[RobotEvent]:
+        return self.backend.events_since(seq)
+
+    def topic_stats(self) -> list[TopicStat]:
+        return self.backend.topic_stats()
+
+    def map_geometry(self) -> MapGeometry:
+        return self.backend.map_geometry()
+
+    def wait_until_idle(self, timeout_s: float) -> str | None:
+        """Block until the robot has no active goal; how the goal ended, when known."""
+        return self.backend.wait_until_idle(timeout_s)
+
+    # -- commands --------------------------------------------------------------------------
     def review(self, text: str) -> Review:
-        return self.safety.review(validate(text, self.catalog), self.backend.e_stopped)
+        return self.safety.review(validate(text, self.catalog), self.e_stopped)
 
     def run(
         self, text: str, confirm: Confirm | None = None, timeout: float | None = None
@@ -72,6 +105,9 @@ class RobotGraph:
         if not review.allowed:
             result.reason = review.reason
             return result
+        if "commands" not in self.backend.capabilities:
+            result.reason = f"the {self.backend.name} robot is read-only"
+            return result
         if review.needs_confirmation:
             if confirm is None:
                 result.reason = "this command moves the robot and needs the operator's confirmation"
@@ -79,6 +115,9 @@ class RobotGraph:
             if not confirm(checked):
                 result.reason = "not confirmed by the operator"
                 return result
+        if checked.kind == "actuate" and self._held(checked):
+            result.reason = ESTOP_REASON  # pressed while the operator was deciding
+            return result
         try:
             result.output, result.values = self.backend.execute(checked, timeout or self.timeout_s)
             result.executed = True
@@ -89,6 +128,34 @@ class RobotGraph:
         self._after(checked, result)
         result.duration_s = time.perf_counter() - t0
         return result
+
+    def drive(self, vx: float, vy: float, wz: float) -> Execution:
+        """Teleop: the key press is the operator's consent; safety still clamps and holds."""
+        text = (
+            "ros2 topic pub --once /cmd_vel geometry_msgs/msg/Twist "
+            f'"{{linear: {{x: {vx:g}, y: {vy:g}}}, angular: {{z: {wz:g}}}}}"'
+        )
+        review = self.review(text)
+        result = Execution(text, review.checked.valid, review.reason, "actuate")
+        if not review.allowed:
+            return result
+        if "teleop" not in self.backend.capabilities:
+            result.reason = f"the {self.backend.name} robot cannot be driven"
+            return result
+        if self._held(review.checked):
+            result.reason = ESTOP_REASON
+            return result
+        result.notes = list(review.checked.notes)
+        try:
+            self.backend.drive(review.checked.message)
+            result.executed = True
+            result.values = review.checked.message
+        except BackendError as exc:
+            result.error = str(exc)
+        return result
+
+    def _held(self, checked: Checked) -> bool:
+        return checked.command.name not in ALWAYS_ALLOWED and self.e_stopped
 
     def _after(self, checked: Checked, result: Execution) -> None:
         cmd = checked.command

@@ -38,23 +38,27 @@ class Execution:
         return data
 
 
-def _prepare(value: Any, no_arr: bool, key: str = "") -> Any:
+def _prepare(value: Any, no_arr: bool, truncate: int | None) -> Any:
     if isinstance(value, dict):
-        return {k: _prepare(v, no_arr, k) for k, v in value.items()}
+        return {k: _prepare(v, no_arr, truncate) for k, v in value.items()}
     if isinstance(value, list):
         if no_arr and value and not isinstance(value[0], dict):
             kind = "double" if isinstance(value[0], float) else type(value[0]).__name__
             return f"<sequence type: {kind}, length: {len(value)}>"
-        items = [_prepare(v, no_arr) for v in value[:TRUNCATE]]
-        return items + ["..."] if len(value) > TRUNCATE else items
+        cut = len(value) if truncate is None else truncate
+        items = [_prepare(v, no_arr, truncate) for v in value[:cut]]
+        return items + ["..."] if len(value) > cut else items
     if isinstance(value, float) and math.isnan(value):
         return float("nan")
     return value
 
 
-def echo_yaml(message: dict[str, Any], no_arr: bool = False) -> str:
+def echo_yaml(
+    message: dict[str, Any], no_arr: bool = False, truncate: int | None = TRUNCATE
+) -> str:
+    """As `ros2 topic echo` prints one message; `truncate=None` is its --full-length."""
     body = yaml.safe_dump(
-        _prepare(message, no_arr), sort_keys=False, default_flow_style=False, width=1000
+        _prepare(message, no_arr, truncate), sort_keys=False, default_flow_style=False, width=1000
     )
     return body + "---\n"
 

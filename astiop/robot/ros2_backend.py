@@ -1,20 +1,46 @@
-"""The real robot: the same checked commands, run by the `ros2` executable (never a shell)."""
+"""The real robot: the same checked commands, run by the `ros2` executable (never a shell).
+
+Live state comes from long-lived `ros2 topic echo` streams; long-running verbs run under
+`Popen` and are stopped with SIGINT so the real client cancels what it started.
+"""
 
 from __future__ import annotations
 
+import math
+import os
 import re
 import shutil
-import subprocess
+import threading
+import time
+from collections import deque
 from typing import Any
 
-import yaml
+import numpy as np
 
+from astiop.robot import ros2_process
 from astiop.robot.catalog import ActionSpec, Catalog, ServiceSpec, TopicSpec, astibot_catalog
-from astiop.robot.output import BackendError
+from astiop.robot.output import BackendError, echo_yaml
+from astiop.robot.render import flow_yaml, sent_argv, zero_twist
+from astiop.robot.ros2_motion import STDIN_DISTROS, ArmedStop, TeleopPublisher
+from astiop.robot.ros2_streams import TopicStream, parse_document
+from astiop.robot.state import OccupancyGrid, RobotEvent, RobotState, TopicStat, from_messages
 from astiop.robot.validation import Checked
 
 _LISTED = re.compile(r"^(?P<name>/\S*)\s+\[(?P<type>[^\]]+)\]\s*$")
 _FIELD = re.compile(r"(\w+)=('(?:[^'\\]|\\.)*'|\"(?:[^\"\\]|\\.)*\"|[^,()]+)")
+# Streamed for the live state, where the robot has them; /odom only when /robot_pose is absent
+# (50 Hz of YAML costs more than it tells).
+STATE_TOPICS = (
+    "/robot_pose",
+    "/battery_status",
+    "/robot_status",
+    "/scan",
+    "/obstacles",
+    "/plan",
+    "/conveyor/status",
+)
+ARRAYS = {"/scan", "/plan", "/obstacles"}  # echoed in full: ros2 truncates at 128 items
+MOVING = {"navigating", "docking", "blocked"}
 
 
 def parse_response(text: str) -> dict[str, Any]:
@@ -35,41 +61,51 @@ def parse_response(text: str) -> dict[str, Any]:
     return values
 
 
+def ros_distro() -> str:
+    return os.environ.get("ROS_DISTRO", "jazzy").strip().lower() or "jazzy"
+
+
 class Ros2Backend:
     name = "ros2"
+    capabilities = frozenset({"commands", "teleop"})
 
-    def __init__(self, executable: str = "ros2", timeout_s: float = 10.0):
+    def __init__(self, executable: str = "ros2", timeout_s: float = 10.0, *, stream: bool = True):
         path = shutil.which(executable)
         if path is None:
             raise BackendError(
                 f"'{executable}' was not found on PATH: source your ROS 2 setup "
-                "(e.g. /opt/ros/humble/setup.bash) or use --robot sim"
+                "(e.g. /opt/ros/jazzy/setup.bash) or use --robot sim"
             )
         self.executable = path
         self.timeout_s = timeout_s
+        self.distro = ros_distro()
+        self.stream = stream
         self._e_stopped = False
+        self._lock = threading.Lock()
+        self._latest: dict[str, dict[str, Any]] = {}
+        self._events: deque[RobotEvent] = deque(maxlen=500)
+        self._event_seq = 0
+        self._streams: dict[str, TopicStream] = {}
+        self._goals: list[ros2_process.Run] = []
+        self._goal_procs: list[Any] = []
+        self._last_outcome: str | None = None
+        self._map: OccupancyGrid | None = None
+        self._teleop: TeleopPublisher | None = None
+        self._armed: ArmedStop | None = None
+        self.t0 = time.monotonic()
         self.catalog = self.read_catalog()
 
-    def _run(self, argv: list[str], timeout: float) -> subprocess.CompletedProcess:
-        try:
-            return subprocess.run(
-                [self.executable, *argv],
-                capture_output=True,
-                text=True,
-                timeout=timeout,
-                stdin=subprocess.DEVNULL,
-            )
-        except subprocess.TimeoutExpired:
-            raise BackendError(f"ros2 {' '.join(argv[:3])} timed out after {timeout:g} s") from None
-        except OSError as exc:
-            raise BackendError(f"cannot run {self.executable}: {exc}") from None
+    # -- the live graph -----------------------------------------------------------------
+    def _run(self, argv: list[str], timeout: float, **kw) -> ros2_process.Run:
+        return ros2_process.run(self.executable, argv, timeout, **kw)
 
     def _listed(self, verb: str) -> list[tuple[str, str]]:
         out = self._run([verb, "list", "-t"], self.timeout_s)
         if out.returncode != 0:
-            raise BackendError(f"ros2 {verb} list failed: {out.stderr.strip()[:200]}")
+            why = out.err.strip()[:200] or ("timed out" if out.stopped else "failed")
+            raise BackendError(f"ros2 {verb} list: {why}")
         pairs = []
-        for line in out.stdout.splitlines():
+        for line in out.out.splitlines():
             m = _LISTED.match(line.strip())
             if m:
                 pairs.append((m["name"], m["type"].split(",")[0].strip()))
@@ -93,72 +129,273 @@ class Ros2Backend:
             cat.actions[name] = spec if spec and spec.type == typ else ActionSpec(name, typ, "?")
         return cat
 
+    # -- lifecycle ------------------------------------------------------------------------
+    def start(self) -> None:
+        cmd_vel = self.catalog.topics.get("/cmd_vel")
+        if cmd_vel is not None:
+            self._teleop = TeleopPublisher(self.executable, cmd_vel.name, cmd_vel.type)
+            if self.distro in STDIN_DISTROS:
+                self._armed = ArmedStop(self.executable, cmd_vel.name, cmd_vel.type)
+                if not self._e_stopped:
+                    self._armed.arm()
+        if not self.stream:
+            return
+        names = [n for n in STATE_TOPICS if n in self.catalog.topics]
+        if "/robot_pose" not in self.catalog.topics and "/odom" in self.catalog.topics:
+            names.append("/odom")
+        for name in names:
+            extra = ("--full-length",) if name in ARRAYS else ()
+            spec = self.catalog.topics[name]
+            self._streams[name] = TopicStream(
+                self.executable, name, spec.type, self._on_message, self._event, extra
+            ).start()
+        if "/map" in self.catalog.topics:
+            threading.Thread(target=self._read_map, name="ros2-map", daemon=True).start()
+
+    def close(self) -> None:
+        for s in self._streams.values():
+            s.stop()
+        self._streams.clear()
+        if self._teleop is not None:
+            self._teleop.close()
+        if self._armed is not None:
+            self._armed.disarm()
+        for proc in list(self._goal_procs):
+            ros2_process.stop(proc, 3.0)  # the client cancels its goal
+
+    # -- live state -----------------------------------------------------------------------
+    def _on_message(self, name: str, msg: dict[str, Any], received: float) -> None:
+        if name == "/robot_status":
+            self._status_changed(self._latest.get(name), msg)
+        with self._lock:
+            self._latest[name] = msg
+
+    def _event(self, kind: str, severity: str, message: str) -> None:
+        with self._lock:
+            self._event_seq += 1
+            t = time.monotonic() - self.t0
+            self._events.append(RobotEvent(self._event_seq, t, kind, severity, message))
+
+    def _status_changed(self, old: dict | None, new: dict) -> None:
+        before, after = (old or {}).get("state"), new.get("state")
+        if old is not None and before != after:
+            severity = "error" if after in ("fault", "e_stopped") else "info"
+            self._event("state", severity, f"{before} -> {after}")
+        if new.get("fault") and new.get("fault") != (old or {}).get("fault"):
+            self._event("fault", "error", str(new["fault"]))
+
+    def state(self) -> RobotState:
+        with self._lock:
+            messages = dict(self._latest)
+            seq = self._event_seq
+        status = messages.get("/robot_status") or {}
+        if status.get("state") not in MOVING:
+            messages.pop("/plan", None)  # the last plan of a finished goal
+        t = time.monotonic() - self.t0
+        return from_messages(t, messages, e_stopped=self._e_stopped, event_seq=seq)
+
+    def events_since(self, seq: int) -> list[RobotEvent]:
+        with self._lock:
+            return [e for e in self._events if e.seq > seq]
+
+    def topic_stats(self) -> list[TopicStat]:
+        now = time.monotonic()
+        stats = []
+        for name, spec in sorted(self.catalog.topics.items()):
+            s = self._streams.get(name)
+            if s is None:
+                stats.append(TopicStat(name, spec.type, spec.rate_hz, math.nan, math.nan, 0))
+            else:
+                stats.append(
+                    TopicStat(name, spec.type, spec.rate_hz, s.rate(now), s.age(now), s.count)
+                )
+        return stats
+
+    def map_geometry(self):
+        return self._map
+
+    def _read_map(self) -> None:
+        spec = self.catalog.topics["/map"]
+        argv = ["topic", "echo", "/map", spec.type, "--once", "--full-length"]
+        argv += ["--qos-durability", "transient_local", "--qos-reliability", "reliable"]
+        run = self._run(argv, 30.0)
+        doc = parse_document(run.out.split("\n---", 1)[0].splitlines(keepends=True))
+        if doc is None:
+            self._event("map", "warning", "no /map received: the map view follows the scan")
+            return
+        try:
+            info = doc["info"]
+            w, h = int(info["width"]), int(info["height"])
+            cells = np.asarray(doc["data"], dtype=np.int8).reshape(h, w)
+            origin = info["origin"]["position"]
+            self._map = OccupancyGrid(
+                float(info["resolution"]), float(origin["x"]), float(origin["y"]), w, h, cells
+            )
+        except (KeyError, TypeError, ValueError) as exc:
+            self._event("map", "warning", f"/map could not be read: {exc}")
+
+    def wait_until_idle(self, timeout_s: float) -> str | None:
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            goals_running = any(p.poll() is None for p in self._goal_procs)
+            with self._lock:
+                state = (self._latest.get("/robot_status") or {}).get("state")
+            if not goals_running and state not in MOVING:
+                return self._last_outcome
+            time.sleep(0.1)
+        return None
+
+    # -- E-STOP and teleop -----------------------------------------------------------------
     @property
     def e_stopped(self) -> bool:
         return self._e_stopped
 
-    def estop(self) -> None:
+    def estop(self) -> list[str]:
+        """Zero Twist first (armed, or spawned), /stop in parallel, goals canceled; no step
+        waits for another. Failures after this returns arrive as events."""
         self._e_stopped = True
-        zero = "{linear: {x: 0.0, y: 0.0, z: 0.0}, angular: {x: 0.0, y: 0.0, z: 0.0}}"
-        self._run(["service", "call", "/stop", "std_srvs/srv/Trigger"], self.timeout_s)
-        self._run(
-            ["topic", "pub", "--once", "/cmd_vel", "geometry_msgs/msg/Twist", zero], self.timeout_s
-        )
+        if self._teleop is not None:
+            self._teleop.halt()
+        failures: list[str] = []
+        cmd_vel = self.catalog.topics.get("/cmd_vel")
+        fired = self._armed.fire() if self._armed is not None else None
+        if fired is not None:
+            threading.Thread(target=self._reap, args=(fired, "zero /cmd_vel"), daemon=True).start()
+        elif cmd_vel is not None:
+            argv = ["topic", "pub", "-r", "10", "-t", "10", cmd_vel.name, cmd_vel.type]
+            self._background([*argv, flow_yaml(zero_twist())], "zero /cmd_vel")
+        else:
+            failures.append("the robot has no /cmd_vel: no zero Twist was sent")
+        if "/stop" in self.catalog.services:
+            argv = ["service", "call", "/stop", self.catalog.services["/stop"].type, "{}"]
+            self._background(argv, "/stop")
+        else:
+            failures.append("the robot has no /stop service: goals were canceled directly")
+        for proc in list(self._goal_procs):
+            threading.Thread(target=ros2_process.stop, args=(proc, 3.0), daemon=True).start()
+        for f in failures:
+            self._event("estop", "error", f)
+        return failures
+
+    def _background(self, argv: list[str], what: str) -> None:
+        def go() -> None:
+            run = self._run(argv, self.timeout_s)
+            if run.returncode != 0 or run.stopped:
+                why = run.err.strip()[-200:] or ("timed out" if run.stopped else "failed")
+                self._event("estop", "error", f"E-STOP {what}: {why}")
+
+        threading.Thread(target=go, name=f"estop {what}", daemon=True).start()
+
+    def _reap(self, proc, what: str) -> None:
+        try:
+            rc = proc.wait(self.timeout_s)
+        except Exception:  # noqa: BLE001
+            ros2_process.stop(proc, 1.0)
+            rc = None
+        if rc != 0:
+            err = (proc.stderr.read() or "").strip()[-200:] if proc.stderr else ""
+            self._event("estop", "error", f"E-STOP {what}: {err or f'exit status {rc}'}")
 
     def release_estop(self) -> None:
         self._e_stopped = False
+        if self._armed is not None:
+            self._armed.arm()
 
+    def drive(self, twist: dict) -> None:
+        if self._e_stopped:
+            raise BackendError("the E-STOP is engaged")
+        if self._teleop is None:
+            raise BackendError("the robot has no /cmd_vel")
+        self._teleop.drive(twist)
+
+    # -- commands -------------------------------------------------------------------------
     def execute(self, checked: Checked, timeout: float) -> tuple[str, Any]:
         cmd = checked.command
-        argv = list(cmd.argv)
-        if cmd.key == ("topic", "echo") and "once" not in cmd.flags:
+        if checked.kind == "actuate" and self._e_stopped and cmd.name != "/stop":
+            raise BackendError("the E-STOP is engaged: nothing was sent")
+        argv = sent_argv(checked)
+        if cmd.key == ("topic", "echo"):
+            return self._echo(checked, argv, timeout)
+        if cmd.key == ("topic", "hz"):
+            return self._hz(checked, argv, timeout)
+        if cmd.key == ("action", "send_goal"):
+            return self._send_goal(checked, argv, timeout)
+        run = self._run(argv, timeout)
+        waited = "waiting for service" in run.out and "response:" not in run.out
+        if cmd.key == ("service", "call") and waited:
+            raise BackendError(f"service {cmd.name} is not available (waited {timeout:g} s)")
+        if run.stopped:
+            raise BackendError(f"ros2 {' '.join(argv[:3])} timed out after {timeout:g} s")
+        if run.returncode != 0:
+            raise BackendError(f"ros2 exited with {run.returncode}: {run.err.strip()[:300]}")
+        if cmd.key == ("service", "call"):
+            values = parse_response(run.out)
+            if cmd.name == "/stop":
+                self._cancel_goals()
+            return run.out, values
+        return run.out, None
+
+    def _echo(self, checked: Checked, argv: list[str], timeout: float):
+        if "--once" not in argv:
             argv.append("--once")
-        if cmd.key == ("topic", "pub") and cmd.name == "/cmd_vel":
-            argv = self._with_clamped_values(argv, checked)
-        out = self._run(argv, timeout)
-        text = out.stdout + (out.stderr if out.returncode else "")
-        if out.returncode != 0:
-            raise BackendError(f"ros2 exited with {out.returncode}: {out.stderr.strip()[:300]}")
-        return text, self._values(checked, out.stdout)
+        argv.append("--full-length")  # values from every item; the text is truncated below
+        run = self._run(argv, timeout, until=lambda out: "\n---" in out)
+        doc = parse_document(run.out.split("\n---", 1)[0].splitlines(keepends=True))
+        if doc is None:
+            if run.stopped:
+                raise BackendError(f"no message on {checked.command.name} within {timeout:g} s")
+            raise BackendError(run.err.strip()[:300] or f"no message on {checked.command.name}")
+        return echo_yaml(doc, "no_arr" in checked.command.flags), doc
 
-    @staticmethod
-    def _with_clamped_values(argv: list[str], checked: Checked) -> list[str]:
-        # the message safety reviewed (clamped) is what goes out, not the text as typed
-        values = yaml.safe_dump(checked.message, default_flow_style=True, width=1000).strip()
-        positional = [
-            i
-            for i, a in enumerate(argv)
-            if i >= 2
-            and not a.startswith("-")
-            and argv[i - 1]
-            not in (
-                "-r",
-                "--rate",
-                "-t",
-                "--times",
-                "-p",
-                "--print",
-                "-w",
-                "--wait-matching-subscriptions",
+    def _hz(self, checked: Checked, argv: list[str], timeout: float):
+        windows = 2
+
+        def enough(out: str) -> bool:
+            return out.count("average rate:") >= windows
+
+        run = self._run(argv, timeout, until=enough)
+        rates = re.findall(r"average rate: ([0-9.]+)", run.out)
+        if not rates:
+            raise BackendError(
+                f"{checked.command.name} is not being published (no rate within {timeout:g} s)"
             )
-        ]
-        if len(positional) >= 3:
-            argv[positional[2]] = values
-        else:
-            argv.append(values)
-        return argv
+        return run.out, {"average_rate": float(rates[-1]), "windows": len(rates)}
 
-    @staticmethod
-    def _values(checked: Checked, stdout: str) -> Any:
-        key = checked.command.key
-        if key == ("topic", "echo"):
-            try:
-                return yaml.safe_load(stdout.split("\n---", 1)[0])
-            except yaml.YAMLError:
-                return None
-        if key == ("service", "call"):
-            return parse_response(stdout)
-        if key == ("action", "send_goal"):
-            m = re.search(r"Goal finished with status: (\w+)", stdout)
-            return {"accepted": "Goal accepted" in stdout, "status": m[1] if m else None}
-        return None
+    def _send_goal(self, checked: Checked, argv: list[str], timeout: float):
+        """Return at acceptance; the client keeps running and is followed to the end."""
+        result = ros2_process.Run(argv)  # filled by the follower thread
+        proc = ros2_process.spawn(self.executable, argv)
+        accepted = threading.Event()
+
+        def follow() -> None:
+            for line in proc.stdout:
+                result.stdout.append(line)
+                if "Goal accepted" in line or "Goal was rejected" in line:
+                    accepted.set()
+                m = re.match(r"Goal finished with status: (\w+)", line)
+                if m:
+                    self._last_outcome = m[1].lower()
+                    self._event("goal", "info", f"goal finished: {m[1]}")
+                elif line.startswith("Goal canceled."):
+                    self._last_outcome = "canceled"
+                    self._event("goal", "warning", "goal canceled")
+            proc.wait()
+            accepted.set()
+            if proc in self._goal_procs:
+                self._goal_procs.remove(proc)
+
+        self._goal_procs.append(proc)
+        self._last_outcome = None
+        threading.Thread(target=follow, name="send_goal", daemon=True).start()
+        if not accepted.wait(timeout):
+            ros2_process.stop(proc, 3.0)
+            raise BackendError(f"the action server did not accept the goal within {timeout:g} s")
+        out = result.out
+        m = re.search(r"Goal accepted with ID: (\w+)", out)
+        if m is None:
+            return out, {"accepted": False, "status": "REJECTED" if "rejected" in out else None}
+        return out, {"accepted": True, "goal_id": m[1], "status": "ACCEPTED"}
+
+    def _cancel_goals(self) -> None:
+        for proc in list(self._goal_procs):
+            threading.Thread(target=ros2_process.stop, args=(proc, 3.0), daemon=True).start()

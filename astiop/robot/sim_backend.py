@@ -6,35 +6,46 @@ import math
 import time
 import uuid
 from collections import deque
-from dataclasses import dataclass
 from typing import Any
 
 from astiop.robot import sim_messages as sm
 from astiop.robot.catalog import Catalog, astibot_catalog
 from astiop.robot.interfaces import default_value, interface_show, python_repr
 from astiop.robot.output import BackendError, echo_yaml, indent_yaml
+from astiop.robot.state import RobotEvent, RobotState, TopicStat, from_messages
 from astiop.robot.validation import Checked
+from astiop.sim.runner import SimRunner
 from astiop.sim.simulator import GoalError, Simulator
 from astiop.store import LocationError, Store
 
-
-@dataclass(frozen=True)
-class TopicStat:
-    name: str
-    type: str
-    nominal_hz: float
-    measured_hz: float
-    age_s: float  # since the last message, sim seconds (inf: none yet)
-    count: int
+# What the state is built from: the same messages the robot publishes.
+STATE_TOPICS = (
+    "/robot_pose",
+    "/odom",
+    "/battery_status",
+    "/robot_status",
+    "/obstacles",
+    "/plan",
+    "/conveyor/status",
+)
 
 
 class SimBackend:
     name = "sim"
+    capabilities = frozenset({"commands", "teleop"})
 
-    def __init__(self, sim: Simulator, store: Store | None = None, *, realtime: bool = False):
+    def __init__(
+        self,
+        sim: Simulator,
+        store: Store | None = None,
+        *,
+        realtime: bool = False,
+        speed: float = 1.0,
+    ):
         self.sim = sim
         self.store = store
         self.realtime = realtime
+        self._runner = SimRunner(sim, speed=speed) if realtime else None
         self.catalog: Catalog = astibot_catalog()
         self.params = {k: p.value for k, p in self.catalog.params.items()}
         self.last_twist: dict | None = None
@@ -43,16 +54,53 @@ class SimBackend:
         self._plan_count = 0
         self._plan_last_t = -math.inf
 
-    # -- e-stop ---------------------------------------------------------------------
+    # -- lifecycle, e-stop -----------------------------------------------------------
+    def start(self) -> None:
+        if self._runner is not None:
+            self._runner.start()
+
+    def close(self) -> None:
+        if self._runner is not None:
+            self._runner.stop()
+
     @property
     def e_stopped(self) -> bool:
         return self.sim.e_stopped
 
-    def estop(self) -> None:
+    def estop(self) -> list[str]:
         self.sim.estop()
+        return []
 
     def release_estop(self) -> None:
         self.sim.release_estop()
+
+    # -- live state -------------------------------------------------------------------
+    def state(self) -> RobotState:
+        snap = self.sim.snapshot()
+        messages = {name: self.message(name, snap) for name in (*STATE_TOPICS, "/scan")}
+        if snap.goal_id == 0:
+            del messages["/plan"]
+        return from_messages(snap.t, messages, e_stopped=snap.e_stopped, event_seq=snap.event_seq)
+
+    def events_since(self, seq: int) -> list[RobotEvent]:
+        return [
+            RobotEvent(e.seq, e.t, e.kind, e.severity, e.message)
+            for e in self.sim.events_since(seq)
+        ]
+
+    def map_geometry(self):
+        return self.sim.map
+
+    def drive(self, twist: dict) -> None:
+        if self.sim.e_stopped:
+            raise BackendError("the E-STOP is engaged")
+        try:
+            self.sim.set_cmd_vel(
+                twist["linear"]["x"], twist["linear"]["y"], twist["angular"]["z"], timeout=0.5
+            )
+        except GoalError as exc:
+            raise BackendError(str(exc)) from None
+        self.last_twist, self.last_twist_t = twist, self.sim.t
 
     # -- clock ----------------------------------------------------------------------
     def advance(self, sim_seconds: float, wall_timeout: float) -> None:
@@ -67,13 +115,17 @@ class SimBackend:
                 raise BackendError(f"timed out after {wall_timeout:g} s waiting for the robot")
             time.sleep(0.01)
 
-    def wait_until_idle(self, timeout_s: float) -> None:
+    def wait_until_idle(self, timeout_s: float) -> str | None:
         if not self.realtime:
             self.sim.run_goal(timeout_s)
-            return
-        deadline = time.monotonic() + timeout_s
-        while self.sim.goal is not None and time.monotonic() < deadline:
-            time.sleep(0.05)
+        else:
+            deadline = time.monotonic() + timeout_s
+            while self.sim.goal is not None and time.monotonic() < deadline:
+                time.sleep(0.05)
+        if self.sim.goal is not None:
+            return None
+        result = self.sim.last_result
+        return result.status if result else None
 
     # -- topics ---------------------------------------------------------------------
     def _last_publish(self, name: str) -> float:
@@ -112,8 +164,8 @@ class SimBackend:
             stats.append(TopicStat(name, spec.type, spec.rate_hz, measured, age, count))
         return stats
 
-    def message(self, name: str) -> dict[str, Any]:
-        s = self.sim.snapshot()
+    def message(self, name: str, s=None) -> dict[str, Any]:
+        s = s or self.sim.snapshot()
         builders = {
             "/odom": sm.odometry,
             "/robot_pose": sm.robot_pose,
@@ -148,8 +200,17 @@ class SimBackend:
     # -- execution ------------------------------------------------------------------
     def execute(self, checked: Checked, timeout: float = 10.0) -> tuple[str, Any]:
         cmd = checked.command
+        if checked.kind == "actuate" and self.sim.e_stopped and cmd.name != "/stop":
+            raise BackendError("the E-STOP is engaged: nothing was sent")
         handler = getattr(self, f"_{cmd.verb}_{cmd.sub}")
-        return handler(checked, timeout)
+        try:
+            return handler(checked, timeout)
+        except (GoalError, LocationError) as exc:
+            raise BackendError(str(exc)) from None
+        except BackendError:
+            raise
+        except Exception as exc:  # the simulator must never take the caller down
+            raise BackendError(f"the simulator failed: {type(exc).__name__}: {exc}") from None
 
     def _topic_list(self, c: Checked, timeout: float):
         return self._listing(self.catalog.topics, c)
@@ -196,6 +257,8 @@ class SimBackend:
         rate = cmd.options.get("rate", 1.0)
         lines = ["publisher: beginning loop"]
         for i in range(times):
+            if self.sim.e_stopped:
+                raise BackendError("the E-STOP is engaged: publishing stopped")
             self.sim.set_cmd_vel(
                 twist["linear"]["x"],
                 twist["linear"]["y"],

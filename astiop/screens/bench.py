@@ -9,7 +9,6 @@ from textual import work
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal, VerticalScroll
-from textual.screen import Screen
 from textual.widgets import (
     Button,
     DataTable,
@@ -25,6 +24,7 @@ from textual.widgets import (
 from astiop.agent.specs import SpecError, parse_spec
 from astiop.bench import runner
 from astiop.bench.report import Report, list_runs, load_report
+from astiop.screens.base import ConsoleScreen
 from astiop.widgets.gauges import bar
 
 HEAT = ["#7f1d1d", "#b45309", "#a16207", "#4d7c0f", "#15803d"]
@@ -35,7 +35,7 @@ def heat(value: float) -> Text:
     return Text(f"{value:5.0f}", style=f"bold white on {colour}")
 
 
-class BenchScreen(Screen):
+class BenchScreen(ConsoleScreen):
     BINDINGS = [Binding("ctrl+b", "run", "Run"), Binding("ctrl+l", "reload", "Reload runs")]
 
     def compose(self) -> ComposeResult:
@@ -80,7 +80,7 @@ class BenchScreen(Screen):
         table = self.query_one("#bench-runs", DataTable)
         table.clear()
         for r in self.runs:
-            table.add_row(str(r["id"]), str(r["stage"]), r["status"], ", ".join(r["models"]))
+            table.add_row(str(r["id"]), str(r["stage"]), r["status"], Text(", ".join(r["models"])))
         if self.runs:
             self.show_report(self.runs[0]["id"])
         else:
@@ -108,7 +108,7 @@ class BenchScreen(Screen):
             for m in models:
                 parse_spec(m)
         except SpecError as exc:
-            self.notify(str(exc), severity="error")
+            self.notify(str(exc), severity="error", markup=False)
             return None
         limit_text = self.query_one("#bench-limit", Input).value.strip()
         if limit_text and (not limit_text.isdigit() or int(limit_text) < 1):
@@ -127,7 +127,7 @@ class BenchScreen(Screen):
         if config is not None:
             self.run_bench(config)
 
-    @work(exclusive=True, group="bench")
+    @work(exclusive=True, group="bench", exit_on_error=False)
     async def run_bench(self, config: runner.RunConfig) -> None:
         store = self.app.services.store
         run_id = runner.create_run(store, config)
@@ -163,7 +163,7 @@ class BenchScreen(Screen):
         for i, r in enumerate(rep.results, 1):
             ranking.add_row(
                 str(i),
-                r.model,
+                Text(r.model),
                 r.mode,
                 *[f"{r.components[k]:.1f}" for k in comps],
                 Text(f"{r.composite:.1f}", style="bold"),
@@ -183,4 +183,6 @@ class BenchScreen(Screen):
         cats = sorted({c for r in rep.results for c in r.by_category})
         heatmap.add_columns("model", *cats)
         for r in rep.results:
-            heatmap.add_row(f"{r.model}/{r.mode}", *[heat(r.by_category.get(c, 0.0)) for c in cats])
+            heatmap.add_row(
+                Text(f"{r.model}/{r.mode}"), *[heat(r.by_category.get(c, 0.0)) for c in cats]
+            )

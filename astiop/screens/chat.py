@@ -7,13 +7,14 @@ from textual import work
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import VerticalScroll
-from textual.screen import Screen
 from textual.widgets import Collapsible, Footer, Header, Input, Static
 
 from astiop.agent.embedded import EmbeddedModelError
 from astiop.agent.specs import SpecError, open_endpoint
 from astiop.agent.turn import Agent, TurnResult
 from astiop.robot.output import Execution
+from astiop.screens.base import ConsoleScreen
+from astiop.screens.messages import TurnFinished
 
 HELP = (
     "Ask in plain language, e.g. 'what is the battery level?' or 'send the robot to "
@@ -34,7 +35,7 @@ class CommandView(Static):
         super().__init__(line, classes="cmd-ok" if ok else "cmd-bad")
 
 
-class ChatScreen(Screen):
+class ChatScreen(ConsoleScreen):
     BINDINGS = [Binding("escape", "cancel", "Cancel reply")]
 
     def compose(self) -> ComposeResult:
@@ -77,7 +78,7 @@ class ChatScreen(Screen):
         elif text.startswith("/mode"):
             mode = text.removeprefix("/mode").strip()
             if mode not in ("command", "tool"):
-                self.notify("/mode takes 'command' or 'tool'", severity="error")
+                self.notify("/mode takes 'command' or 'tool'", severity="error", markup=False)
                 return
             self.agent = self._make_agent(self.agent.endpoint, mode)
             self.notify(f"reply mode: {mode}")
@@ -89,7 +90,7 @@ class ChatScreen(Screen):
         try:
             endpoint = open_endpoint(spec or "rules")
         except SpecError as exc:
-            self.notify(str(exc), severity="error")
+            self.notify(str(exc), severity="error", markup=False)
             return
         old = self.app.services.endpoint
         self.app.services.endpoint = endpoint
@@ -99,9 +100,9 @@ class ChatScreen(Screen):
         )
         self.app.sub_title = f"robot: {self.app.services.graph.backend.name}  model: {spec}"
         self.run_worker(old.close, thread=True, group="model")
-        self.notify(f"model: {endpoint.spec.raw}")
+        self.notify(f"model: {endpoint.spec.raw}", markup=False)
 
-    @work(exclusive=True, group="llm")
+    @work(exclusive=True, group="llm", exit_on_error=False)
     async def run_turn(self, text: str) -> None:
         status = Static(Text("thinking…", style="dim"), classes="answer")
         self._log(status)
@@ -131,7 +132,7 @@ class ChatScreen(Screen):
         except EmbeddedModelError as exc:
             status.update(Text(str(exc), style="red"))
             return
-        self.app.last_turn = result
+        self.app.post_message(TurnFinished(result, self.agent.model, ""))
         if not parts:
             self.query_one("#chat-log").mount(answer, before=status)
             answer.update(Text(result.answer))

@@ -1,4 +1,8 @@
-"""Dashboard (Fig. 16a): the robot, the graph's topics, the agent, the map, the latest events."""
+"""Dashboard (Fig. 16a): the robot, the graph's topics, the agent, the map, the latest events.
+
+Everything here comes from the robot layer's `RobotState`, so it reads the same on the
+simulator and on a real robot; a topic the robot lacks shows as absent.
+"""
 
 from __future__ import annotations
 
@@ -8,11 +12,12 @@ from rich.text import Text
 from textual import work
 from textual.app import ComposeResult
 from textual.containers import Vertical, VerticalScroll
-from textual.screen import Screen
 from textual.widgets import DataTable, Footer, Header, Static
 
 from astiop.agent.llm import LLMError
-from astiop.sim.state import SimState
+from astiop.robot.state import RobotState, TopicStat
+from astiop.screens.base import ConsoleScreen
+from astiop.screens.messages import RobotStateSampled, TurnFinished
 from astiop.widgets.gauges import BatteryGauge
 from astiop.widgets.warehouse_map import WarehouseMapView
 
@@ -25,18 +30,55 @@ STATE_COLOURS = {
     "e_stopped": "bold red",
     "fault": "bold red",
 }
+EVENT_ROWS = 6
 
 
-class DashboardScreen(Screen):
+def _num(value: float | None, fmt: str) -> str:
+    return "—" if value is None or not math.isfinite(value) else format(value, fmt)
+
+
+def robot_text(st: RobotState) -> Text:
+    state = st.state_word
+    status = st.status
+    text = Text.assemble(("robot  ", "bold"), (state.upper(), STATE_COLOURS.get(state, "white")))
+    if status:
+        text.append(f"   mode {status.mode}")
+    text.append(f"   t {st.t:.1f} s\n")
+    if st.pose is None:
+        text.append("pose   — no /robot_pose or /odom\n", style="dim")
+    else:
+        p = st.pose
+        deg = math.degrees(p.theta) if math.isfinite(p.theta) else math.nan
+        text.append(
+            f"pose   x {_num(p.x, '6.2f')} m  y {_num(p.y, '6.2f')} m  θ {_num(deg, '6.1f')}°\n"
+        )
+    wz = f"  ω {st.velocity[2]:+.2f} rad/s" if st.velocity else ""
+    text.append(f"speed  {_num(st.speed, '.2f')} m/s{wz}\n")
+    goal = status.active_goal if status else ""
+    remaining = st.distance_remaining
+    text.append(f"goal   {goal or '-'}")
+    if goal and remaining is not None:
+        text.append(f"  ({remaining:.1f} m to go)")
+    fault = status.fault if status else ""
+    text.append("\nfault  " + (fault or "none"), style="bold red" if fault else "")
+    conveyor = st.conveyor
+    if conveyor is not None:
+        text.append(
+            f"\nconveyor {'loaded' if conveyor.loaded else 'empty'}"
+            f"{'  running' if conveyor.running else ''}  lamp {conveyor.lamp}"
+        )
+    seen = "—" if st.obstacles is None else str(len(st.obstacles))
+    text.append(f"\nobstacles seen {seen}")
+    return text
+
+
+class DashboardScreen(ConsoleScreen):
     def compose(self) -> ComposeResult:
-        services = self.app.services
-        warehouse = services.store.warehouse
         yield Header(show_clock=False)
         with Vertical(id="dash-grid"):
             with Vertical(id="dash-left"):
-                yield WarehouseMapView(warehouse, id="map-panel")
-                events = DataTable(id="events", cursor_type="none", zebra_stripes=True)
-                yield events
+                yield WarehouseMapView(self.app.services.graph.map_geometry(), id="map-panel")
+                yield DataTable(id="events", cursor_type="none", zebra_stripes=True)
             with VerticalScroll(id="dash-right"):
                 yield Static(id="robot", classes="panel")
                 yield BatteryGauge(id="battery", classes="panel")
@@ -45,102 +87,105 @@ class DashboardScreen(Screen):
                 yield Static(id="services", classes="panel")
         yield Footer()
 
+    def on_mount(self) -> None:
+        self.reach = ""
+        self.last_turn = None
+        self.query_one("#topics", DataTable).add_columns("topic", "type", "Hz", "age")
+        self.query_one("#events", DataTable).add_columns("t", "kind", "message")
+        self._events: list[tuple[str, str, str]] = []
+        cat = self.app.services.graph.catalog
+        text = Text("services & actions\n", style="bold")
+        for s in cat.services.values():
+            text.append(s.name + "  ").append(s.type + "\n", style="dim")
+        for a in cat.actions.values():
+            text.append(a.name + "  ").append(a.type, style="dim").append(" (action)\n")
+        self.query_one("#services", Static).update(text)
+        self.show_agent()
+        self.check_endpoint()
+        self.show_state(self.app.robot_state)
+        self.show_topics(self.app.topic_stats)
+
     def on_screen_resume(self) -> None:
         # on first show too; locations may have changed on the Locations screen
         self.query_one(WarehouseMapView).set_locations(
             [(loc.x, loc.y) for loc in self.app.services.store.list_locations()]
         )
 
-    def on_mount(self) -> None:
-        topics = self.query_one("#topics", DataTable)
-        topics.add_columns("topic", "type", "Hz", "age")
-        events = self.query_one("#events", DataTable)
-        events.add_columns("sim t", "kind", "message")
-        cat = self.app.services.graph.catalog
-        lines = [f"{s.name}  [dim]{s.type}[/]" for s in cat.services.values()]
-        lines += [f"{a.name}  [dim]{a.type}[/] (action)" for a in cat.actions.values()]
-        self.query_one("#services", Static).update("[b]services & actions[/]\n" + "\n".join(lines))
+    def on_robot_state_sampled(self, msg: RobotStateSampled) -> None:
+        self.show_state(msg.state)
+        for ev in msg.events:
+            self._events.append((f"{ev.t:.1f}", ev.kind, ev.message))
+        if msg.events:
+            self._show_events()
+        if msg.stats is not None:
+            self.show_topics(msg.stats)
+
+    def on_turn_finished(self, msg: TurnFinished) -> None:
+        self.last_turn = msg.result
+        self.reach = msg.reachable or self.reach
         self.show_agent()
-        self.check_endpoint()
-        self.set_interval(1.0, self.show_topics)
-        self.show_topics()
-        if self.app.state is not None:
-            self.show_state(self.app.state)
 
     def show_agent(self) -> None:
         ep = self.app.services.endpoint
-        turn = self.app.last_turn
         if ep.is_rules:
             reach = "rule-based baseline (no LLM)"
         elif ep.local:
             reach = "ready" if ep.server else "starts on first request"
         else:
-            reach = getattr(self, "_reach", f"checking {ep.spec.url}…")
-        latency = (
-            f"last turn {turn.total_s:.1f} s, first token {turn.ttft_s or 0:.1f} s"
-            if turn
-            else "no turn yet"
-        )
-        self.query_one("#agent", Static).update(
-            f"[b]agent[/]   model {ep.spec.raw}  ({reach})\n{latency}"
-        )
+            reach = self.reach or f"checking {ep.spec.url}…"
+        turn = self.last_turn
+        if turn is None:
+            latency = "no turn yet"
+        else:
+            latency = f"last turn {turn.total_s:.1f} s, first token {turn.ttft_s or 0:.1f} s"
+            latency += f", {turn.prompt_tokens}+{turn.completion_tokens} tokens"
+            if turn.error:
+                latency += f"\nerror: {turn.error}"
+        text = Text("agent", style="bold")
+        text.append(f"   model {ep.spec.raw}  ({reach})\n{latency}")
+        self.query_one("#agent", Static).update(text)
 
-    @work(exclusive=True, group="reach")
+    @work(exclusive=True, group="reach", exit_on_error=False)
     async def check_endpoint(self) -> None:
         ep = self.app.services.endpoint
         if ep.is_rules or ep.local:
             return
         try:
             served = await ep.client().list_models()
-            self._reach = f"answers at {ep.spec.url}, serving {len(served)} model(s)"
+            self.reach = f"answers at {ep.spec.url}, serving {len(served)} model(s)"
         except LLMError as exc:
-            self._reach = f"DOWN: {exc}"
+            self.reach = f"DOWN: {exc}"
         self.show_agent()
 
-    def show_topics(self) -> None:
-        backend = self.app.services.graph.backend
-        stats = getattr(backend, "topic_stats", None)
+    def show_topics(self, stats: list[TopicStat]) -> None:
         table = self.query_one("#topics", DataTable)
         table.clear()
-        if stats is None:
-            for name, spec in self.app.services.graph.catalog.topics.items():
-                table.add_row(name, spec.type.split("/")[-1], "-", "-")
-            return
-        for s in stats():
-            age = "never" if math.isinf(s.age_s) else f"{s.age_s:.1f}s"
-            table.add_row(s.name, s.type.split("/")[-1], f"{s.measured_hz:.1f}", age)
+        for s in stats:
+            if math.isnan(s.measured_hz):
+                hz, age = "-", "-"
+            else:
+                hz = f"{s.measured_hz:.1f}"
+                age = "never" if math.isinf(s.age_s) else f"{s.age_s:.1f}s"
+            table.add_row(Text(s.name), Text(s.type.split("/")[-1]), hz, age)
 
-    def show_state(self, st: SimState) -> None:
-        self.query_one(WarehouseMapView).show(st)
-        colour = STATE_COLOURS.get(st.state, "white")
-        text = Text.assemble(
-            ("robot  ", "bold"),
-            (st.state.upper(), colour),
-            f"   mode {st.mode}   t {st.t:.1f} s\n",
-            f"pose   x {st.x:6.2f} m  y {st.y:6.2f} m  θ {math.degrees(st.theta):6.1f}°\n",
-            f"speed  {st.speed:.2f} m/s  ω {st.wz:+.2f} rad/s\n",
-            f"goal   {st.active_goal or '-'}"
-            + (f"  ({st.distance_remaining:.1f} m to go)" if st.active_goal else "")
-            + "\n",
-            ("fault  " + (st.fault or "none"), "bold red" if st.fault else ""),
-            f"\nconveyor {'loaded' if st.conveyor_loaded else 'empty'}"
-            f"{'  running' if st.conveyor_direction else ''}  lamp {st.lamp}"
-            f"  obstacles seen {len(st.detected)}",
-        )
+    def show_state(self, st: RobotState) -> None:
+        view = self.query_one(WarehouseMapView)
+        view.set_geometry(self.app.services.graph.map_geometry())
+        view.show(st)
+        text = robot_text(st)
         if text.plain != getattr(self, "_robot_text", None):
             self._robot_text = text.plain
             self.query_one("#robot", Static).update(text)
-        self.query_one("#battery", BatteryGauge).show(
-            st.battery_soc, st.battery_voltage, st.battery_current, st.battery_charging
-        )
-        self._show_events(st.event_seq)
+        gauge = self.query_one("#battery", BatteryGauge)
+        if st.battery is None:
+            gauge.show_absent()
+        else:
+            b = st.battery
+            gauge.show(b.percentage, b.voltage, b.current, b.charging)
 
-    def _show_events(self, seq: int) -> None:
-        if seq == getattr(self, "_event_seq", None):
-            return
-        self._event_seq = seq
-        sim = self.app.services.sim
+    def _show_events(self) -> None:
+        self._events = self._events[-EVENT_ROWS:]
         table = self.query_one("#events", DataTable)
         table.clear()
-        for ev in reversed(sim.events_since(0)[-6:] if sim else []):
-            table.add_row(f"{ev.t:.1f}", ev.kind, ev.message)
+        for t, kind, message in reversed(self._events):
+            table.add_row(t, Text(kind), Text(message))

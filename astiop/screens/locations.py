@@ -4,16 +4,17 @@ from __future__ import annotations
 
 import math
 
+from rich.text import Text
 from textual.app import ComposeResult
 from textual.binding import Binding
-from textual.screen import Screen
 from textual.widgets import DataTable, Footer, Header
 
+from astiop.screens.base import ConsoleScreen
 from astiop.screens.modals import ConfirmModal, FormModal
 from astiop.store import Location, LocationError
 
 
-class LocationsScreen(Screen):
+class LocationsScreen(ConsoleScreen):
     BINDINGS = [
         Binding("a", "add", "Add"),
         Binding("r", "rename", "Rename"),
@@ -40,11 +41,11 @@ class LocationsScreen(Screen):
         table.clear()
         for loc in self.locations:
             table.add_row(
-                loc.name,
+                Text(loc.name),
                 f"{loc.x:.2f}",
                 f"{loc.y:.2f}",
                 f"{math.degrees(loc.theta):.1f}",
-                loc.description,
+                Text(loc.description),  # stored text is data, never markup
             )
 
     def selected(self) -> Location | None:
@@ -54,8 +55,8 @@ class LocationsScreen(Screen):
         return self.locations[min(table.cursor_row, len(self.locations) - 1)]
 
     def action_add(self) -> None:
-        st = self.app.state
-        x, y, th = (st.x, st.y, math.degrees(st.theta)) if st else (0.0, 0.0, 0.0)
+        pose = self.app.robot_state.pose
+        x, y, th = (pose.x, pose.y, math.degrees(pose.theta)) if pose else (0.0, 0.0, 0.0)
         fields = [
             ("name", "name (letters, digits, _ or -)", ""),
             ("x", "x (m) — the robot's pose by default", f"{x:.2f}"),
@@ -77,9 +78,9 @@ class LocationsScreen(Screen):
                     values["name"].strip(), x, y, math.radians(th), values["description"]
                 )
             except LocationError as exc:
-                self.notify(str(exc), severity="error")
+                self.notify(str(exc), severity="error", markup=False)
                 return
-            self.notify(f"added {loc.name}")
+            self.notify(f"added {loc.name}", markup=False)
             self.reload()
 
         self.app.push_screen(FormModal("Add a named location", fields), done)
@@ -95,9 +96,9 @@ class LocationsScreen(Screen):
             try:
                 new = self.app.services.store.rename_location(loc.name, values["name"].strip())
             except LocationError as exc:
-                self.notify(str(exc), severity="error")
+                self.notify(str(exc), severity="error", markup=False)
                 return
-            self.notify(f"renamed {loc.name} to {new.name}")
+            self.notify(f"renamed {loc.name} to {new.name}", markup=False)
             self.reload()
 
         self.app.push_screen(
@@ -112,7 +113,7 @@ class LocationsScreen(Screen):
         def done(ok: bool | None) -> None:
             if ok:
                 self.app.services.store.remove_location(loc.name)
-                self.notify(f"removed {loc.name}")
+                self.notify(f"removed {loc.name}", markup=False)
                 self.reload()
 
         self.app.push_screen(ConfirmModal(f"Delete the location {loc.name}?"), done)
@@ -125,9 +126,15 @@ class LocationsScreen(Screen):
             f"ros2 service call /goto_position astiop_msgs/srv/GotoPosition "
             f"\"{{name: '{loc.name}'}}\""
         )
-        result = self.app.services.graph.run(cmd, confirm=lambda _c: True)  # g is consent
+        # the same y/n as every actuation (when confirmation is on), then off the UI thread
+        self.run_worker(lambda: self._goto(cmd), thread=True, group="goto", exit_on_error=False)
+
+    def _goto(self, cmd: str) -> None:
+        graph = self.app.services.graph
+        result = graph.run(cmd, confirm=self.app.confirm_from_thread)
         values = result.values or {}
         if result.executed and values.get("success"):
-            self.notify(values["message"])
+            self.app.call_from_thread(self.notify, values["message"], markup=False)
         else:
-            self.notify(result.reason or values.get("message", "refused"), severity="error")
+            why = result.reason or result.error or values.get("message", "refused")
+            self.app.call_from_thread(self.notify, why, severity="error", markup=False)

@@ -7,12 +7,14 @@ import json
 import time
 from pathlib import Path
 
+from rich.text import Text
 from textual import work
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal, VerticalScroll
-from textual.screen import Screen
 from textual.widgets import DataTable, Footer, Header, Input, Select, Static
+
+from astiop.screens.base import ConsoleScreen
 
 KINDS = [
     ("all rows", "all"),
@@ -30,7 +32,7 @@ def _when(t: float | None) -> str:
     return time.strftime("%m-%d %H:%M:%S", time.localtime(t)) if t else "-"
 
 
-class LogsScreen(Screen):
+class LogsScreen(ConsoleScreen):
     BINDINGS = [
         Binding("ctrl+l", "reload", "Reload"),
         Binding("x", "export('csv')", "CSV"),
@@ -60,7 +62,7 @@ class LogsScreen(Screen):
     def on_screen_resume(self) -> None:
         self.action_reload()
 
-    @work(thread=True, exclusive=True, group="logs")
+    @work(thread=True, exclusive=True, group="logs", exit_on_error=False)
     def action_reload(self) -> None:
         store = self.app.services.store
         rows = []
@@ -136,7 +138,10 @@ class LogsScreen(Screen):
         self.shown = [r for r in self.rows if self._matches(r)]
         for r in self.shown:
             valid = "-" if r["valid"] is None else ("yes" if r["valid"] else "NO")
-            table.add_row(_when(r["t"]), r["kind"], r["model"], valid, r["summary"][:80])
+            # stored text is data, never markup: "[/scan]" prints as typed
+            table.add_row(
+                _when(r["t"]), r["kind"], Text(r["model"]), valid, Text(r["summary"][:80])
+            )
         self.sub_title = f"{len(self.shown)} of {len(self.rows)} rows"
         if self.shown:
             self._detail(self.shown[0])
@@ -174,7 +179,7 @@ class LogsScreen(Screen):
             text = "\n".join(lines)
         self.query_one("#logs-detail-text", Static).update(text)
 
-    @work(thread=True, group="export")
+    @work(thread=True, group="export", exit_on_error=False)
     def action_export(self, fmt: str) -> None:
         folder = self.app.services.store.path.parent / "exports"
         folder.mkdir(parents=True, exist_ok=True)
@@ -192,7 +197,9 @@ class LogsScreen(Screen):
             for r in self.shown
         ]
         _write(path, fmt, records)
-        self.app.call_from_thread(self.notify, f"exported {len(records)} rows to {path}")
+        self.app.call_from_thread(
+            self.notify, f"exported {len(records)} rows to {path}", markup=False
+        )
 
 
 def _write(path: Path, fmt: str, records: list[dict]) -> None:

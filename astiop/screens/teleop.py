@@ -1,26 +1,28 @@
 """Teleop: keys drive vx, vy, ωz; the inverse kinematics shows the four wheel speeds.
 
 Terminals send no key-release events, so each key press commands motion for half a second:
-holding a key repeats it, letting go lets the command lapse.
+holding a key repeats it, letting go lets the command lapse. Every press goes to the robot in
+a worker, never on the UI thread, so a slow robot cannot freeze the screen or delay E-STOP.
 """
 
 from __future__ import annotations
 
+from rich.text import Text
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Vertical
-from textual.screen import Screen
 from textual.widgets import Footer, Header, Static
 
-from astiop.sim.kinematics import inverse_kinematics
-from astiop.sim.state import SimState
+from astiop.robot.state import RobotState, wheel_speeds
+from astiop.screens.base import ConsoleScreen
+from astiop.screens.messages import RobotStateSampled
 from astiop.widgets.gauges import WheelBars
 from astiop.widgets.warehouse_map import WarehouseMapView
 
 STEPS = (0.1, 0.2, 0.4, 0.8)
 
 
-class TeleopScreen(Screen):
+class TeleopScreen(ConsoleScreen):
     BINDINGS = [
         Binding("w", "drive(1, 0, 0)", "fwd"),
         Binding("s", "drive(-1, 0, 0)", "back"),
@@ -41,7 +43,7 @@ class TeleopScreen(Screen):
     def compose(self) -> ComposeResult:
         yield Header(show_clock=False)
         with Vertical(id="teleop-grid"):
-            yield WarehouseMapView(self.app.services.store.warehouse)
+            yield WarehouseMapView(self.app.services.graph.map_geometry())
             with Vertical():
                 yield Static(id="teleop-help", classes="panel")
                 yield WheelBars(id="wheels", classes="panel")
@@ -49,7 +51,6 @@ class TeleopScreen(Screen):
         yield Footer()
 
     def on_screen_resume(self) -> None:
-        # on first show too; locations may have changed on the Locations screen
         self.query_one(WarehouseMapView).set_locations(
             [(loc.x, loc.y) for loc in self.app.services.store.list_locations()]
         )
@@ -57,8 +58,7 @@ class TeleopScreen(Screen):
     def on_mount(self) -> None:
         self._show_help()
         self.query_one(WheelBars).show((0.0, 0.0, 0.0, 0.0))
-        if self.app.state is not None:
-            self.show_state(self.app.state)
+        self.show_state(self.app.robot_state)
 
     def _show_help(self) -> None:
         v = STEPS[self.step]
@@ -75,26 +75,45 @@ class TeleopScreen(Screen):
     def action_drive(self, fx: int, fy: int, fw: int) -> None:
         v = STEPS[self.step]
         self.command = (fx * v, fy * v, fw * 2 * v)
-        vx, vy, wz = self.command
-        cmd = (
-            f"ros2 topic pub --once /cmd_vel geometry_msgs/msg/Twist "
-            f'"{{linear: {{x: {vx}, y: {vy}}}, angular: {{z: {wz}}}}}"'
+        self.query_one(WheelBars).show(wheel_speeds(*self.command))
+        command = self.command
+        self.run_worker(
+            lambda: self._drive(*command), thread=True, group="teleop", exit_on_error=False
         )
-        result = self.app.services.graph.run(cmd, confirm=lambda _c: True)  # the key is consent
-        if not result.executed:
-            self.notify(result.reason, severity="warning")
-        self.query_one(WheelBars).show(inverse_kinematics(vx, vy, wz))
+
+    def _drive(self, vx: float, vy: float, wz: float) -> None:
+        result = self.app.services.graph.drive(vx, vy, wz)
+        if not result.executed or result.error:
+            why = result.reason or result.error
+            self.app.call_from_thread(self.notify, why, severity="warning", markup=False)
 
     def action_halt(self) -> None:
         self.command = (0.0, 0.0, 0.0)
-        self.app.services.graph.run("ros2 service call /stop std_srvs/srv/Trigger")
         self.query_one(WheelBars).show((0.0, 0.0, 0.0, 0.0))
+        self.run_worker(self._halt, thread=True, group="teleop", exit_on_error=False)
 
-    def show_state(self, st: SimState) -> None:
+    def _halt(self) -> None:
+        result = self.app.services.graph.run("ros2 service call /stop std_srvs/srv/Trigger")
+        if result.error:
+            self.app.call_from_thread(self.notify, result.error, severity="error", markup=False)
+
+    def on_robot_state_sampled(self, msg: RobotStateSampled) -> None:
+        self.show_state(msg.state)
+
+    def show_state(self, st: RobotState) -> None:
         self.query_one(WarehouseMapView).show(st)
-        self.query_one(WheelBars).show(st.wheel_speeds)
-        self.query_one("#teleop-state", Static).update(
-            f"state {st.state}  mode {st.mode}\nx {st.x:.2f}  y {st.y:.2f}  "
-            f"v ({st.vx:+.2f}, {st.vy:+.2f}) m/s  ω {st.wz:+.2f} rad/s"
-            + (f"\n[red]fault: {st.fault}[/]" if st.fault else "")
-        )
+        if st.wheel_speeds is not None:
+            self.query_one(WheelBars).show(st.wheel_speeds)
+        text = Text(f"state {st.state_word}")
+        if st.status:
+            text.append(f"  mode {st.status.mode}")
+        if st.pose:
+            text.append(f"\nx {st.pose.x:.2f}  y {st.pose.y:.2f}")
+        if st.velocity:
+            vx, vy, wz = st.velocity
+            text.append(f"  v ({vx:+.2f}, {vy:+.2f}) m/s  ω {wz:+.2f} rad/s")
+        elif st.speed is not None:
+            text.append(f"  speed {st.speed:.2f} m/s")
+        if st.status and st.status.fault:
+            text.append(f"\nfault: {st.status.fault}", style="red")
+        self.query_one("#teleop-state", Static).update(text)

@@ -27,8 +27,8 @@ from astiop.sim.navigator import Goal, GoalResult
 from astiop.sim.perception import DetectedObstacle, detect
 from astiop.sim.planner import Planner
 from astiop.sim.state import Event, SimState
-from astiop.sim.warehouse_map import WarehouseMap, default_map
 from astiop.sim.world import CT_OBSTACLE, CT_ROBOT, CT_STATIC, World
+from astiop.warehouse import WarehouseMap, default_map
 
 ROBOT_MASS = 45.0
 TELEOP_TIMEOUT_S = 0.5

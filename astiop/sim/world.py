@@ -10,7 +10,7 @@ import numpy as np
 import pymunk
 
 from astiop.sim.geometry import circle_polygon, oriented_box, polygon_edges, rect_edges
-from astiop.sim.warehouse_map import WarehouseMap
+from astiop.warehouse import WarehouseMap
 
 CT_ROBOT, CT_STATIC, CT_OBSTACLE = 1, 2, 3
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 from rich.text import Text
 from textual.widgets import Static
 
-from astiop.sim.kinematics import ASTIBOT
+from astiop.robot.state import MAX_WHEEL_SPEED
 
 
 def bar(fraction: float, width: int, color: str) -> Text:
@@ -15,6 +15,11 @@ def bar(fraction: float, width: int, color: str) -> Text:
 
 
 class BatteryGauge(Static):
+    def show_absent(self) -> None:
+        if getattr(self, "_shown", None) != "absent":
+            self._shown = "absent"
+            self.update(Text("battery  — the robot publishes no /battery_status", style="dim"))
+
     def show(self, soc: float, voltage: float, current: float, charging: bool) -> None:
         color = "green" if soc > 0.4 else "yellow" if soc > 0.2 else "red"
         text = (
@@ -36,7 +41,7 @@ class WheelBars(Static):
     NAMES = ("FL", "FR", "RL", "RR")
 
     def show(self, wheels) -> None:
-        limit = ASTIBOT.max_wheel_speed
+        limit = MAX_WHEEL_SPEED
         half = 12
         lines = Text()
         for name, w in zip(self.NAMES, wheels):

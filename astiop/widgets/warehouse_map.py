@@ -1,4 +1,8 @@
-"""The warehouse drawn with half blocks: two map pixels per terminal cell, one colour each."""
+"""The robot's map drawn with half blocks: two map pixels per terminal cell, one colour each.
+
+The geometry comes from the robot layer: the known warehouse layout, the robot's /map grid,
+or nothing, when the view follows the robot and shows what its scan sees.
+"""
 
 from __future__ import annotations
 
@@ -11,9 +15,19 @@ from textual.geometry import Region
 from textual.strip import Strip
 from textual.widget import Widget
 
-from astiop.sim.geometry import oriented_box
-from astiop.sim.state import SimState
-from astiop.sim.warehouse_map import WarehouseMap
+from astiop.robot.state import OccupancyGrid, RobotState
+from astiop.warehouse import WarehouseMap
+
+FOLLOW_HALF_M = 12.0  # with no map: metres shown either side of the robot
+
+
+def _body_points(x: float, y: float, th: float, length: float = 1.0, width: float = 0.735):
+    c, s = math.cos(th), math.sin(th)
+    u = np.linspace(-length / 2, length / 2, 6)
+    v = np.linspace(-width / 2, width / 2, 5)
+    gu, gv = (a.ravel() for a in np.meshgrid(u, v))
+    return x + gu * c - gv * s, y + gu * s + gv * c
+
 
 # palette index -> colour
 PALETTE = [
@@ -38,10 +52,10 @@ _STYLES = {
 class WarehouseMapView(Widget):
     DEFAULT_CSS = "WarehouseMapView { height: 1fr; width: 1fr; min-height: 10; }"
 
-    def __init__(self, warehouse: WarehouseMap, **kwargs):
+    def __init__(self, geometry: WarehouseMap | OccupancyGrid | None, **kwargs):
         super().__init__(**kwargs)
-        self.warehouse = warehouse
-        self.robot_state: SimState | None = None
+        self.geometry = geometry
+        self.robot_state: RobotState | None = None
         self.locations: list[tuple[float, float]] = []  # named locations, drawn as markers
         self._base: np.ndarray | None = None
         self._pixels: np.ndarray | None = None
@@ -52,8 +66,25 @@ class WarehouseMapView(Widget):
         self._pixels = None
         self.refresh()
 
-    def show(self, state: SimState) -> None:
+    def set_geometry(self, geometry) -> None:
+        if geometry is not self.geometry:
+            self.geometry = geometry
+            self._base = self._pixels = None
+            self.refresh()
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float]:
+        if self.geometry is not None:
+            return self.geometry.bounds
+        st = self.robot_state
+        cx, cy = (st.pose.x, st.pose.y) if st and st.pose else (0.0, 0.0)
+        h = FOLLOW_HALF_M
+        return (cx - h, cy - h / 2, cx + h, cy + h / 2)
+
+    def show(self, state: RobotState) -> None:
         self.robot_state = state
+        if self.geometry is None:
+            self._base = None  # the view moves with the robot
         w, h = self.size.width, self.size.height
         if w <= 0 or h <= 0:
             return
@@ -71,14 +102,14 @@ class WarehouseMapView(Widget):
 
     # -- rasterising ----------------------------------------------------------------------
     def _scale(self, w: int, h: int) -> tuple[float, float, float]:
-        x0, y0, x1, y1 = self.warehouse.bounds
+        x0, y0, x1, y1 = self.bounds
         # keep metres square: a cell is twice as tall as wide, two pixels per cell vertically
         s = min(w / (x1 - x0), h / (y1 - y0))
         return s, x0, y0
 
     def _top(self, px: np.ndarray, s: float) -> int:
         """Pixel row of the map's top edge: the drawing is centred vertically."""
-        map_h = int(math.ceil((self.warehouse.bounds[3] - self.warehouse.bounds[1]) * s))
+        map_h = int(math.ceil((self.bounds[3] - self.bounds[1]) * s))
         return px.shape[0] - max((px.shape[0] - map_h) // 2, 0)
 
     def _fill_rect(self, px: np.ndarray, rect, value: int, s, x0, y0) -> None:
@@ -92,11 +123,20 @@ class WarehouseMapView(Widget):
     def _base_layer(self, w: int, h: int) -> np.ndarray:
         px = np.full((h, w), FREE, dtype=np.int8)
         s, x0, y0 = self._scale(w, h)
-        for zone in self.warehouse.zones:
-            self._fill_rect(px, zone.rect, ZONE, s, x0, y0)
-        for kind, rect in self.warehouse.static_rects:
-            value = WALL if kind in ("wall", "pillar") else SHELF if kind == "shelf" else STATION
-            self._fill_rect(px, rect, value, s, x0, y0)
+        geo = self.geometry
+        if isinstance(geo, WarehouseMap):
+            for zone in geo.zones:
+                self._fill_rect(px, zone.rect, ZONE, s, x0, y0)
+            for kind, rect in geo.static_rects:
+                value = (
+                    WALL if kind in ("wall", "pillar") else SHELF if kind == "shelf" else STATION
+                )
+                self._fill_rect(px, rect, value, s, x0, y0)
+        elif isinstance(geo, OccupancyGrid):
+            rows, cols = np.nonzero(geo.cells >= 50)
+            xs = geo.origin_x + (cols + 0.5) * geo.resolution
+            ys = geo.origin_y + (rows + 0.5) * geo.resolution
+            self._plot(px, xs, ys, WALL, s, x0, y0)
         return px
 
     def _plot(self, px, xs, ys, value, s, x0, y0) -> None:
@@ -116,30 +156,27 @@ class WarehouseMapView(Widget):
             xs, ys = zip(*self.locations)
             self._plot(px, xs, ys, LABEL, s, x0, y0)
         st = self.robot_state
-        if st is None:
-            return px
-        for ob in st.obstacles:
-            pts = ob.outline()
-            self._fill_rect(px, (*pts.min(axis=0), *pts.max(axis=0)), OBSTACLE, s, x0, y0)
+        if st is None or st.pose is None or not math.isfinite(st.pose.x):
+            return px  # no pose reported: the map alone
+        x, y, th = st.pose.x, st.pose.y, st.pose.theta
+        for ob in st.obstacles or ():  # what the robot detected, not what the sim knows
+            half = max(ob.size, 0.3) / 2
+            rect = (ob.x - half, ob.y - half, ob.x + half, ob.y + half)
+            self._fill_rect(px, rect, OBSTACLE, s, x0, y0)
         for (ax, ay), (bx, by) in zip(st.plan, st.plan[1:]):
             n = max(int(math.dist((ax, ay), (bx, by)) * s * 2), 2)
             self._plot(px, np.linspace(ax, bx, n), np.linspace(ay, by, n), PLAN, s, x0, y0)
-        finite = np.isfinite(st.scan_ranges)
-        if finite.any():
-            ang = st.theta + (
-                -math.pi + 2 * math.pi / len(st.scan_ranges) * np.arange(len(st.scan_ranges))
-            )
-            r = st.scan_ranges[finite]
+        scan = st.scan
+        if scan is not None and len(scan.ranges):
+            finite = np.isfinite(scan.ranges)
+            ang = th + scan.angle_min + scan.angle_increment * np.arange(len(scan.ranges))
+            r = scan.ranges[finite]
             self._plot(
-                px, st.x + r * np.cos(ang[finite]), st.y + r * np.sin(ang[finite]), LIDAR, s, x0, y0
+                px, x + r * np.cos(ang[finite]), y + r * np.sin(ang[finite]), LIDAR, s, x0, y0
             )
-        body = oriented_box(st.x, st.y, st.theta, 1.0, 0.735)
-        gx, gy = np.meshgrid(np.linspace(0, 1, 6), np.linspace(0, 1, 5))
-        a, b, d = body[0], body[1], body[3]
-        pts = a + np.outer(gx.ravel(), b - a) + np.outer(gy.ravel(), d - a)
-        self._plot(px, pts[:, 0], pts[:, 1], ROBOT, s, x0, y0)
-        hx, hy = st.x + 0.8 * math.cos(st.theta), st.y + 0.8 * math.sin(st.theta)
-        self._plot(px, [hx], [hy], HEADING, s, x0, y0)
+        bx, by = _body_points(x, y, th)
+        self._plot(px, bx, by, ROBOT, s, x0, y0)
+        self._plot(px, [x + 0.8 * math.cos(th)], [y + 0.8 * math.sin(th)], HEADING, s, x0, y0)
         return px
 
     # -- Textual's line API ---------------------------------------------------------------

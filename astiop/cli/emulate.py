@@ -1,0 +1,45 @@
+"""`astiop emulate-ros2`: the simulator as a robot in its own process, with a `ros2` to drive it."""
+
+from __future__ import annotations
+
+import contextlib
+from pathlib import Path
+
+import typer
+
+from astiop.cli.common import fail
+
+
+def emulate_ros2(
+    folder: Path = typer.Option(..., "--dir", help="Where to write the `ros2` executable."),
+    distro: str = typer.Option("jazzy", "--distro", help="humble or jazzy: the CLI to emulate."),
+    seed: int = typer.Option(0, "--seed", min=0, max=2**32 - 1, help="Seed of the simulator."),
+    latency_ms: int = typer.Option(
+        300, "--latency-ms", min=0, max=60_000, help="Start-up delay of each ros2 call."
+    ),
+    missing: list[str] = typer.Option(
+        [], "--missing", help="A topic, service or action the robot lacks (repeatable)."
+    ),
+) -> None:
+    """Run an emulated robot until Ctrl-C; put DIR on PATH and use `astiop --robot ros2`."""
+    from astiop.robot.emulator.robot import EmulatedRobot, write_client
+    from astiop.robot.emulator.ros2_args import DISTROS
+
+    if distro not in DISTROS:
+        fail(f"--distro must be one of {', '.join(DISTROS)}, not '{distro}'")
+    folder = folder.expanduser().resolve()
+    if len(str(folder / "robot.sock")) > 100:
+        fail(f"--dir {folder} is too long for a Unix socket path; use a shorter one")
+    try:
+        exe = write_client(folder, distro=distro, latency_ms=latency_ms, missing=tuple(missing))
+        robot = EmulatedRobot(folder, seed=seed, distro=distro, missing=tuple(missing))
+    except OSError as exc:
+        fail(f"cannot set up {folder}: {exc.strerror or exc}")
+    typer.echo(
+        f"emulated ROS 2 {distro} robot ready: {exe}\n"
+        f'  export PATH="{folder}:$PATH" ROS_DISTRO={distro}; astiop --robot ros2\n'
+        "  every call is logged to " + str(folder / "ros2.log") + "; Ctrl-C stops the robot",
+        err=True,
+    )
+    with contextlib.suppress(KeyboardInterrupt):
+        robot.serve(str(folder / "robot.sock"))

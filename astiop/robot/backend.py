@@ -1,0 +1,53 @@
+"""What every robot backend offers the gateway: commands, live state, events, the map."""
+
+from __future__ import annotations
+
+from typing import Protocol, Union
+
+from astiop.robot.catalog import Catalog
+from astiop.robot.state import OccupancyGrid, RobotEvent, RobotState, TopicStat
+from astiop.robot.validation import Checked
+from astiop.warehouse import WarehouseMap
+
+# A known layout (the simulator's warehouse), the robot's /map, or nothing: then the map view
+# follows the robot and shows its scan.
+MapGeometry = Union[WarehouseMap, OccupancyGrid, None]
+
+
+class RobotBackend(Protocol):
+    name: str  # sim | ros2 | replay
+    catalog: Catalog
+    capabilities: frozenset[str]  # "commands", "teleop"; a replay has neither
+
+    @property
+    def e_stopped(self) -> bool: ...
+
+    def start(self) -> None: ...
+
+    def close(self) -> None: ...
+
+    def estop(self) -> list[str]:
+        """Stop the robot now; returns the failures of each step (empty: all went out)."""
+        ...
+
+    def release_estop(self) -> None: ...
+
+    def execute(self, checked: Checked, timeout: float) -> tuple[str, object]: ...
+
+    def drive(self, twist: dict) -> None:
+        """Teleop: hold this (already clamped) velocity for a short lapse time."""
+        ...
+
+    def state(self) -> RobotState:
+        """The latest state; never blocks on the robot."""
+        ...
+
+    def events_since(self, seq: int) -> list[RobotEvent]: ...
+
+    def topic_stats(self) -> list[TopicStat]: ...
+
+    def wait_until_idle(self, timeout_s: float) -> str | None:
+        """Block until the robot has no active goal; returns how the goal ended, if known."""
+        ...
+
+    def map_geometry(self) -> MapGeometry: ...

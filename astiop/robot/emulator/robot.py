@@ -1,0 +1,552 @@
+"""The emulated robot: the simulator at real time in its own process, behind a Unix socket.
+
+Each emulated `ros2` call connects, sends its parsed arguments, and gets back what the real
+CLI prints, streamed: `topic echo` until SIGINT, `topic hz` every second, `action send_goal`
+blocking until the goal ends (SIGINT cancels it), a call to a service nobody serves waiting.
+"""
+
+from __future__ import annotations
+
+import collections
+import contextlib
+import json
+import math
+import os
+import socket
+import sys
+import threading
+import time
+import uuid
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from astiop.robot import sim_messages as sm
+from astiop.robot.catalog import astibot_catalog
+from astiop.robot.definitions import DEFINITIONS
+from astiop.robot.interfaces import InterfaceError, fill, interface_show, python_repr
+from astiop.robot.output import echo_yaml, indent_yaml
+from astiop.robot.sim_backend import SimBackend
+from astiop.sim.simulator import GoalError, Simulator
+from astiop.store import LocationError, Store
+
+HIDDEN_TOPICS = {
+    "/parameter_events": "rcl_interfaces/msg/ParameterEvent",
+    "/rosout": "rcl_interfaces/msg/Log",
+}
+MAP_TYPE = "nav_msgs/msg/OccupancyGrid"
+MAP_RESOLUTION = 0.2
+
+
+class Interrupted(Exception):
+    """The client got SIGINT, or went away."""
+
+
+class Call:
+    """One client connection: output goes back as JSON lines; SIGINT arrives as a line."""
+
+    def __init__(self, conn: socket.socket):
+        self.conn = conn
+        self.reader = conn.makefile("r", encoding="utf-8")
+        self.interrupted = threading.Event()
+        self.request = json.loads(self.reader.readline() or "{}")
+        threading.Thread(target=self._watch, daemon=True).start()
+
+    def _watch(self) -> None:
+        try:
+            for _line in self.reader:
+                self.interrupted.set()
+        except (OSError, ValueError):
+            pass
+        self.interrupted.set()  # the client is gone: stop as on SIGINT
+
+    def _send(self, msg: dict) -> None:
+        try:
+            self.conn.sendall((json.dumps(msg) + "\n").encode())
+        except OSError:
+            self.interrupted.set()
+            raise Interrupted from None
+
+    def out(self, text: str) -> None:
+        self._send({"out": text})
+
+    def err(self, text: str) -> None:
+        self._send({"err": text})
+
+    def wait(self, seconds: float) -> None:
+        if self.interrupted.wait(seconds):
+            raise Interrupted
+
+    def finish(self, code: int) -> None:
+        with contextlib.suppress(Interrupted):
+            self._send({"exit": code})
+        with contextlib.suppress(OSError):  # the reader's file object holds it open
+            self.conn.shutdown(socket.SHUT_RDWR)
+        self.conn.close()
+
+
+class EmulatedRobot:
+    def __init__(self, folder: Path, *, seed: int, distro: str, missing: tuple[str, ...] = ()):
+        self.folder = folder
+        self.distro = distro
+        self.missing = set(missing)
+        self.sim = Simulator(seed=seed)
+        self.store = Store(folder / "robot.db")  # the robot's own named locations
+        self.backend = SimBackend(self.sim, self.store, realtime=True)
+        self.catalog = astibot_catalog()
+        self.cmd_vel_log: collections.deque = collections.deque(maxlen=2000)
+        self._twist_seq = 0
+        self._map_msg = self._occupancy_grid()
+
+    # -- the graph ---------------------------------------------------------------------------
+    def topics(self) -> dict[str, str]:
+        names = {n: t.type for n, t in self.catalog.topics.items()}
+        names["/map"] = MAP_TYPE
+        names.update(HIDDEN_TOPICS)
+        return {n: t for n, t in sorted(names.items()) if n not in self.missing}
+
+    def services(self) -> dict[str, str]:
+        return {
+            n: s.type for n, s in sorted(self.catalog.services.items()) if n not in self.missing
+        }
+
+    def actions(self) -> dict[str, str]:
+        return {n: a.type for n, a in sorted(self.catalog.actions.items()) if n not in self.missing}
+
+    def _occupancy_grid(self) -> dict:
+        x0, y0, x1, y1 = self.sim.map.bounds
+        w = int(math.ceil((x1 - x0) / MAP_RESOLUTION))
+        h = int(math.ceil((y1 - y0) / MAP_RESOLUTION))
+        cells = np.zeros((h, w), dtype=int)
+        for _kind, (rx0, ry0, rx1, ry1) in self.sim.map.static_rects:
+            c0, c1 = int((rx0 - x0) / MAP_RESOLUTION), int(math.ceil((rx1 - x0) / MAP_RESOLUTION))
+            r0, r1 = int((ry0 - y0) / MAP_RESOLUTION), int(math.ceil((ry1 - y0) / MAP_RESOLUTION))
+            cells[max(r0, 0) : r1, max(c0, 0) : c1] = 100
+        return {
+            "header": sm.stamp(0.0, "map"),
+            "info": {
+                "map_load_time": {"sec": 0, "nanosec": 0},
+                "resolution": MAP_RESOLUTION,
+                "width": w,
+                "height": h,
+                "origin": {
+                    "position": {"x": x0, "y": y0, "z": 0.0},
+                    "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+                },
+            },
+            "data": cells.ravel().tolist(),
+        }
+
+    # -- serving ----------------------------------------------------------------------------
+    def serve(self, path: str) -> None:
+        self.backend.start()
+        server = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        if os.path.exists(path):
+            os.unlink(path)
+        server.bind(path)
+        server.listen(64)
+        try:
+            while True:
+                conn, _ = server.accept()
+                threading.Thread(target=self._handle, args=(conn,), daemon=True).start()
+        finally:
+            server.close()
+            self.backend.close()
+
+    def _handle(self, conn: socket.socket) -> None:
+        call = Call(conn)
+        req = call.request
+        if req.get("op") == "cmd_vel_log":  # for measurements: when each Twist arrived
+            call.out(json.dumps(list(self.cmd_vel_log)))
+            call.finish(0)
+            return
+        args = req.get("args", {})
+        handler = getattr(self, f"_{args.get('command')}_{args.get('verb')}", None)
+        code = 1
+        try:
+            if handler is None:
+                call.err(f"the emulated robot does not implement ros2 {args.get('command')}\n")
+            else:
+                code = handler(call, args) or 0
+        except Interrupted:
+            code = 2  # ros2cli returns signal.SIGINT on KeyboardInterrupt
+        except Exception as exc:  # noqa: BLE001 - the robot never dies of one call
+            with contextlib.suppress(Interrupted):
+                call.err(f"{type(exc).__name__}: {exc}\n")
+        call.finish(code)
+
+    # -- topic ------------------------------------------------------------------------------
+    def _topic_list(self, call: Call, a: dict) -> int:
+        topics = self.topics()
+        if a.get("count_topics"):
+            call.out(f"{len(topics)}\n")
+            return 0
+        lines = [f"{n} [{t}]" if a.get("show_types") else n for n, t in topics.items()]
+        call.out("\n".join(lines) + "\n")
+        return 0
+
+    def _topic_type(self, call: Call, a: dict) -> int:
+        t = self.topics().get(a["topic_name"])
+        if t is None:
+            call.err("Unknown topic '{}'\n".format(a["topic_name"]))
+            return 1
+        call.out(t + "\n")
+        return 0
+
+    def _topic_info(self, call: Call, a: dict) -> int:
+        name = a["topic_name"]
+        t = self.topics().get(name)
+        if t is None:
+            call.err(f"Unknown topic '{name}'\n")
+            return 1
+        spec = self.catalog.topics.get(name)
+        pubs = int(bool(spec.publisher)) if spec else 1
+        subs = int(bool(spec.subscriber)) if spec else 0
+        call.out(f"Type: {t}\nPublisher count: {pubs}\nSubscription count: {subs}\n")
+        return 0
+
+    def _message(self, name: str) -> dict:
+        if name == "/map":
+            return self._map_msg
+        return self.backend.message(name)
+
+    def _topic_echo(self, call: Call, a: dict) -> int:
+        name = a["topic_name"]
+        t = self.topics().get(name)
+        if t is None or name in HIDDEN_TOPICS:
+            if a.get("message_type") is None:
+                call.err(
+                    f"WARNING: topic [{name}] does not appear to be published yet\n"
+                    "Could not determine the type for the passed topic\n"
+                )
+                return 1
+            call.wait(1e9)  # nobody publishes it: echo waits
+        truncate = None if a.get("full_length") else a.get("truncate_length", 128)
+        deadline = time.monotonic() + a["timeout"] if a.get("timeout") else math.inf
+        for msg in self._publications(name, call, deadline):
+            call.out(echo_yaml(msg, a.get("no_arr", False), truncate))
+            if a.get("once"):
+                return 0
+        return 0
+
+    def _publications(self, name: str, call: Call, deadline: float):
+        """Messages as the robot publishes them, at its rate, on its clock."""
+        spec = self.catalog.topics.get(name)
+        rate = spec.rate_hz if spec else 0.0
+        if name in ("/tf_static", "/map"):
+            yield self._message(name)
+            call.wait(max(deadline - time.monotonic(), 0) if deadline < math.inf else 1e9)
+            return
+        if name == "/cmd_vel":
+            seen = self._twist_seq
+            while time.monotonic() < deadline:
+                call.wait(0.01)
+                if self._twist_seq != seen:
+                    seen = self._twist_seq
+                    yield self.backend.last_twist
+            return
+        period = 1.0 / rate
+        next_t = (math.floor(self.sim.t / period) + 1) * period
+        while time.monotonic() < deadline:
+            call.wait(0.005)
+            if self.sim.t >= next_t:
+                next_t = (math.floor(self.sim.t / period) + 1) * period
+                if name == "/plan" and self.sim.goal is None:
+                    continue
+                yield self._message(name)
+
+    def _topic_hz(self, call: Call, a: dict) -> int:
+        name = a["topic_name"]
+        spec = self.catalog.topics.get(name)
+        if name not in self.topics():
+            call.err(f"WARNING: topic [{name}] does not appear to be published yet\n")
+            call.wait(1e9)
+        stamps: list[float] = []
+        last_print = time.monotonic()
+        for _msg in self._publications(name, call, math.inf) if spec else ():
+            stamps.append(time.monotonic())
+            stamps = stamps[-a["window_size"] :]
+            if time.monotonic() - last_print >= 1.0 and len(stamps) > 1:
+                last_print = time.monotonic()
+                d = np.diff(stamps)
+                call.out(
+                    f"average rate: {1.0 / d.mean():.3f}\n\tmin: {d.min():.3f}s max: {d.max():.3f}s std dev: {d.std():.5f}s window: {len(stamps)}\n"
+                )
+        call.wait(1e9)
+        return 0
+
+    def _topic_pub(self, call: Call, a: dict) -> int:
+        name, type_ = a["topic_name"], a["message_type"]
+        text = a.get("stdin_values") if a.get("stdin") else a.get("values", "{}")
+        try:
+            values = yaml.safe_load(text or "")
+        except yaml.YAMLError as exc:
+            call.err(f"{exc}\n")
+            return 1
+        if not isinstance(values, dict):
+            call.err("The passed value needs to be a dictionary in YAML format\n")
+            return 1
+        if name != "/cmd_vel" or type_ not in ("geometry_msgs/msg/Twist", "geometry_msgs/Twist"):
+            call.err(
+                f"the emulated robot only listens to /cmd_vel "
+                f"(geometry_msgs/msg/Twist), not {name} ({type_})\n"
+            )
+            return 1
+        try:
+            twist = fill("geometry_msgs/msg/Twist", values)
+        except InterfaceError as exc:
+            call.err(f"Failed to populate field: {exc}\n")
+            return 1
+        times = 1 if a.get("once") else a.get("times", 0)
+        call.out("publisher: beginning loop\n")
+        count = 0
+        while times == 0 or count < times:
+            count += 1
+            self._receive_twist(twist, times == 1)
+            if count % max(a.get("print", 1), 1) == 0:
+                call.out(
+                    f"publishing #{count}: {python_repr('geometry_msgs/msg/Twist', twist)}\n\n"
+                )
+            if times and count >= times:
+                break
+            call.wait(1.0 / a["rate"])
+        time.sleep(a.get("keep_alive", 0.1))
+        return 0
+
+    def _receive_twist(self, twist: dict, once: bool) -> None:
+        self.cmd_vel_log.append({"mono": time.monotonic(), "twist": twist})
+        self._twist_seq += 1
+        self.backend.last_twist, self.backend.last_twist_t = twist, self.sim.t
+        if self.sim.e_stopped:
+            return  # the base holds still while e-stopped
+        try:
+            self.sim.set_cmd_vel(
+                twist["linear"]["x"], twist["linear"]["y"], twist["angular"]["z"], timeout=0.5
+            )
+        except GoalError:
+            pass  # a faulted base ignores velocity commands; /robot_status says why
+
+    # -- service ----------------------------------------------------------------------------
+    def _service_list(self, call: Call, a: dict) -> int:
+        services = self.services()
+        if a.get("count_services"):
+            call.out(f"{len(services)}\n")
+            return 0
+        lines = [f"{n} [{t}]" if a.get("show_types") else n for n, t in services.items()]
+        call.out("\n".join(lines) + "\n")
+        return 0
+
+    def _service_type(self, call: Call, a: dict) -> int:
+        t = self.services().get(a["service_name"])
+        if t is None:
+            call.err("Unable to find service '{}'\n".format(a["service_name"]))
+            return 1
+        call.out(t + "\n")
+        return 0
+
+    def _service_call(self, call: Call, a: dict) -> int:
+        name, type_ = a["service_name"], a["service_type"]
+        if type_ not in DEFINITIONS:
+            call.err("The passed service type is invalid\n")
+            return 1
+        text = a.get("stdin_values") if a.get("stdin") else a.get("values", "{}")
+        try:
+            request = fill(type_, yaml.safe_load(text or "") or {}, part=0)
+        except (InterfaceError, yaml.YAMLError) as exc:
+            call.err(f"Failed to populate field: {exc}\n")
+            return 1
+        served = self.services()
+        if name not in served or served[name] != type_:
+            call.out("waiting for service to become available...\n")
+            call.wait(1e9)
+        call.out(f"requester: making request: {python_repr(type_, request, 0)}\n\n")
+        try:
+            response = self.backend._serve(name, request)
+        except (GoalError, LocationError) as exc:
+            response = {"success": False, "message": str(exc)}
+        call.out(f"response:\n{python_repr(type_, response, 1)}\n\n")
+        return 0
+
+    # -- action -----------------------------------------------------------------------------
+    def _action_list(self, call: Call, a: dict) -> int:
+        actions = self.actions()
+        lines = [f"{n} [{t}]" if a.get("show_types") else n for n, t in actions.items()]
+        call.out("\n".join(lines) + "\n")
+        return 0
+
+    def _action_info(self, call: Call, a: dict) -> int:
+        name = a["action_name"]
+        if name not in self.actions():
+            call.out(f"Action: {name}\nAction clients: 0\nAction servers: 0\n")
+            return 0
+        node = self.catalog.actions[name].node
+        call.out(f"Action: {name}\nAction clients: 0\nAction servers: 1\n    {node}\n")
+        return 0
+
+    def _action_send_goal(self, call: Call, a: dict) -> int:
+        name, type_ = a["action_name"], a["action_type"]
+        text = a.get("stdin_values") if a.get("stdin") else a.get("goal", "{}")
+        if type_ not in DEFINITIONS:
+            call.err("The passed action type is invalid\n")
+            return 1
+        try:
+            goal_msg = fill(type_, yaml.safe_load(text or "") or {}, part=0)
+        except (InterfaceError, yaml.YAMLError) as exc:
+            call.out(f"Failed to populate message fields: {exc!r}\n")
+            return 1
+        call.out("Waiting for an action server to become available...\n")
+        if name not in self.actions():
+            call.wait(1e9)
+        call.out(f"Sending goal:\n{indent_yaml(goal_msg, 5)}")
+        pose = goal_msg["pose"]["pose"]
+        try:
+            goal = self.sim.goto(
+                pose["position"]["x"], pose["position"]["y"], sm.yaw_of(pose["orientation"])
+            )
+        except GoalError:
+            call.out("Goal was rejected.\n")
+            return 0
+        call.out(f"Goal accepted with ID: {uuid.UUID(int=goal.id).hex}\n\n")
+        start = self.sim.t
+        try:
+            while self.sim.goal is not None and self.sim.goal.id == goal.id:
+                call.wait(1.0)
+                if a.get("feedback") and self.sim.goal is not None:
+                    s = self.sim.snapshot()
+                    call.out(
+                        "Feedback:\n    "
+                        f"distance_remaining: {s.distance_remaining:.3f}\n"
+                        f"navigation_time: {self.sim.t - start:.1f}\n\n"
+                    )
+        except Interrupted:  # the client's finally: cancel the goal it sent
+            if self.sim.goal is not None and self.sim.goal.id == goal.id:
+                self.sim.stop()
+            with contextlib.suppress(Interrupted):
+                call.out("Canceling goal...\nGoal canceled.\n")
+            raise
+        result = self.sim.last_result
+        ok = result is not None and result.id == goal.id and result.status == "succeeded"
+        canceled = result is not None and result.status == "canceled"
+        status = "SUCCEEDED" if ok else "CANCELED" if canceled else "ABORTED"
+        body = "{}" if self.distro == "humble" else f"error_code: {0 if ok else 1}"
+        call.out(f"Result:\n    {body}\n\nGoal finished with status: {status}\n")
+        return 0
+
+    # -- node, interface, param, daemon ------------------------------------------------------
+    def _node_list(self, call: Call, a: dict) -> int:
+        nodes = sorted(self.catalog.nodes)
+        if a.get("count_nodes"):
+            call.out(f"{len(nodes)}\n")
+        else:
+            call.out("\n".join(nodes) + "\n")
+        return 0
+
+    def _node_info(self, call: Call, a: dict) -> int:
+        name = a["node_name"]
+        if name not in self.catalog.nodes:
+            call.err(f"Unable to find node '{name}'\n")
+            return 1
+        lines = [name]
+        for section, items in self.catalog.node_info(name).items():
+            lines.append(f"  {section}:")
+            lines += [f"    {n}: {t}" for n, t in items if n not in self.missing]
+        call.out("\n".join(lines) + "\n")
+        return 0
+
+    def _interface_show(self, call: Call, a: dict) -> int:
+        t = a["type"]
+        if t not in DEFINITIONS:
+            call.err(
+                f"Unknown interface '{t}'\n"
+                if t.count("/") == 2
+                else f"Invalid name '{t}'. Expected three parts separated by '/'\n"
+            )
+            return 1
+        call.out(interface_show(t))
+        return 0
+
+    def _interface_list(self, call: Call, a: dict) -> int:
+        call.out("".join(f"    {n}\n" for n in sorted(DEFINITIONS)))
+        return 0
+
+    def _param_list(self, call: Call, a: dict) -> int:
+        lines = []
+        for node in sorted(self.catalog.nodes):
+            if a.get("node_name") and node != a["node_name"]:
+                continue
+            names = sorted(p for (n, p) in self.backend.params if n == node)
+            if names:
+                lines.append(f"{node}:")
+                lines += [f"  {p}" for p in names]
+        call.out("\n".join(lines) + "\n")
+        return 0
+
+    def _param_get(self, call: Call, a: dict) -> int:
+        key = (a["node_name"], a["parameter_name"])
+        if a["node_name"] not in self.catalog.nodes:
+            call.err("Node not found\n")
+            return 1
+        if key not in self.backend.params:
+            call.out("Parameter not set.\n")
+            return 0
+        value = self.backend.params[key]
+        word = {float: "Double", int: "Integer", str: "String", bool: "Boolean"}[type(value)]
+        call.out(f"{word} value is: {value}\n")
+        return 0
+
+    def _param_set(self, call: Call, a: dict) -> int:
+        key = (a["node_name"], a["parameter_name"])
+        if a["node_name"] not in self.catalog.nodes:
+            call.err("Node not found\n")
+            return 1
+        value = yaml.safe_load(a["value"])
+        current = self.backend.params.get(key)
+        if current is None or type(value) is not type(current):
+            # rclcpp refuses a type change and says so on stdout; the exit status stays 0
+            call.out(
+                f"Setting parameter failed: Wrong parameter type, parameter {{{key[1]}}} is of type "
+                f"{{{type(current).__name__}}}, setting it to {{{type(value).__name__}}} is not allowed.\n"
+            )
+            return 0
+        self.backend.params[key] = value
+        call.out("Set parameter successful\n")
+        return 0
+
+    def _daemon_start(self, call: Call, a: dict) -> int:
+        call.out("The daemon has been started\n")
+        return 0
+
+    def _daemon_status(self, call: Call, a: dict) -> int:
+        call.out("The daemon is running\n")
+        return 0
+
+    def _daemon_stop(self, call: Call, a: dict) -> int:
+        call.out("The daemon has been stopped\n")
+        return 0
+
+
+CLIENT = """#!{python}
+# The emulated ros2 of `astiop emulate-ros2` ({distro}); written by astiop.
+import sys
+from astiop.robot.emulator.client import main
+sys.exit(main(sys.argv[1:], {folder!r}))
+"""
+
+
+def write_client(folder: Path, *, distro: str, latency_ms: int, missing: tuple[str, ...]) -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    info = {
+        "socket": str(folder / "robot.sock"),
+        "distro": distro,
+        "latency_ms": latency_ms,
+        "missing": list(missing),
+        "pid": os.getpid(),
+    }
+    (folder / "robot.json").write_text(json.dumps(info), encoding="utf-8")
+    exe = folder / "ros2"
+    exe.write_text(
+        CLIENT.format(python=sys.executable, distro=distro, folder=str(folder)), encoding="utf-8"
+    )
+    exe.chmod(0o755)
+    return exe

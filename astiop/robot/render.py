@@ -1,0 +1,46 @@
+"""The command line that is actually sent, rebuilt from the checked command, not the typed words.
+
+Values come from the checked message (after safety's clamp), the type is always present, and
+names are the full names the catalog knows.
+"""
+
+from __future__ import annotations
+
+import shlex
+
+import yaml
+
+from astiop.robot.validation import Checked
+
+
+def flow_yaml(message: dict) -> str:
+    return yaml.safe_dump(message, default_flow_style=True, width=100_000, sort_keys=False).strip()
+
+
+def sent_argv(checked: Checked) -> list[str]:
+    """What follows `ros2` on the command line for this checked command."""
+    cmd = checked.command
+    key = cmd.key
+    if key == ("topic", "pub"):
+        argv = ["topic", "pub"]
+        if "once" in cmd.flags:
+            argv.append("--once")
+        else:
+            argv += ["-t", str(cmd.options["times"])]
+        if "rate" in cmd.options:
+            argv += ["-r", f"{cmd.options['rate']:g}"]
+        return [*argv, cmd.name, checked.type, flow_yaml(checked.message)]
+    if key == ("service", "call"):
+        return ["service", "call", cmd.name, checked.type, flow_yaml(checked.message)]
+    if key == ("action", "send_goal"):
+        argv = ["action", "send_goal", cmd.name, checked.type, flow_yaml(checked.message)]
+        return argv + (["--feedback"] if "feedback" in cmd.flags else [])
+    return list(cmd.argv)
+
+
+def sent_text(checked: Checked) -> str:
+    return "ros2 " + shlex.join(sent_argv(checked))
+
+
+def zero_twist() -> dict:
+    return {"linear": {"x": 0.0, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}

@@ -1,0 +1,252 @@
+"""What the robot reported, as one immutable snapshot every layer above the robot reads.
+
+Both backends build it from the same ROS 2 messages (`from_messages`), so the console shows
+the simulator and the real robot alike. A topic the robot lacks leaves its field `None`:
+absent, never zero.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from astiop.sim.kinematics import ASTIBOT, inverse_kinematics
+
+MAX_WHEEL_SPEED = ASTIBOT.max_wheel_speed  # rad/s at the wheel, the motor limit
+
+
+def wheel_speeds(vx: float, vy: float, wz: float) -> tuple[float, float, float, float]:
+    """FL, FR, RL, RR from the body velocity (the ASTIbot's inverse kinematics)."""
+    return tuple(float(w) for w in inverse_kinematics(vx, vy, wz))
+
+
+@dataclass(frozen=True)
+class Pose2D:
+    x: float
+    y: float
+    theta: float  # rad
+
+
+@dataclass(frozen=True)
+class Battery:
+    percentage: float  # 0..1, as sensor_msgs/BatteryState
+    voltage: float
+    current: float
+    charging: bool
+
+
+@dataclass(frozen=True)
+class Status:
+    state: str  # idle, navigating, docking, charging, blocked, e_stopped, fault
+    mode: str
+    active_goal: str
+    fault: str
+    speed: float
+    e_stopped: bool
+    docked: bool
+
+
+@dataclass(frozen=True)
+class Scan:
+    angle_min: float
+    angle_increment: float
+    ranges: np.ndarray  # m; inf where nothing was hit
+    stamp: float
+
+
+@dataclass(frozen=True)
+class Obstacle:
+    kind: str
+    distance: float
+    bearing: float
+    x: float
+    y: float
+    size: float
+
+
+@dataclass(frozen=True)
+class Conveyor:
+    running: bool
+    direction: int
+    loaded: bool
+    lamp: str
+
+
+@dataclass(frozen=True)
+class RobotEvent:
+    seq: int
+    t: float  # robot clock
+    kind: str
+    severity: str  # info | warning | error
+    message: str
+
+
+@dataclass(frozen=True)
+class TopicStat:
+    name: str
+    type: str
+    nominal_hz: float  # 0: unknown or on change
+    measured_hz: float
+    age_s: float  # since the last message (inf: none yet)
+    count: int
+
+
+@dataclass(frozen=True)
+class OccupancyGrid:
+    """nav_msgs/OccupancyGrid: row-major cells from the origin, -1 unknown, 0..100 occupied."""
+
+    resolution: float
+    origin_x: float
+    origin_y: float
+    width: int
+    height: int
+    cells: np.ndarray = field(repr=False)  # shape (height, width), int8
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float]:
+        return (
+            self.origin_x,
+            self.origin_y,
+            self.origin_x + self.width * self.resolution,
+            self.origin_y + self.height * self.resolution,
+        )
+
+
+@dataclass(frozen=True)
+class RobotState:
+    t: float  # the robot's clock: sim time, or receive time on a real robot
+    pose: Pose2D | None = None
+    velocity: tuple[float, float, float] | None = None  # vx, vy (m/s), wz (rad/s), robot frame
+    wheel_speeds: tuple[float, float, float, float] | None = None  # FL, FR, RL, RR (rad/s)
+    battery: Battery | None = None
+    status: Status | None = None
+    scan: Scan | None = None
+    obstacles: tuple[Obstacle, ...] | None = None
+    plan: tuple[tuple[float, float], ...] = ()
+    conveyor: Conveyor | None = None
+    e_stopped: bool = False
+    event_seq: int = 0
+
+    @property
+    def speed(self) -> float | None:
+        if self.velocity is None:
+            return self.status.speed if self.status else None
+        return math.hypot(self.velocity[0], self.velocity[1])
+
+    @property
+    def state_word(self) -> str:
+        if self.e_stopped:
+            return "e_stopped"
+        return self.status.state if self.status else "unknown"
+
+    @property
+    def distance_remaining(self) -> float | None:
+        """Along the plan from the robot, while there is one."""
+        if not self.plan or self.pose is None:
+            return None
+        pts = np.asarray(self.plan)
+        nearest = int(np.argmin(np.hypot(pts[:, 0] - self.pose.x, pts[:, 1] - self.pose.y)))
+        rest = pts[nearest:]
+        first = math.dist((self.pose.x, self.pose.y), rest[0])
+        return first + float(np.hypot(*np.diff(rest, axis=0).T).sum()) if len(rest) > 1 else first
+
+    def with_e_stop(self, engaged: bool) -> RobotState:
+        return replace(self, e_stopped=engaged or self.e_stopped)
+
+
+def yaw_of(q: dict[str, Any]) -> float:
+    w, x, y, z = (float(q.get(k, 0.0)) for k in ("w", "x", "y", "z"))
+    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+
+
+def _f(value: Any, default: float = math.nan) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return default
+    return v
+
+
+def from_messages(
+    t: float, messages: dict[str, dict[str, Any]], *, e_stopped: bool = False, event_seq: int = 0
+) -> RobotState:
+    """The state from the latest message of each topic (missing topics stay `None`)."""
+    pose = velocity = wheels = battery = status = scan = obstacles = conveyor = None
+    if (p := messages.get("/robot_pose")) is not None:
+        pose = Pose2D(_f(p.get("x")), _f(p.get("y")), _f(p.get("theta")))
+    if (o := messages.get("/odom")) is not None:
+        tw = o.get("twist", {}).get("twist", {})
+        lin, ang = tw.get("linear", {}), tw.get("angular", {})
+        velocity = (_f(lin.get("x"), 0.0), _f(lin.get("y"), 0.0), _f(ang.get("z"), 0.0))
+        if pose is None:  # a robot without /robot_pose: the odometry pose
+            op = o.get("pose", {}).get("pose", {})
+            pos = op.get("position", {})
+            pose = Pose2D(_f(pos.get("x")), _f(pos.get("y")), yaw_of(op.get("orientation", {})))
+    if velocity is not None and all(math.isfinite(v) for v in velocity):
+        wheels = wheel_speeds(*velocity)
+    if (b := messages.get("/battery_status")) is not None:
+        battery = Battery(
+            _f(b.get("percentage")),
+            _f(b.get("voltage")),
+            _f(b.get("current")),
+            int(_f(b.get("power_supply_status"), 0)) == 1,  # POWER_SUPPLY_STATUS_CHARGING
+        )
+    if (s := messages.get("/robot_status")) is not None:
+        status = Status(
+            str(s.get("state", "")),
+            str(s.get("mode", "")),
+            str(s.get("active_goal", "")),
+            str(s.get("fault", "")),
+            _f(s.get("speed"), 0.0),
+            bool(s.get("e_stopped", False)),
+            bool(s.get("docked", False)),
+        )
+    if (sc := messages.get("/scan")) is not None:
+        ranges = np.array([_f(r, math.inf) for r in sc.get("ranges") or []], dtype=float)
+        stamp = sc.get("header", {}).get("stamp", {})
+        scan = Scan(
+            _f(sc.get("angle_min"), -math.pi),
+            _f(sc.get("angle_increment"), 0.0),
+            ranges,
+            _f(stamp.get("sec"), 0.0) + _f(stamp.get("nanosec"), 0.0) * 1e-9,
+        )
+    if (ob := messages.get("/obstacles")) is not None:
+        obstacles = tuple(
+            Obstacle(
+                str(o.get("kind", "unknown")),
+                _f(o.get("distance")),
+                _f(o.get("bearing")),
+                _f(o.get("position", {}).get("x")),
+                _f(o.get("position", {}).get("y")),
+                _f(o.get("size"), 0.0),
+            )
+            for o in ob.get("obstacles") or []
+        )
+    plan: tuple[tuple[float, float], ...] = ()
+    if (pl := messages.get("/plan")) is not None:
+        points = [ps.get("pose", {}).get("position", {}) for ps in pl.get("poses") or []]
+        plan = tuple((_f(p.get("x")), _f(p.get("y"))) for p in points)
+    if (c := messages.get("/conveyor/status")) is not None:
+        conveyor = Conveyor(
+            bool(c.get("running")),
+            int(_f(c.get("direction"), 0)),
+            bool(c.get("loaded")),
+            str(c.get("lamp", "")),
+        )
+    return RobotState(
+        t=t,
+        pose=pose,
+        velocity=velocity,
+        wheel_speeds=wheels,
+        battery=battery,
+        status=status,
+        scan=scan,
+        obstacles=obstacles,
+        plan=plan,
+        conveyor=conveyor,
+        e_stopped=e_stopped or bool(status and status.e_stopped),
+        event_seq=event_seq,
+    )

@@ -1,0 +1,19 @@
+"""What every console screen shares: broadcasts from the app, and one place for worker errors."""
+
+from __future__ import annotations
+
+from textual.screen import Screen
+from textual.worker import Worker
+
+
+class ConsoleScreen(Screen):
+    def on_mount(self) -> None:
+        self.app.listeners.append(self)
+
+    def on_unmount(self) -> None:
+        if self in self.app.listeners:
+            self.app.listeners.remove(self)
+
+    def on_worker_state_changed(self, event: Worker.StateChanged) -> None:
+        # a screen's worker reports here, not to the App: send it to the one handler
+        self.app.worker_failed(event.worker)

@@ -1,0 +1,55 @@
+"""What travels between the app, its screens and widgets: the robot's state and the agent's turn."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from textual.message import Message
+
+from astiop.robot.state import RobotEvent, RobotState, TopicStat
+
+
+class RobotStateSampled(Message, bubble=False):
+    """The robot's latest state, sampled off the UI thread at ~10 Hz."""
+
+    def __init__(
+        self, state: RobotState, events: list[RobotEvent], stats: list[TopicStat] | None = None
+    ):
+        super().__init__()
+        self.state = state
+        self.events = events
+        self.stats = stats  # every second or so; None in between
+
+    def can_replace(self, message: Message) -> bool:
+        # a burst collapses to the newest, unless the older one carries events or stats
+        return (
+            isinstance(message, RobotStateSampled) and not message.events and message.stats is None
+        )
+
+
+class ReplyTokenReceived(Message):
+    def __init__(self, kind: str, text: str):
+        super().__init__()
+        self.kind = kind  # plan_token | answer_token
+        self.text = text
+
+
+class CommandExecuted(Message):
+    def __init__(self, execution: Any):
+        super().__init__()
+        self.execution = execution
+
+
+class TurnFinished(Message, bubble=False):
+    def __init__(self, result: Any, model: str, reachable: str):
+        super().__init__()
+        self.result = result
+        self.model = model
+        self.reachable = reachable
+
+
+class EStopChanged(Message, bubble=False):
+    def __init__(self, engaged: bool, failures: list[str]):
+        super().__init__()
+        self.engaged = engaged
+        self.failures = failures

@@ -1,0 +1,176 @@
+"""The ros2 path end to end: astiop's ros2 backend, real subprocesses, and an emulated robot in
+its own process whose `ros2` parses arguments as ros2cli does."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import time
+
+import pytest
+
+from astiop.robot.graph import RobotGraph
+from astiop.robot.safety import SafetyPolicy
+from astiop.store import Store
+from tests.emulator import cmd_vel_received, emulated_robot, on_path, ros2_calls
+
+YES = lambda _c: True  # noqa: E731
+GOAL = (
+    "ros2 action send_goal /navigate_to_pose nav2_msgs/action/NavigateToPose "
+    '"{pose: {header: {frame_id: map}, pose: {position: {x: 6.0, y: 3.0}}}}"'
+)
+
+
+def until(predicate, timeout: float = 10.0) -> bool:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return True
+        time.sleep(0.05)
+    return False
+
+
+@pytest.fixture
+def robot(monkeypatch):
+    with emulated_robot() as folder:
+        on_path(monkeypatch, folder)
+        yield folder
+
+
+def gateway(store: Store | None = None, *, stream: bool = True) -> RobotGraph:
+    from astiop.robot.ros2_backend import Ros2Backend
+
+    graph = RobotGraph(Ros2Backend("ros2", 10.0, stream=stream), SafetyPolicy(), store=store)
+    graph.start()
+    return graph
+
+
+def test_live_state_comes_from_echo_streams(robot):
+    graph = gateway()
+    try:
+        assert until(lambda: graph.state().battery is not None and graph.state().scan is not None)
+        st = graph.state()
+        assert st.status.state == "charging" and st.pose.x == pytest.approx(1.15, abs=0.05)
+        assert 0.0 < st.battery.percentage <= 1.0
+        assert len(st.scan.ranges) == 360  # echoed in full, not ros2's 128
+        assert until(lambda: graph.map_geometry() is not None)
+        assert graph.map_geometry().bounds == pytest.approx((0.0, 0.0, 40.0, 25.0))
+        echoes = [c for c in ros2_calls(robot) if c[:2] == ["topic", "echo"]]
+        streams = [c for c in echoes if "--once" not in c]
+        assert len(streams) == len({c[2] for c in streams})  # one process per topic
+    finally:
+        graph.close()
+
+
+def test_what_is_sent_is_rebuilt_and_clamped(robot):
+    graph = gateway(stream=False)
+    try:
+        graph.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=YES)
+        r = graph.run("ros2 service call /goto_position \"{name: 'x; rm -rf /'}\"", confirm=YES)
+        assert r.executed and r.values["success"] is False  # the robot knows no such place
+        r = graph.run(
+            "ros2 topic pub --once /cmd_vel geometry_msgs/msg/Twist '{linear: {x: 5.0}}'",
+            confirm=YES,
+        )
+        assert r.executed and not r.error, r.error
+        assert not graph.run("ros2 service call /warp std_srvs/srv/Trigger", confirm=YES).executed
+    finally:
+        graph.close()
+    calls = ros2_calls(robot)
+    goto = next(c for c in calls if c[:3] == ["service", "call", "/goto_position"])
+    assert goto[3] == "astiop_msgs/srv/GotoPosition"  # the type is always sent
+    assert [
+        "topic",
+        "pub",
+        "--stdin",
+        "-r",
+        "10",
+        "-t",
+        "10",
+        "/cmd_vel",
+        "geometry_msgs/msg/Twist",
+    ] in calls  # the E-STOP's publisher, armed ahead of time
+    pub = next(c for c in calls if c[:3] == ["topic", "pub", "--once"])
+    assert "x: 0.8" in pub[-1]  # the clamped message went out, not the typed one
+    assert not any("/warp" in c for c in calls)  # a rejected command never runs
+    assert cmd_vel_received(robot)[-1]["twist"]["linear"]["x"] == pytest.approx(0.8)
+
+
+def test_goal_returns_at_acceptance_and_stop_cancels_it(robot):
+    graph = gateway()
+    try:
+        graph.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=YES)
+        assert until(lambda: graph.state().status and graph.state().status.state == "idle")
+        t0 = time.monotonic()
+        r = graph.run(GOAL, confirm=YES)
+        assert r.values["accepted"] and time.monotonic() - t0 < 5
+        assert until(lambda: graph.state().status.state == "navigating")
+        graph.run("ros2 service call /stop std_srvs/srv/Trigger")
+        assert graph.wait_until_idle(15) == "canceled"
+    finally:
+        graph.close()
+
+
+def test_estop_sends_zero_twist_even_without_a_stop_service(monkeypatch):
+    with emulated_robot(latency_ms=300, missing=("/stop",)) as folder:
+        on_path(monkeypatch, folder)
+        graph = gateway(stream=False)
+        try:
+            time.sleep(0.6)  # the armed publisher has paid its start-up
+            pressed = time.monotonic()
+            failures = graph.estop()
+            assert any("/stop" in f for f in failures)
+            assert until(lambda: cmd_vel_received(folder), 5)
+            first = cmd_vel_received(folder)[0]
+            assert first["twist"]["linear"]["x"] == 0.0
+            assert first["mono"] - pressed < 0.3  # no CLI start-up paid at the press
+            r = graph.run(GOAL, confirm=YES)
+            assert not r.executed and "E-STOP" in r.reason
+        finally:
+            graph.close()
+        assert not any(c[:2] == ["action", "send_goal"] for c in ros2_calls(folder))
+
+
+def test_teleop_holds_one_publisher_and_lapses(robot):
+    graph = gateway()
+    try:
+        graph.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=YES)
+        assert until(lambda: graph.state().status and graph.state().status.state == "idle")
+        x0 = graph.state().pose.x
+        for _ in range(15):
+            r = graph.drive(-0.4, 0.0, 0.0)  # it faces west after undocking: +x
+            assert r.executed, r.reason
+            time.sleep(0.1)
+        assert until(lambda: graph.state().pose.x > x0 + 0.2)
+        pubs = [c for c in ros2_calls(robot) if c[:4] == ["topic", "pub", "-r", "10"]]
+        assert len(pubs) == 1  # one long-lived publisher, not a process per key
+        assert until(lambda: cmd_vel_received(robot)[-1]["twist"]["linear"]["x"] == 0.0)
+    finally:
+        graph.close()
+
+
+def test_estop_in_one_process_holds_another(robot, tmp_path):
+    store = Store(tmp_path / "shared.db")
+    graph = gateway(store, stream=False)
+    graph.estop()
+    graph.close()
+    cmd = [
+        sys.executable,
+        "-m",
+        "astiop",
+        "--db",
+        str(tmp_path / "shared.db"),
+        "--robot",
+        "ros2",
+        "exec",
+        "--yes",
+        "ros2 service call /dock std_srvs/srv/Trigger",
+    ]
+    out = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+    assert out.returncode == 2 and "E-STOP" in out.stderr
+    assert not any(c[:3] == ["service", "call", "/dock"] for c in ros2_calls(robot))
+    restarted = gateway(Store(tmp_path / "shared.db"), stream=False)
+    try:
+        assert restarted.e_stopped  # a restart keeps it until it is released
+    finally:
+        restarted.close()
