@@ -1,7 +1,9 @@
 """Publishers that must not pay the `ros2` start-up cost at the moment they matter.
 
 Teleop: one long-lived `ros2 topic pub -r 10` per motion; a repeated key keeps it, a new
-direction replaces it, and it lapses (then a zero Twist goes out) when the keys stop.
+direction replaces it, and it lapses (then a zero Twist goes out) when the keys stop. The
+lapse counts from when it is publishing ("publisher: beginning loop"), not from its spawn:
+otherwise one key press would lapse before a slow CLI has started.
 
 E-STOP: on distros whose `topic pub` takes `--stdin` (Jazzy on; ros2topic/verb/pub.py, jazzy
 branch: values are read from stdin before the node is created), a publisher is started ahead
@@ -33,6 +35,7 @@ class TeleopPublisher:
         self._lock = threading.Lock()
         self._proc: subprocess.Popen | None = None
         self._twist: dict | None = None
+        self._ready = False
         self._deadline = 0.0
         self._closed = False
         self._watchdog = threading.Thread(target=self._watch, name="teleop-lapse", daemon=True)
@@ -53,13 +56,26 @@ class TeleopPublisher:
             threading.Thread(target=ros2_process.stop, args=(old, 0.5), daemon=True).start()
         if twist is not None:
             argv = ["topic", "pub", "-r", str(TELEOP_RATE_HZ), self.topic, self.type]
-            self._proc = ros2_process.spawn(self.executable, [*argv, flow_yaml(twist)])
+            proc = ros2_process.spawn(self.executable, [*argv, flow_yaml(twist)])
+            self._proc, self._ready = proc, False
+            threading.Thread(target=self._drain, args=(proc,), daemon=True).start()
+
+    def _drain(self, proc: subprocess.Popen) -> None:
+        """Read what pub prints (a full pipe would block it) and note when it publishes."""
+        for line in proc.stdout:
+            if line.startswith("publisher: beginning loop"):
+                with self._lock:
+                    if proc is self._proc:
+                        self._ready = True
+                        self._deadline = max(self._deadline, time.monotonic() + self.lapse_s)
 
     def _watch(self) -> None:
         while not self._closed:
             time.sleep(0.05)
             with self._lock:
-                lapsed = self._proc is not None and time.monotonic() > self._deadline
+                proc = self._proc
+                starting = proc is not None and not self._ready and proc.poll() is None
+                lapsed = proc is not None and not starting and time.monotonic() > self._deadline
                 if lapsed:
                     self._replace(None)
             if lapsed:  # motion lapsed: say so to the base too

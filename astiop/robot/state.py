@@ -144,14 +144,21 @@ class RobotState:
 
     @property
     def distance_remaining(self) -> float | None:
-        """Along the plan from the robot, while there is one."""
+        """Along the plan from the robot, while there is one: to the end of the nearest
+        segment, then the segments after it."""
         if not self.plan or self.pose is None:
             return None
-        pts = np.asarray(self.plan)
-        nearest = int(np.argmin(np.hypot(pts[:, 0] - self.pose.x, pts[:, 1] - self.pose.y)))
-        rest = pts[nearest:]
-        first = math.dist((self.pose.x, self.pose.y), rest[0])
-        return first + float(np.hypot(*np.diff(rest, axis=0).T).sum()) if len(rest) > 1 else first
+        pts = np.asarray(self.plan, dtype=float)
+        here = np.array([self.pose.x, self.pose.y])
+        if len(pts) == 1:
+            return float(np.hypot(*(pts[0] - here)))
+        a, b = pts[:-1], pts[1:]
+        ab = b - a
+        t = np.clip(((here - a) * ab).sum(1) / np.maximum((ab * ab).sum(1), 1e-12), 0.0, 1.0)
+        gap = np.hypot(*(a + ab * t[:, None] - here).T)
+        k = int(np.argmin(gap))
+        lengths = np.hypot(*ab.T)
+        return float(np.hypot(*(b[k] - here)) + lengths[k + 1 :].sum())
 
     def with_e_stop(self, engaged: bool) -> RobotState:
         return replace(self, e_stopped=engaged or self.e_stopped)

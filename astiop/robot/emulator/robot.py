@@ -320,12 +320,10 @@ class EmulatedRobot:
         self.backend.last_twist, self.backend.last_twist_t = twist, self.sim.t
         if self.sim.e_stopped:
             return  # the base holds still while e-stopped
-        try:
+        with contextlib.suppress(GoalError):  # a faulted base ignores velocity commands
             self.sim.set_cmd_vel(
                 twist["linear"]["x"], twist["linear"]["y"], twist["angular"]["z"], timeout=0.5
             )
-        except GoalError:
-            pass  # a faulted base ignores velocity commands; /robot_status says why
 
     # -- service ----------------------------------------------------------------------------
     def _service_list(self, call: Call, a: dict) -> int:
