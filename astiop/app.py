@@ -46,8 +46,9 @@ class Services:
 class StateSampler(threading.Thread):
     """Reads the robot's state through the gateway and posts it to the app."""
 
-    def __init__(self, app: AstiopApp, hz: float):
+    def __init__(self, app: AstiopApp, hz: float, seq: int = 0):
         super().__init__(name="astiop-sampler", daemon=True)
+        self.seq = seq  # events up to here were read at start
         self.app = app
         self.period = 1.0 / hz
         self.every = max(int(hz), 1)  # topic statistics about once a second
@@ -55,7 +56,7 @@ class StateSampler(threading.Thread):
 
     def run(self) -> None:
         graph, store = self.app.services.graph, self.app.services.store
-        seq, n, failing = 0, 0, False
+        seq, n, failing = self.seq, 0, False
         while not self.halt.wait(self.period):
             try:
                 state = graph.state()
@@ -110,10 +111,12 @@ class AstiopApp(App):
         self.sample_hz = sample_hz
         self.confirm_timeout_s = confirm_timeout_s
         self.robot_state: RobotState = services.graph.state()
+        self.recent_events = services.graph.events_since(0)[-50:]  # shown at once, not later
         self.topic_stats: list[TopicStat] = []
         self.listeners: list[Any] = []  # screens that take broadcasts
         self.estop_latency_s: float | None = None
-        self._sampler = StateSampler(self, sample_hz)
+        last = self.recent_events[-1].seq if self.recent_events else 0
+        self._sampler = StateSampler(self, sample_hz, last)
 
     def on_mount(self) -> None:
         graph = self.services.graph

@@ -38,6 +38,9 @@ async def test_chat_answers_and_logs_it(tmp_path):
         assert app.services.store.interactions()[0]["status"] == "done"
         rows = app.services.store.interactions()
         assert rows[0]["prompt"] == "what is the battery level?"
+        await pilot.press("f1")  # the dashboard heard the turn finish
+        await pilot.pause()
+        assert "last turn" in str(app.screen.query_one("#agent").render())
         await pilot.press("f3")
         await app.workers.wait_for_complete()
         await pilot.pause()
@@ -60,6 +63,22 @@ async def test_chat_actuation_waits_for_the_operator(tmp_path):
         await pilot.press("y")
         await app.workers.wait_for_complete()
         assert sim_of(app).goal is not None and sim_of(app).goal.name == "shipping"
+
+
+async def test_an_unanswered_confirmation_closes_and_says_so(tmp_path):
+    app = console(tmp_path, confirm_timeout_s=0.5)
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.press("f2")
+        await pilot.pause()
+        app.screen.query_one(Input).value = "send the robot to shipping"
+        await pilot.press("enter")
+        await app.workers.wait_for_complete()
+        await pilot.pause()
+        assert type(app.screen).__name__ == "ChatScreen"  # the dialog was closed
+        assert sim_of(app).goal is None
+        commands = app.services.store.commands_for(app.services.store.interactions()[0]["id"])
+        assert commands[0]["executed"] == 0
+        assert any("timed out" in n.title for n in app._notifications)
 
 
 async def test_add_and_remove_a_location(tmp_path):

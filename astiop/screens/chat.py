@@ -14,7 +14,7 @@ from astiop.agent.specs import SpecError, open_endpoint
 from astiop.agent.turn import Agent, TurnResult
 from astiop.robot.output import Execution
 from astiop.screens.base import ConsoleScreen
-from astiop.screens.messages import TurnFinished
+from astiop.screens.messages import CommandExecuted, ReplyTokenReceived, TurnFinished
 
 HELP = (
     "Ask in plain language, e.g. 'what is the battery level?' or 'send the robot to "
@@ -104,44 +104,56 @@ class ChatScreen(ConsoleScreen):
 
     @work(exclusive=True, group="llm", exit_on_error=False)
     async def run_turn(self, text: str) -> None:
-        status = Static(Text("thinking…", style="dim"), classes="answer")
-        self._log(status)
-        answer = Static("", classes="answer")
-        parts: list[str] = []
+        self._status = Static(Text("thinking…", style="dim"), classes="answer")
+        self._answer = Static("", classes="answer")
+        self._parts: list[str] = []
+        self._log(self._status)
 
-        def on_event(kind: str, data) -> None:
+        def on_event(kind: str, data) -> None:  # the agent's progress, as messages
             if kind == "command":
-                ex: Execution = data
-                self.query_one("#chat-log").mount(CommandView(ex), before=status)
-                if ex.output:
-                    out = Collapsible(
-                        Static(ex.output.rstrip(), markup=False), title="output", collapsed=True
-                    )
-                    self.query_one("#chat-log").mount(out, before=status)
-            elif kind == "answer_token":
-                if not parts:
-                    self.query_one("#chat-log").mount(answer, before=status)
-                parts.append(data)
-                answer.update(Text("".join(parts)))
-            elif kind == "status":
-                status.update(Text(str(data), style="dim"))
-            self.query_one("#chat-log", VerticalScroll).scroll_end(animate=False)
+                self.post_message(CommandExecuted(data))
+            elif kind in ("answer_token", "status"):
+                self.post_message(ReplyTokenReceived(kind, str(data)))
 
         try:
             result: TurnResult = await self.agent.turn(text, on_event)
         except EmbeddedModelError as exc:
-            status.update(Text(str(exc), style="red"))
+            self._status.update(Text(str(exc), style="red"))
             return
         self.app.post_message(TurnFinished(result, self.agent.model, ""))
-        if not parts:
-            self.query_one("#chat-log").mount(answer, before=status)
-            answer.update(Text(result.answer))
+
+    def _before_status(self, widget) -> None:
+        self.query_one("#chat-log").mount(widget, before=self._status)
+        self.query_one("#chat-log", VerticalScroll).scroll_end(animate=False)
+
+    def on_command_executed(self, msg: CommandExecuted) -> None:
+        ex: Execution = msg.execution
+        self._before_status(CommandView(ex))
+        if ex.output:
+            out = Static(ex.output.rstrip(), markup=False)
+            self._before_status(Collapsible(out, title="output", collapsed=True))
+
+    def on_reply_token_received(self, msg: ReplyTokenReceived) -> None:
+        if msg.kind == "status":
+            self._status.update(Text(msg.text, style="dim"))
+            return
+        if not self._parts:
+            self._before_status(self._answer)
+        self._parts.append(msg.text)
+        self._answer.update(Text("".join(self._parts)))
+
+    def on_turn_finished(self, msg: TurnFinished) -> None:
+        # after every token and command message of the turn: they were posted before it
+        result = msg.result
+        if not self._parts:
+            self._before_status(self._answer)
+            self._answer.update(Text(result.answer))
         info = f"{result.model} · {result.mode} · {result.total_s:.1f} s"
         if result.completion_tokens:
             info += f" · {result.completion_tokens} tokens"
         if result.error:
             info += f" · {result.error}"
-        status.update(Text(info, style="dim red" if result.error else "dim"))
+        self._status.update(Text(info, style="dim red" if result.error else "dim"))
         self.query_one("#chat-log", VerticalScroll).scroll_end(animate=False)
 
     def action_cancel(self) -> None:

@@ -92,7 +92,7 @@ class DashboardScreen(ConsoleScreen):
         self.last_turn = None
         self.query_one("#topics", DataTable).add_columns("topic", "type", "Hz", "age")
         self.query_one("#events", DataTable).add_columns("t", "kind", "message")
-        self._events: list[tuple[str, str, str]] = []
+        self._events = [(f"{ev.t:.1f}", ev.kind, ev.message) for ev in self.app.recent_events]
         cat = self.app.services.graph.catalog
         text = Text("services & actions\n", style="bold")
         for s in cat.services.values():
@@ -104,6 +104,7 @@ class DashboardScreen(ConsoleScreen):
         self.check_endpoint()
         self.show_state(self.app.robot_state)
         self.show_topics(self.app.topic_stats)
+        self._show_events()
 
     def on_screen_resume(self) -> None:
         # on first show too; locations may have changed on the Locations screen
