@@ -247,11 +247,15 @@ class EmulatedRobot:
                     yield self.backend.last_twist
             return
         period = 1.0 / rate
-        next_t = (math.floor(self.sim.t / period) + 1) * period
+
+        def after(t: float) -> float:  # the next publication time (1e-9: floor(0.3/0.1) == 2)
+            return (math.floor(t / period + 1e-9) + 1) * period
+
+        next_t = after(self.sim.t)
         while time.monotonic() < deadline:
             call.wait(0.005)
-            if self.sim.t >= next_t:
-                next_t = (math.floor(self.sim.t / period) + 1) * period
+            if self.sim.t >= next_t - 1e-9:
+                next_t = after(self.sim.t)
                 if name == "/plan" and self.sim.goal is None:
                     continue
                 yield self._message(name)
