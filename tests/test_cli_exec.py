@@ -33,7 +33,7 @@ def test_exec_rejected_exits_2_and_dry_run(tmp_path):
         "exec",
         "--dry-run",
         "--json",
-        'ros2 service call /goto_position "{name: shipping}"',
+        'ros2 service call /goto_position astiop_msgs/srv/GotoPosition "{name: shipping}"',
     )
     data = json.loads(out.stdout)
     assert out.returncode == 0 and data["valid"] and data["kind"] == "actuate"
@@ -42,7 +42,9 @@ def test_exec_rejected_exits_2_and_dry_run(tmp_path):
 
 def test_exec_actuating_needs_yes(tmp_path):
     db = str(tmp_path / "t.db")
-    cmd = 'ros2 service call /goto_position "{name: inspection_zone_a}"'
+    cmd = (
+        'ros2 service call /goto_position astiop_msgs/srv/GotoPosition "{name: inspection_zone_a}"'
+    )
     out = astiop("--db", db, "exec", cmd)
     assert out.returncode == 2 and "--yes" in out.stderr
     out = astiop("--db", db, "exec", "--yes", "--json", cmd)

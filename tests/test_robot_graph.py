@@ -26,7 +26,8 @@ VALID = [
     "ros2 topic type /odom",
     "ros2 topic hz /scan",
     "ros2 topic echo /robot_pose --once",
-    "ros2 topic echo robot_pose -1",
+    "ros2 topic echo robot_pose --once",
+    "ros2 topic echo /scan --qos-reliability best_effort --once",
     "ros2 topic echo /odom nav_msgs/msg/Odometry --once",
     "ros2 topic echo /scan --once --no-arr",
     "ros2 topic echo /battery_status",
@@ -42,7 +43,7 @@ VALID = [
     "ros2 service list -t",
     "ros2 service type /dock",
     "ros2 service call /goto_position astiop_msgs/srv/GotoPosition \"{name: 'shipping'}\"",
-    'ros2 service call /goto_position "{x: 20.0, y: 12.25, theta: 0.0}"',
+    'ros2 service call /goto_position astiop_msgs/srv/GotoPosition "{x: 20.0, y: 12.25}"',
     "ros2 service call /stop std_srvs/srv/Trigger",
     "ros2 service call /dock std_srvs/srv/Trigger",
     "ros2 service call /undock std_srvs/srv/Trigger",
@@ -73,7 +74,7 @@ INVALID = [
     ("ros2 run teleop teleop", "not supported"),
     ("ros2 topic echo /batery_status", "did you mean /battery_status"),
     ("ros2 topic echo /odom sensor_msgs/msg/LaserScan", "has type nav_msgs/msg/Odometry"),
-    ("ros2 topic echo /scan --qos-reliability best_effort", "unknown option"),
+    ("ros2 topic echo /scan --qos-reliabilty best_effort", "did you mean --qos-reliability"),
     ("ros2 topic pub /cmd_vel geometry_msgs/msg/Twist '{linear: {x: 0.2}}'", "--once"),
     ("ros2 topic pub --once /odom nav_msgs/msg/Odometry '{}'", "only topic you may publish"),
     ("ros2 topic pub --once /cmd_vel geometry_msgs/msg/Twist '{linear: {x: fast}}'", "number"),
@@ -81,14 +82,17 @@ INVALID = [
     ("ros2 topic pub --once /cmd_vel geometry_msgs/msg/Twist '{linear: [}'", "not valid YAML"),
     ("ros2 topic pub --once /cmd_vel geometry_msgs/msg/Twist '[1, 2]'", "mapping"),
     ("ros2 topic pub -t 1000 -r 1 /cmd_vel geometry_msgs/msg/Twist '{}'", "longer than"),
-    ("ros2 topic pub -r abc --once /cmd_vel geometry_msgs/msg/Twist '{}'", "needs a float"),
+    (
+        "ros2 topic pub -r abc --once /cmd_vel geometry_msgs/msg/Twist '{}'",
+        "invalid positive_float value",
+    ),
     ("ros2 service call /goto std_srvs/srv/Trigger", "no service /goto"),
     ("ros2 service call /goto_position std_srvs/srv/Trigger", "has type"),
-    ("ros2 service call /goto_position '{place: dock}'", "no field 'place'"),
-    ("ros2 service call /goto_position '{x: .inf}'", "finite"),
+    ("ros2 service call /goto_position '{place: dock}'", "needs the service type before"),
+    ("ros2 service call /goto_position astiop_msgs/srv/GotoPosition '{place: 1}'", "no field"),
+    ("ros2 service call /goto_position astiop_msgs/srv/GotoPosition '{x: .inf}'", "finite"),
     ("ros2 service call /dock std_srvs/srv/Trigger '{force: true}'", "no field"),
     ("ros2 action send_goal /navigate nav2_msgs/action/NavigateToPose '{}'", "no action"),
-    ("ros2 action send_goal /navigate_to_pose nav2_msgs/action/NavigateToPose", "needs"),
     ("ros2 node info /teleop", "no node"),
     ("ros2 interface show foo_msgs/msg/Bar", "unknown"),
     ("ros2 param get /astibot_base turbo", "no parameter"),
@@ -230,14 +234,20 @@ def test_goto_named_location_service(graph):
     assert r.values["success"] is True
     result = graph.backend.sim.run_goal(300)
     assert result.status == "succeeded"
-    r = graph.run("ros2 service call /goto_position \"{name: 'mars'}\"", confirm=YES)
+    r = graph.run(
+        "ros2 service call /goto_position astiop_msgs/srv/GotoPosition \"{name: 'mars'}\"",
+        confirm=YES,
+    )
     assert (
         r.executed and r.values["success"] is False and "no location named" in r.values["message"]
     )
 
 
 def test_geofence(graph):
-    r = graph.run("ros2 service call /goto_position '{x: 39.9, y: 3.0}'", confirm=YES)
+    r = graph.run(
+        "ros2 service call /goto_position astiop_msgs/srv/GotoPosition '{x: 39.9, y: 3.0}'",
+        confirm=YES,
+    )
     assert not r.executed and "geofence" in r.reason
 
 
@@ -257,10 +267,16 @@ def test_action_goal_with_feedback_until_arrival(graph):
 
 def test_estop_during_navigation(graph):
     sim = graph.backend.sim
-    graph.run('ros2 service call /goto_position "{name: shipping}"', confirm=YES)
+    graph.run(
+        'ros2 service call /goto_position astiop_msgs/srv/GotoPosition "{name: shipping}"',
+        confirm=YES,
+    )
     sim.step(5.0)
     graph.estop()
-    held = graph.run('ros2 service call /goto_position "{name: shipping}"', confirm=YES)
+    held = graph.run(
+        'ros2 service call /goto_position astiop_msgs/srv/GotoPosition "{name: shipping}"',
+        confirm=YES,
+    )
     assert not held.executed and "E-STOP" in held.reason
     pose = sim.pose
     sim.step(2.0)
@@ -268,9 +284,10 @@ def test_estop_during_navigation(graph):
     status = graph.run("ros2 topic echo /robot_status --once").values
     assert status["state"] == "e_stopped" and status["e_stopped"] is True
     graph.release_estop()
-    assert graph.run('ros2 service call /goto_position "{name: shipping}"', confirm=YES).values[
-        "success"
-    ]
+    assert graph.run(
+        'ros2 service call /goto_position astiop_msgs/srv/GotoPosition "{name: shipping}"',
+        confirm=YES,
+    ).values["success"]
 
 
 def test_obstacles_topic_reports_a_person(graph):

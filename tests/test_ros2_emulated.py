@@ -66,7 +66,10 @@ def test_what_is_sent_is_rebuilt_and_clamped(robot):
     graph = gateway(stream=False)
     try:
         graph.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=YES)
-        r = graph.run("ros2 service call /goto_position \"{name: 'x; rm -rf /'}\"", confirm=YES)
+        r = graph.run(
+            "ros2 service call /goto_position astiop_msgs/srv/GotoPosition \"{name: 'x; rm -rf /'}\"",
+            confirm=YES,
+        )
         assert r.executed and r.values["success"] is False  # the robot knows no such place
         r = graph.run(
             "ros2 topic pub --once /cmd_vel geometry_msgs/msg/Twist '{linear: {x: 5.0}}'",
@@ -174,3 +177,17 @@ def test_estop_in_one_process_holds_another(robot, tmp_path):
         assert restarted.e_stopped  # a restart keeps it until it is released
     finally:
         restarted.close()
+
+
+def test_a_stream_that_dies_is_restarted_and_said_so(robot):
+    graph = gateway()
+    try:
+        stream = graph.backend._streams["/battery_status"]
+        assert until(lambda: stream.count >= 1)
+        stream._proc.kill()
+        count = stream.count
+        assert until(lambda: stream.restarts == 1 and stream.count > count, 15)
+        events = graph.events_since(0)
+        assert any(e.kind == "stream" and "/battery_status" in e.message for e in events)
+    finally:
+        graph.close()

@@ -41,10 +41,14 @@ async def test_ros2_dashboard_and_estop_during_a_confirmation(tmp_path, monkeypa
         on_path(monkeypatch, robot)
         app = ros2_console(tmp_path)
         async with app.run_test(size=SIZE) as pilot:
-            assert await wait_for(pilot, lambda: app.robot_state.battery is not None)
-            robot_panel = str(app.screen.query_one("#robot").render())
-            assert "CHARGING" in robot_panel and "x   1.15 m" in robot_panel
-            assert "85." in str(app.screen.query_one("#battery").render())
+
+            def shown(widget_id: str) -> str:
+                return str(app.screen.query_one(widget_id).render())
+
+            # what the operator sees, once the screen has taken the robot's first messages
+            assert await wait_for(pilot, lambda: "85." in shown("#battery"))
+            assert await wait_for(pilot, lambda: "CHARGING" in shown("#robot"))
+            assert "x   1.15 m" in shown("#robot")
             await pilot.press("f2")
             await pilot.pause()
             app.screen.query_one(Input).value = "send the robot to shipping"

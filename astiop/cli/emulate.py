@@ -23,7 +23,7 @@ def emulate_ros2(
 ) -> None:
     """Run an emulated robot until Ctrl-C; put DIR on PATH and use `astiop --robot ros2`."""
     from astiop.robot.emulator.robot import EmulatedRobot, write_client
-    from astiop.robot.emulator.ros2_args import DISTROS
+    from astiop.robot.ros2cli_args import DISTROS
 
     if distro not in DISTROS:
         fail(f"--distro must be one of {', '.join(DISTROS)}, not '{distro}'")

@@ -1,95 +1,130 @@
-"""The subset of the `ros2` CLI the agent may use, parsed with the real CLI's syntax.
+"""The subset of the `ros2` CLI the agent may use, parsed by ros2cli's own argument definitions
+for the robot's distro (`ROS_DISTRO`, default jazzy): what parses here parses on the robot.
 
-Anything outside this grammar is refused with a sentence an LLM can use to repair it; there is
-no path by which other text runs.
+Anything outside it is refused with the real CLI's error and astiop's suggestion; there is no
+path by which other text runs.
 """
 
 from __future__ import annotations
 
+import argparse
+import difflib
+import os
+import re
 import shlex
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from functools import cache
 from typing import Any
 
 import yaml
 
+from astiop.robot.ros2cli_args import DISTROS, build_parser
+
 SHELL_OPERATORS = {"|", "||", "&", "&&", ";", ";;", ">", ">>", "<", "<<", "$(", "`", "(", ")"}
+SUPPORTED = {
+    ("topic", "list"),
+    ("topic", "info"),
+    ("topic", "type"),
+    ("topic", "echo"),
+    ("topic", "hz"),
+    ("topic", "pub"),
+    ("service", "list"),
+    ("service", "type"),
+    ("service", "call"),
+    ("action", "list"),
+    ("action", "info"),
+    ("action", "send_goal"),
+    ("node", "list"),
+    ("node", "info"),
+    ("interface", "show"),
+    ("interface", "list"),
+    ("param", "list"),
+    ("param", "get"),
+    ("param", "set"),
+}
+ALLOWED = ", ".join(sorted(f"{v} {s}" for v, s in SUPPORTED))
+EXAMPLES = {
+    ("topic", "echo"): "ros2 topic echo /battery_status sensor_msgs/msg/BatteryState --once",
+    ("topic", "pub"): 'ros2 topic pub --once /cmd_vel geometry_msgs/msg/Twist "{linear: {x: 0.2}}"',
+    ("service", "call"): "ros2 service call /goto_position astiop_msgs/srv/GotoPosition "
+    "\"{name: 'shipping'}\"",
+    ("action", "send_goal"): "ros2 action send_goal /navigate_to_pose "
+    'nav2_msgs/action/NavigateToPose "{pose: {header: {frame_id: map}, pose: {position: '
+    '{x: 5.0, y: 3.0}}}}" --feedback',
+    ("interface", "show"): "ros2 interface show sensor_msgs/msg/LaserScan",
+    ("param", "set"): "ros2 param set /astibot_base max_linear_speed 0.5",
+}
+# argparse destinations astiop reads, by its own names
+_FLAGS = {
+    "once": "once",
+    "no_arr": "no_arr",
+    "no_str": "no_str",
+    "show_types": "show_types",
+    "feedback": "feedback",
+    "full_length": "full_length",
+    "flow_style": "flow_style",
+    "csv": "csv",
+    "verbose": "verbose",
+}
+_OPTIONS = {
+    "rate": "rate",
+    "times": "times",
+    "window_size": "window",
+    "timeout": "timeout",
+    "print": "print",
+    "wait_matching_subscriptions": "wait",
+    "truncate_length": "truncate",
+    "field": "field",
+    "qos_profile": "qos_profile",
+    "qos_depth": "qos_depth",
+    "qos_history": "qos_history",
+    "qos_reliability": "qos_reliability",
+    "qos_durability": "qos_durability",
+}
 
 
 class CommandSyntaxError(ValueError):
-    """The text is not a command of the supported `ros2` subset."""
+    """The text is not a command of the supported `ros2` subset for this distro."""
 
 
-@dataclass(frozen=True)
-class _Spec:
-    positional: tuple[str, ...]  # names; a trailing '?' marks an optional one
-    flags: dict[str, str] = field(default_factory=dict)  # option -> canonical flag
-    options: dict[str, tuple[str, type]] = field(default_factory=dict)  # option -> (name, type)
-    example: str = ""
+def current_distro() -> str:
+    distro = os.environ.get("ROS_DISTRO", "").strip().lower()
+    return distro if distro in DISTROS else "jazzy"
 
 
-_T = {"-t": "show_types", "--show-types": "show_types"}
-SPECS: dict[tuple[str, str], _Spec] = {
-    ("topic", "list"): _Spec((), _T, example="ros2 topic list -t"),
-    ("topic", "info"): _Spec(
-        ("name",), {"-v": "verbose", "--verbose": "verbose"}, example="ros2 topic info /scan"
-    ),
-    ("topic", "type"): _Spec(("name",), example="ros2 topic type /odom"),
-    ("topic", "echo"): _Spec(
-        ("name", "type?"),
-        {"--once": "once", "-1": "once", "--no-arr": "no_arr"},
-        {"--timeout": ("timeout", float)},
-        example="ros2 topic echo /battery_status --once",
-    ),
-    ("topic", "hz"): _Spec(
-        ("name",),
-        options={"-w": ("window", int), "--window": ("window", int)},
-        example="ros2 topic hz /scan",
-    ),
-    ("topic", "pub"): _Spec(
-        ("name", "type", "values?"),
-        {"--once": "once", "-1": "once"},
-        {
-            "-r": ("rate", float),
-            "--rate": ("rate", float),
-            "-t": ("times", int),
-            "--times": ("times", int),
-            "-p": ("print", int),
-            "--print": ("print", int),
-            "-w": ("wait", int),
-            "--wait-matching-subscriptions": ("wait", int),
-        },
-        example='ros2 topic pub --once /cmd_vel geometry_msgs/msg/Twist "{linear: {x: 0.2}}"',
-    ),
-    ("service", "list"): _Spec((), _T, example="ros2 service list -t"),
-    ("service", "type"): _Spec(("name",), example="ros2 service type /goto_position"),
-    ("service", "call"): _Spec(
-        ("name", "type?", "values?"),
-        example="ros2 service call /goto_position astiop_msgs/srv/GotoPosition "
-        "\"{name: 'shipping'}\"",
-    ),
-    ("action", "list"): _Spec((), _T, example="ros2 action list -t"),
-    ("action", "info"): _Spec(("name",), example="ros2 action info /navigate_to_pose"),
-    ("action", "send_goal"): _Spec(
-        ("name", "type", "values"),
-        {"-f": "feedback", "--feedback": "feedback"},
-        example="ros2 action send_goal /navigate_to_pose nav2_msgs/action/NavigateToPose "
-        '"{pose: {pose: {position: {x: 5.0, y: 3.0}}}}" --feedback',
-    ),
-    ("node", "list"): _Spec((), example="ros2 node list"),
-    ("node", "info"): _Spec(("name",), example="ros2 node info /navigator"),
-    ("interface", "show"): _Spec(
-        ("type",), example="ros2 interface show sensor_msgs/msg/LaserScan"
-    ),
-    ("interface", "list"): _Spec((), example="ros2 interface list"),
-    ("param", "list"): _Spec(("node?",), example="ros2 param list /astibot_base"),
-    ("param", "get"): _Spec(
-        ("node", "param"), example="ros2 param get /astibot_base max_linear_speed"
-    ),
-    ("param", "set"): _Spec(
-        ("node", "param", "value"), example="ros2 param set /astibot_base max_linear_speed 0.5"
-    ),
-}
-ALLOWED = ", ".join(sorted({f"{v} {s}" for v, s in SPECS}))
+class _Parser(argparse.ArgumentParser):
+    """argparse that raises (with a suggestion) instead of printing and exiting."""
+
+    def error(self, message: str):
+        raise CommandSyntaxError(f"{self.prog}: error: {message}")
+
+    def exit(self, status=0, message=None):
+        raise CommandSyntaxError(f"{self.prog}: asks for help; send a command instead")
+
+
+@cache
+def _parser(distro: str) -> argparse.ArgumentParser:
+    return build_parser(distro, _Parser)
+
+
+def _verb_parser(distro: str, key: tuple[str, str]) -> argparse.ArgumentParser:
+    parser = _parser(distro)
+    for word in key:
+        action = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+        parser = action.choices[word]
+    return parser
+
+
+def _suggest(distro: str, key: tuple[str, str], message: str) -> str:
+    """argparse reports unknown options at the root: name the verb and its closest option."""
+    m = re.search(r"unrecognized arguments: (\S+)", message)
+    if not m:
+        return message
+    parser = _verb_parser(distro, key)
+    options = [o for o in parser._option_string_actions if o.startswith("--")]
+    close = difflib.get_close_matches(m[1].split("=")[0], options, n=1, cutoff=0.6)
+    hint = f"; did you mean {close[0]}?" if close else ""
+    return message.replace("ros2: error:", f"ros2 {key[0]} {key[1]} ({distro}): error:") + hint
 
 
 @dataclass(frozen=True)
@@ -97,10 +132,11 @@ class Ros2Command:
     text: str
     verb: str
     sub: str
-    args: dict[str, Any]  # positional values by name; 'values' holds parsed YAML
+    args: dict[str, Any]  # name (full), type, values (parsed YAML), node, param, value
     flags: frozenset[str]
     options: dict[str, Any]
-    argv: tuple[str, ...]  # what follows `ros2`, for the real CLI
+    argv: tuple[str, ...]  # what was typed after `ros2`
+    distro: str = "jazzy"
 
     @property
     def key(self) -> tuple[str, str]:
@@ -119,10 +155,6 @@ def normalize_name(name: str) -> str:
     return name if name.startswith("/") else "/" + name
 
 
-def _looks_like_type(token: str) -> bool:
-    return "/" in token and not token.startswith("/") and not any(c in token for c in "{}:[ ")
-
-
 def parse_values(text: str) -> dict[str, Any]:
     try:
         value = yaml.safe_load(text) if text.strip() else {}
@@ -139,7 +171,7 @@ def parse_values(text: str) -> dict[str, Any]:
     return value
 
 
-def parse(text: str) -> Ros2Command:
+def _tokens(text: str) -> list[str]:
     if not isinstance(text, str) or not text.strip():
         raise CommandSyntaxError("the command is empty; send one ros2 command")
     if "\n" in text.strip():
@@ -157,40 +189,55 @@ def parse(text: str) -> Ros2Command:
         raise CommandSyntaxError(f"a command must start with 'ros2', not '{tokens[0]}'")
     if len(tokens) < 3:
         raise CommandSyntaxError(f"'{' '.join(tokens)}' is incomplete; allowed: {ALLOWED}")
-    verb, sub = tokens[1], tokens[2]
-    spec = SPECS.get((verb, sub))
-    if spec is None:
-        raise CommandSyntaxError(f"'ros2 {verb} {sub}' is not supported; allowed: {ALLOWED}")
-    flags: set[str] = set()
-    options: dict[str, Any] = {}
-    positional: list[str] = []
-    rest = tokens[3:]
-    i = 0
-    while i < len(rest):
-        tok = rest[i]
-        if tok in spec.flags:
-            flags.add(spec.flags[tok])
-        elif tok in spec.options:
-            name, kind = spec.options[tok]
-            if i + 1 >= len(rest):
-                raise CommandSyntaxError(f"option {tok} of 'ros2 {verb} {sub}' needs a value")
-            try:
-                options[name] = kind(rest[i + 1])
-            except ValueError:
-                raise CommandSyntaxError(
-                    f"option {tok} needs a {kind.__name__}, got '{rest[i + 1]}'"
-                ) from None
-            i += 1
-        elif tok.startswith("-") and len(tok) > 1 and not _is_number(tok):
-            allowed = ", ".join(list(spec.flags) + list(spec.options)) or "none"
-            raise CommandSyntaxError(
-                f"unknown option '{tok}' for 'ros2 {verb} {sub}' (allowed: {allowed})"
-            )
-        else:
-            positional.append(tok)
-        i += 1
-    args = _bind(verb, sub, spec, positional)
-    return Ros2Command(text.strip(), verb, sub, args, frozenset(flags), options, tuple(tokens[1:]))
+    if (tokens[1], tokens[2]) not in SUPPORTED:
+        raise CommandSyntaxError(
+            f"'ros2 {tokens[1]} {tokens[2]}' is not supported; allowed: {ALLOWED}"
+        )
+    return tokens
+
+
+def parse(text: str, distro: str | None = None) -> Ros2Command:
+    distro = distro or current_distro()
+    tokens = _tokens(text)
+    key = (tokens[1], tokens[2])
+    try:
+        ns = vars(_parser(distro).parse_args(tokens[1:]))
+    except CommandSyntaxError as exc:
+        example = EXAMPLES.get(key)
+        message = _suggest(distro, key, str(exc))
+        raise CommandSyntaxError(message + (f" (e.g. {example})" if example else "")) from None
+    if ns.get("stdin"):
+        raise CommandSyntaxError("astiop does not read values from stdin: give them as an argument")
+    args: dict[str, Any] = {}
+    for dest in ("topic_name", "service_name", "action_name"):
+        if ns.get(dest):
+            args["name"] = normalize_name(ns[dest])
+    if key[0] == "node" and ns.get("node_name"):
+        args["name"] = normalize_name(ns["node_name"])
+    if key[0] == "param":
+        if ns.get("node_name"):
+            args["node"] = normalize_name(ns["node_name"])
+        for dest, name in (("parameter_name", "param"), ("value", "value")):
+            if ns.get(dest) is not None:
+                args[name] = ns[dest]
+    for dest in ("message_type", "service_type", "action_type", "type"):
+        if ns.get(dest):
+            args["type"] = ns[dest]
+    if key in (("topic", "pub"), ("service", "call")):
+        args["values"] = parse_values(ns.get("values") or "")
+    elif key == ("action", "send_goal"):
+        args["values"] = parse_values(ns.get("goal") or "")
+    flags = frozenset(ours for dest, ours in _FLAGS.items() if ns.get(dest))
+    options = {ours: ns[dest] for dest, ours in _OPTIONS.items() if ns.get(dest) is not None}
+    if key == ("topic", "pub") and not ns.get("times"):
+        options.pop("times", None)  # 0: forever, which astiop refuses
+    if key == ("topic", "hz") and ns.get("window_size") == 10000:
+        options.pop("window", None)  # ros2's default: astiop keeps its own short window
+    if key == ("topic", "echo") and options.get("truncate") == 128:
+        options.pop("truncate")
+    return Ros2Command(
+        text.strip(), key[0], key[1], args, flags, options, tuple(tokens[1:]), distro
+    )
 
 
 def _shell_tokens(text: str) -> list[str]:
@@ -201,43 +248,3 @@ def _shell_tokens(text: str) -> list[str]:
         return list(lexer)
     except ValueError:
         return []
-
-
-def _is_number(tok: str) -> bool:
-    try:
-        float(tok)
-        return True
-    except ValueError:
-        return False
-
-
-def _bind(verb: str, sub: str, spec: _Spec, positional: list[str]) -> dict[str, Any]:
-    names = [p.rstrip("?") for p in spec.positional]
-    required = [p for p in spec.positional if not p.endswith("?")]
-    usage = f"usage: {spec.example}"
-    if len(positional) < len(required):
-        raise CommandSyntaxError(
-            f"'ros2 {verb} {sub}' needs {', '.join(n.rstrip('?') for n in required)}; {usage}"
-        )
-    if len(positional) > len(names):
-        raise CommandSyntaxError(
-            f"too many arguments for 'ros2 {verb} {sub}' ({' '.join(positional)}); quote YAML "
-            f"values as one argument; {usage}"
-        )
-    args: dict[str, Any] = {}
-    if (
-        (verb, sub) == ("service", "call")
-        and len(positional) == 2
-        and not _looks_like_type(positional[1])
-    ):
-        positional = [positional[0], "", positional[1]]  # the optional type was left out
-    for name, value in zip(names, positional):
-        if name == "values":
-            args["values"] = parse_values(value)
-        elif name in ("name",) and verb in ("topic", "service", "action", "node"):
-            args["name"] = normalize_name(value)
-        elif name == "node":
-            args["node"] = normalize_name(value)
-        elif value != "":
-            args[name] = value
-    return args

@@ -35,7 +35,23 @@ def sent_argv(checked: Checked) -> list[str]:
     if key == ("action", "send_goal"):
         argv = ["action", "send_goal", cmd.name, checked.type, flow_yaml(checked.message)]
         return argv + (["--feedback"] if "feedback" in cmd.flags else [])
-    return list(cmd.argv)
+    if key == ("param", "set"):
+        return ["param", "set", cmd.args["node"], cmd.args["param"], repr(checked.message["value"])]
+    if key == ("param", "get"):
+        return ["param", "get", cmd.args["node"], cmd.args["param"]]
+    return _full_names(cmd)
+
+
+def _full_names(cmd) -> list[str]:
+    """The typed words with the name as the catalog knows it (`navigator` -> `/navigator`):
+    real ros2 matches node names exactly."""
+    argv = list(cmd.argv)
+    typed = [i for i, a in enumerate(argv[2:], 2) if not a.startswith("-")]
+    if cmd.name and typed:
+        argv[typed[0]] = cmd.name
+    elif cmd.args.get("node") and typed:
+        argv[typed[0]] = cmd.args["node"]
+    return argv
 
 
 def sent_text(checked: Checked) -> str:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import difflib
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -35,9 +36,9 @@ def _check_type(given: str | None, expected: str, what: str) -> None:
         raise InterfaceError(f"{what} has type {expected}, not {given}")
 
 
-def validate(text: str, catalog: Catalog) -> Checked:
+def validate(text: str, catalog: Catalog, distro: str | None = None) -> Checked:
     try:
-        cmd = parse(text)
+        cmd = parse(text, distro)
     except CommandSyntaxError as exc:
         return Checked(text, None, False, str(exc))
     try:
@@ -61,7 +62,13 @@ def _validate(cmd: Ros2Command, catalog: Catalog) -> Checked:
     key, text = cmd.key, cmd.text
     if key in (("topic", "info"), ("topic", "type"), ("topic", "hz"), ("topic", "echo")):
         spec = _topic(cmd, catalog)
-        _check_type(cmd.args.get("type"), spec.type, spec.name)
+        given = cmd.args.get("type")
+        if given and given.startswith("-"):  # argparse took it for the message type
+            raise InterfaceError(
+                f"'ros2 topic echo' has no {given} option (ros2 would read it as the message "
+                "type and wait); read one message with --once"
+            )
+        _check_type(given, spec.type, spec.name)
         return Checked(text, cmd, True, type=spec.type)
     if key == ("topic", "pub"):
         spec = _topic(cmd, catalog)
@@ -93,7 +100,13 @@ def _validate(cmd: Ros2Command, catalog: Catalog) -> Checked:
             )
         if key == ("service", "type"):
             return Checked(text, cmd, True, type=spec.type)
-        _check_type(cmd.args.get("type"), spec.type, spec.name)
+        given = cmd.args.get("type", "")
+        if given.startswith("{") or ":" in given:  # the values, where the type belongs
+            raise InterfaceError(
+                f"ros2 service call needs the service type before the values: "
+                f'ros2 service call {spec.name} {spec.type} "{given}"'
+            )
+        _check_type(given, spec.type, spec.name)
         if not known_type(spec.type):
             raise InterfaceError(f"astiop cannot check requests of type {spec.type}")
         msg = fill(spec.type, cmd.args.get("values"), part=0)
@@ -109,11 +122,24 @@ def _validate(cmd: Ros2Command, catalog: Catalog) -> Checked:
             return Checked(text, cmd, True, type=spec.type)
         _check_type(cmd.args["type"], spec.type, spec.name)
         msg = fill(spec.type, cmd.args.get("values"), part=0)
-        return Checked(text, cmd, True, kind="actuate", type=spec.type, message=msg)
+        notes: tuple[str, ...] = ()
+        header = msg.get("pose", {}).get("header") if isinstance(msg.get("pose"), dict) else None
+        if header is not None and not header.get("frame_id"):
+            header["frame_id"] = "map"  # Nav2 cannot transform a goal with no frame
+            notes = ("the goal's header.frame_id was empty: set to map",)
+        return Checked(text, cmd, True, "", "actuate", spec.type, msg, notes)
     if key == ("node", "info") and cmd.name not in catalog.nodes:
         raise InterfaceError(f"there is no node {cmd.name}" + _suggest(cmd.name, catalog.nodes))
-    if key == ("interface", "show") and not known_type(cmd.args["type"]):
-        raise InterfaceError(f"unknown interface type {cmd.args['type']}")
+    if key == ("interface", "show"):
+        name = cmd.args["type"]
+        if name.count("/") != 2:
+            raise InterfaceError(
+                f"ros2 interface show needs the full name pkg/msg/Name (or srv, action), "
+                f"not '{name}'"
+                + (f"; did you mean {normalize_type(name)}?" if known_type(name) else "")
+            )
+        if not known_type(name):
+            raise InterfaceError(f"unknown interface type {name}")
     if cmd.verb == "param":
         return _validate_param(cmd, catalog)
     return Checked(text, cmd, True)
@@ -136,10 +162,17 @@ def _validate_param(cmd: Ros2Command, catalog: Catalog) -> Checked:
         return Checked(cmd.text, cmd, True)
     if not spec.writable:
         raise InterfaceError(f"parameter {spec.name} of {node} is read-only")
+    # typed by the parameter's declared type: rclcpp refuses `1` for a double
     try:
         value = float(cmd.args["value"])
     except ValueError:
         raise InterfaceError(f"{spec.name} takes a number, got '{cmd.args['value']}'") from None
+    if not math.isfinite(value):
+        raise InterfaceError(f"{spec.name} takes a finite number, got '{cmd.args['value']}'")
+    if isinstance(spec.value, int) and not isinstance(spec.value, bool):
+        if not value.is_integer():
+            raise InterfaceError(f"{spec.name} is an integer parameter, got {cmd.args['value']}")
+        value = int(value)
     if not (spec.minimum <= value <= spec.maximum):
         raise InterfaceError(f"{spec.name} must be within {spec.minimum}..{spec.maximum}")
     return Checked(cmd.text, cmd, True, kind="actuate", message={"value": value})

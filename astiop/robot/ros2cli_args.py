@@ -1,4 +1,4 @@
-"""The emulated `ros2`'s argument parsers: the verbs astiop uses, as ros2cli declares them.
+"""ros2cli's argument parsers for the verbs astiop uses, per distro: astiop's grammar, and the emulated `ros2`'s.
 
 Read from ros2/ros2cli on the `humble` and `jazzy` branches: ros2topic/verb/{list,info,type,
 echo,hz,pub}.py, ros2service/verb/{list,type,call}.py, ros2action/verb/{list,info,send_goal}.py,
@@ -14,21 +14,21 @@ import argparse
 DISTROS = ("humble", "jazzy")
 
 
-def _positive_float(text: str) -> float:
+def positive_float(text: str) -> float:
     value = float(text)
-    if value <= 0 or value != value:
+    if not (0 < value < float("inf")):  # NaN fails both comparisons; astiop wants it finite
         raise ValueError("must be positive")
     return value
 
 
-def _nonnegative_int(text: str) -> int:
+def nonnegative_int(text: str) -> int:
     value = int(text)
     if value < 0:
         raise ValueError("must be positive or zero")
     return value
 
 
-def _positive_int(text: str) -> int:
+def positive_int(text: str) -> int:
     value = int(text)
     if value <= 0:
         raise ValueError("must be positive")
@@ -67,8 +67,8 @@ def _qos(p, distro: str) -> None:
         p.add_argument("--qos-liveliness-lease-duration-seconds", type=float)
 
 
-def build_parser(distro: str) -> argparse.ArgumentParser:
-    root = argparse.ArgumentParser(prog="ros2")
+def build_parser(distro: str, parser_class=argparse.ArgumentParser) -> argparse.ArgumentParser:
+    root = parser_class(prog="ros2")
     verbs = root.add_subparsers(dest="command", required=True)
 
     topic = verbs.add_parser("topic").add_subparsers(dest="verb", required=True)
@@ -92,7 +92,7 @@ def build_parser(distro: str) -> argparse.ArgumentParser:
     p.add_argument("--csv", action="store_true")
     p.add_argument("--field")
     p.add_argument("--full-length", "-f", action="store_true")
-    p.add_argument("--truncate-length", "-l", type=_nonnegative_int, default=128)
+    p.add_argument("--truncate-length", "-l", type=nonnegative_int, default=128)
     p.add_argument("--no-arr", action="store_true")
     p.add_argument("--no-str", action="store_true")
     p.add_argument("--flow-style", action="store_true")
@@ -103,12 +103,12 @@ def build_parser(distro: str) -> argparse.ArgumentParser:
     if distro == "humble":
         p.add_argument("--lost-messages", action="store_true")
     else:
-        p.add_argument("--timeout", type=_positive_float)
+        p.add_argument("--timeout", type=positive_float)
         p.add_argument("--include-message-info", "-i", action="store_true")
     _strategy(p)
     p = topic.add_parser("hz")
     p.add_argument("topic_name")
-    p.add_argument("--window", "-w", dest="window_size", type=_positive_int, default=10000)
+    p.add_argument("--window", "-w", dest="window_size", type=positive_int, default=10000)
     p.add_argument("--filter", dest="filter_expr")
     p.add_argument("--wall-time", dest="use_wtime", action="store_true")
     _strategy(p)
@@ -121,15 +121,15 @@ def build_parser(distro: str) -> argparse.ArgumentParser:
         g = p.add_mutually_exclusive_group()
         g.add_argument("values", nargs="?", default="{}")
         g.add_argument("--stdin", action="store_true")
-    p.add_argument("-r", "--rate", type=_positive_float, default=1.0)
+    p.add_argument("-r", "--rate", type=positive_float, default=1.0)
     p.add_argument("-p", "--print", type=int, default=1)
     g = p.add_mutually_exclusive_group()
     g.add_argument("-1", "--once", action="store_true")
-    g.add_argument("-t", "--times", type=_nonnegative_int, default=0)
-    p.add_argument("-w", "--wait-matching-subscriptions", type=_nonnegative_int)
+    g.add_argument("-t", "--times", type=nonnegative_int, default=0)
+    p.add_argument("-w", "--wait-matching-subscriptions", type=nonnegative_int)
     if distro != "humble":
-        p.add_argument("--max-wait-time-secs", type=_positive_float)
-    p.add_argument("--keep-alive", type=_positive_float, default=0.1)
+        p.add_argument("--max-wait-time-secs", type=positive_float)
+    p.add_argument("--keep-alive", type=positive_float, default=0.1)
     p.add_argument("-n", "--node-name")
     _qos(p, distro)
     p.add_argument("--use-sim-time", action="store_true")
