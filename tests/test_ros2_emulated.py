@@ -191,3 +191,48 @@ def test_a_stream_that_dies_is_restarted_and_said_so(robot):
         assert any(e.kind == "stream" and "/battery_status" in e.message for e in events)
     finally:
         graph.close()
+
+
+def test_a_refusal_printed_with_status_0_is_an_error(robot):
+    from astiop.robot.ros2_backend import Ros2Backend
+
+    graph = gateway(stream=False)
+    try:
+        r = graph.run("ros2 param set /astibot_base max_linear_speed 1", confirm=YES)
+        assert r.executed and not r.error  # astiop sends 1.0 for a double parameter
+        assert ["param", "set", "/astibot_base", "max_linear_speed", "1.0"] in ros2_calls(robot)
+        backend: Ros2Backend = graph.backend
+        out = backend._run(["param", "set", "/astibot_base", "max_linear_speed", "1"], 10.0)
+        assert out.returncode == 0 and "Setting parameter failed" in out.out  # as rclcpp does
+    finally:
+        graph.close()
+
+
+def test_a_service_nobody_serves_is_reported_within_its_bound(monkeypatch):
+    with emulated_robot(missing=("/dock",)) as folder:
+        on_path(monkeypatch, folder)
+        from astiop.robot.catalog import astibot_catalog
+        from astiop.robot.ros2_backend import Ros2Backend
+
+        backend = Ros2Backend("ros2", 10.0, stream=False)
+        backend.catalog.services["/dock"] = astibot_catalog().services["/dock"]  # listed earlier
+        graph = RobotGraph(backend, SafetyPolicy())
+        t0 = time.monotonic()
+        r = graph.run("ros2 service call /dock std_srvs/srv/Trigger", confirm=YES, timeout=2.0)
+        assert "service /dock is not available" in r.error
+        assert time.monotonic() - t0 < 8  # the bound, plus SIGINT's grace
+        graph.close()
+
+
+def test_the_graph_is_read_from_the_robot_and_refreshed_when_a_name_is_missing(robot):
+    graph = gateway(stream=False)
+    try:
+        backend = graph.backend
+        assert "/navigator" in backend.catalog.nodes and "/map" in backend.catalog.topics
+        assert ["daemon", "start"] in ros2_calls(robot)
+        del backend.catalog.topics["/battery_status"]  # as if it appeared after the last read
+        backend.refreshed_at = 0.0
+        r = graph.run("ros2 topic echo /battery_status --once")
+        assert r.executed and not r.error and 0 < r.values["percentage"] <= 1
+    finally:
+        graph.close()

@@ -24,6 +24,11 @@ float64 theta
 """,
     "geometry_msgs/msg/PoseStamped": "std_msgs/Header header\nPose pose\n",
     "geometry_msgs/msg/PoseWithCovariance": "Pose pose\nfloat64[36] covariance\n",
+    "geometry_msgs/msg/TwistStamped": """\
+# A twist with reference coordinate frame and timestamp
+std_msgs/Header header
+Twist twist
+""",
     "geometry_msgs/msg/Twist": """\
 # This expresses velocity in free space broken into its linear and angular parts.
 

@@ -13,6 +13,7 @@ from collections.abc import Callable
 from astiop.robot.backend import MapGeometry, RobotBackend
 from astiop.robot.catalog import Catalog
 from astiop.robot.output import BackendError, Execution
+from astiop.robot.render import STAMPED
 from astiop.robot.safety import ALWAYS_ALLOWED, Review, SafetyPolicy
 from astiop.robot.state import RobotEvent, RobotState, TopicStat
 from astiop.robot.validation import Checked, validate
@@ -90,7 +91,17 @@ class RobotGraph:
 
     # -- commands --------------------------------------------------------------------------
     def review(self, text: str) -> Review:
-        return self.safety.review(validate(text, self.catalog), self.e_stopped)
+        checked = validate(text, self.catalog)
+        if not checked.valid and checked.reason.startswith("there is no") and self._refresh():
+            checked = validate(text, self.catalog)  # it may have appeared since the last read
+        return self.safety.review(checked, self.e_stopped)
+
+    def _refresh(self) -> bool:
+        refresh = getattr(self.backend, "refresh", None)
+        last = getattr(self.backend, "refreshed_at", 0.0)
+        if refresh is None or time.monotonic() - last < 5.0:
+            return False
+        return refresh()
 
     def run(
         self, text: str, confirm: Confirm | None = None, timeout: float | None = None
@@ -131,10 +142,11 @@ class RobotGraph:
 
     def drive(self, vx: float, vy: float, wz: float) -> Execution:
         """Teleop: the key press is the operator's consent; safety still clamps and holds."""
-        text = (
-            "ros2 topic pub --once /cmd_vel geometry_msgs/msg/Twist "
-            f'"{{linear: {{x: {vx:g}, y: {vy:g}}}, angular: {{z: {wz:g}}}}}"'
-        )
+        twist = f"{{linear: {{x: {vx:g}, y: {vy:g}}}, angular: {{z: {wz:g}}}}}"
+        spec = self.catalog.topics.get("/cmd_vel")
+        type_ = spec.type if spec else "geometry_msgs/msg/Twist"
+        values = f"{{twist: {twist}}}" if type_ == STAMPED else twist
+        text = f'ros2 topic pub --once /cmd_vel {type_} "{values}"'
         review = self.review(text)
         result = Execution(text, review.checked.valid, review.reason, "actuate")
         if not review.allowed:
@@ -147,7 +159,8 @@ class RobotGraph:
             return result
         result.notes = list(review.checked.notes)
         try:
-            self.backend.drive(review.checked.message)
+            message = review.checked.message
+            self.backend.drive(message["twist"] if type_ == STAMPED else message)
             result.executed = True
             result.values = review.checked.message
         except BackendError as exc:

@@ -29,7 +29,12 @@ def sent_argv(checked: Checked) -> list[str]:
             argv += ["-t", str(cmd.options["times"])]
         if "rate" in cmd.options:
             argv += ["-r", f"{cmd.options['rate']:g}"]
-        return [*argv, cmd.name, checked.type, flow_yaml(checked.message)]
+        return [
+            *argv,
+            cmd.name,
+            checked.type,
+            flow_yaml(stamped_now(checked.type, checked.message)),
+        ]
     if key == ("service", "call"):
         return ["service", "call", cmd.name, checked.type, flow_yaml(checked.message)]
     if key == ("action", "send_goal"):
@@ -60,3 +65,19 @@ def sent_text(checked: Checked) -> str:
 
 def zero_twist() -> dict:
     return {"linear": {"x": 0.0, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}
+
+
+STAMPED = "geometry_msgs/msg/TwistStamped"
+
+
+def velocity_message(type_: str, twist: dict) -> dict:
+    """A Twist as the robot's /cmd_vel type wants it (Jazzy's diff_drive wants TwistStamped)."""
+    return {"header": {"frame_id": "base_link"}, "twist": twist} if type_ == STAMPED else twist
+
+
+def stamped_now(type_: str, message: dict) -> dict:
+    """`header: auto` makes ros2 topic pub stamp each message now (humble and jazzy; see
+    ros2topic/verb/pub.py, expand_header_auto): a zero stamp looks stale to a controller."""
+    if type_ == STAMPED and isinstance(message.get("header"), dict):
+        return {**message, "header": "auto"}
+    return message

@@ -13,6 +13,7 @@ import shutil
 import threading
 import time
 from collections import deque
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -20,7 +21,14 @@ import numpy as np
 from astiop.robot import ros2_process
 from astiop.robot.catalog import ActionSpec, Catalog, ServiceSpec, TopicSpec, astibot_catalog
 from astiop.robot.output import BackendError, echo_yaml
-from astiop.robot.render import flow_yaml, sent_argv, zero_twist
+from astiop.robot.render import (
+    STAMPED,
+    flow_yaml,
+    sent_argv,
+    stamped_now,
+    velocity_message,
+    zero_twist,
+)
 from astiop.robot.ros2_motion import STDIN_DISTROS, ArmedStop, TeleopPublisher
 from astiop.robot.ros2_streams import TopicStream, parse_document
 from astiop.robot.state import OccupancyGrid, RobotEvent, RobotState, TopicStat, from_messages
@@ -41,6 +49,13 @@ STATE_TOPICS = (
 )
 ARRAYS = {"/scan", "/plan", "/obstacles"}  # echoed in full: ros2 truncates at 128 items
 MOVING = {"navigating", "docking", "blocked"}
+GRAPH_REFRESH_S = 30.0
+# What ros2 prints on stdout, with exit status 0, when nothing was done.
+FAILED_WITH_STATUS_0 = re.compile(
+    r"^(Setting parameter failed.*|Parameter not set.*|Node not found.*|"
+    r"Failed to populate (message )?fields?.*|Goal was rejected.*)$",
+    re.MULTILINE,
+)
 
 
 def parse_response(text: str) -> dict[str, Any]:
@@ -93,13 +108,30 @@ class Ros2Backend:
         self._teleop: TeleopPublisher | None = None
         self._armed: ArmedStop | None = None
         self.t0 = time.monotonic()
+        self._closed = threading.Event()
         self.catalog = self.read_catalog()
+        self.refreshed_at = time.monotonic()
 
     # -- the live graph -----------------------------------------------------------------
     def _run(self, argv: list[str], timeout: float, **kw) -> ros2_process.Run:
         return ros2_process.run(self.executable, argv, timeout, **kw)
 
+    def read_catalog(self) -> Catalog:
+        """The live graph (read until two reads agree: discovery takes a moment), described
+        with our catalog where names match."""
+        self._run(["daemon", "start"], self.timeout_s)  # a failure here shows in the lists
+        previous = None
+        for _ in range(3):
+            lists = {v: self._listed(v) for v in ("topic", "service", "action", "node")}
+            if lists == previous:
+                break
+            previous = lists
+        return self._describe(lists)
+
     def _listed(self, verb: str) -> list[tuple[str, str]]:
+        if verb == "node":
+            out = self._run(["node", "list"], self.timeout_s)
+            return sorted((n.strip(), "") for n in out.out.splitlines() if n.startswith("/"))
         out = self._run([verb, "list", "-t"], self.timeout_s)
         if out.returncode != 0:
             why = out.err.strip()[:200] or ("timed out" if out.stopped else "failed")
@@ -109,22 +141,39 @@ class Ros2Backend:
             m = _LISTED.match(line.strip())
             if m:
                 pairs.append((m["name"], m["type"].split(",")[0].strip()))
-        return pairs
+        return sorted(pairs)
 
-    def read_catalog(self) -> Catalog:
-        """The live graph, described with our catalog where names match."""
+    def refresh(self) -> bool:
+        """Read the graph again (a name was missing, or 30 s passed); False if it failed."""
+        try:
+            self.catalog = self._describe(
+                {v: self._listed(v) for v in ("topic", "service", "action", "node")}
+            )
+        except BackendError:
+            return False
+        self.refreshed_at = time.monotonic()
+        return True
+
+    def _refresh_loop(self) -> None:
+        while not self._closed.wait(GRAPH_REFRESH_S):
+            self.refresh()
+
+    def _describe(self, lists: dict[str, list[tuple[str, str]]]) -> Catalog:
         known = astibot_catalog()
-        cat = Catalog(nodes=known.nodes, params=known.params)
-        for name, typ in self._listed("topic"):
+        nodes = tuple(n for n, _ in lists["node"]) or known.nodes
+        cat = Catalog(nodes=nodes, params=known.params)
+        for name, typ in lists["topic"]:
             spec = known.topics.get(name)
+            if name == "/cmd_vel" and spec and typ == STAMPED:  # Jazzy's diff_drive_controller
+                spec = replace(spec, type=typ)
             cat.topics[name] = spec if spec and spec.type == typ else TopicSpec(name, typ, 0, "?")
-        for name, typ in self._listed("service"):
+        for name, typ in lists["service"]:
             spec = known.services.get(name)
             # an unknown service is treated as actuating: it needs confirmation
             cat.services[name] = (
                 spec if spec and spec.type == typ else ServiceSpec(name, typ, "?", True)
             )
-        for name, typ in self._listed("action"):
+        for name, typ in lists["action"]:
             spec = known.actions.get(name)
             cat.actions[name] = spec if spec and spec.type == typ else ActionSpec(name, typ, "?")
         return cat
@@ -151,8 +200,10 @@ class Ros2Backend:
             ).start()
         if "/map" in self.catalog.topics:
             threading.Thread(target=self._read_map, name="ros2-map", daemon=True).start()
+        threading.Thread(target=self._refresh_loop, name="ros2-graph", daemon=True).start()
 
     def close(self) -> None:
+        self._closed.set()
         for s in self._streams.values():
             s.stop()
         self._streams.clear()
@@ -263,7 +314,8 @@ class Ros2Backend:
             threading.Thread(target=self._reap, args=(fired, "zero /cmd_vel"), daemon=True).start()
         elif cmd_vel is not None:
             argv = ["topic", "pub", "-r", "10", "-t", "10", cmd_vel.name, cmd_vel.type]
-            self._background([*argv, flow_yaml(zero_twist())], "zero /cmd_vel")
+            zero = stamped_now(cmd_vel.type, velocity_message(cmd_vel.type, zero_twist()))
+            self._background([*argv, flow_yaml(zero)], "zero /cmd_vel")
         else:
             failures.append("the robot has no /cmd_vel: no zero Twist was sent")
         if "/stop" in self.catalog.services:
@@ -328,6 +380,9 @@ class Ros2Backend:
             raise BackendError(f"ros2 {' '.join(argv[:3])} timed out after {timeout:g} s")
         if run.returncode != 0:
             raise BackendError(f"ros2 exited with {run.returncode}: {run.err.strip()[:300]}")
+        failed = FAILED_WITH_STATUS_0.search(run.out)
+        if failed:  # rclcpp refuses on stdout and ros2 still exits 0: it did not happen
+            raise BackendError(failed[0].strip()[:300])
         if cmd.key == ("service", "call"):
             values = parse_response(run.out)
             if cmd.name == "/stop":

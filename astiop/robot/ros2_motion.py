@@ -19,7 +19,7 @@ import threading
 import time
 
 from astiop.robot import ros2_process
-from astiop.robot.render import flow_yaml, zero_twist
+from astiop.robot.render import flow_yaml, stamped_now, velocity_message, zero_twist
 
 STDIN_DISTROS = {"jazzy", "kilted", "rolling"}
 TELEOP_RATE_HZ = 10
@@ -56,7 +56,8 @@ class TeleopPublisher:
             threading.Thread(target=ros2_process.stop, args=(old, 0.5), daemon=True).start()
         if twist is not None:
             argv = ["topic", "pub", "-r", str(TELEOP_RATE_HZ), self.topic, self.type]
-            proc = ros2_process.spawn(self.executable, [*argv, flow_yaml(twist)])
+            msg = stamped_now(self.type, velocity_message(self.type, twist))
+            proc = ros2_process.spawn(self.executable, [*argv, flow_yaml(msg)])
             self._proc, self._ready = proc, False
             threading.Thread(target=self._drain, args=(proc,), daemon=True).start()
 
@@ -79,7 +80,8 @@ class TeleopPublisher:
                 if lapsed:
                     self._replace(None)
             if lapsed:  # motion lapsed: say so to the base too
-                argv = ["topic", "pub", "--once", self.topic, self.type, flow_yaml(zero_twist())]
+                zero = stamped_now(self.type, velocity_message(self.type, zero_twist()))
+                argv = ["topic", "pub", "--once", self.topic, self.type, flow_yaml(zero)]
                 ros2_process.run(self.executable, argv, 10.0)
 
     def halt(self) -> None:
@@ -100,6 +102,7 @@ class ArmedStop:
     def __init__(self, executable: str, topic: str, type_: str):
         self.executable = executable
         self.argv = ["topic", "pub", "--stdin", *ESTOP_BURST, topic, type_]
+        self.zero = stamped_now(type_, velocity_message(type_, zero_twist()))
         self._proc: subprocess.Popen | None = None
 
     def arm(self) -> None:
@@ -112,7 +115,7 @@ class ArmedStop:
         if proc is None or proc.poll() is not None:
             return None
         try:
-            proc.stdin.write(flow_yaml(zero_twist()) + "\n")
+            proc.stdin.write(flow_yaml(self.zero) + "\n")
             proc.stdin.close()
         except OSError:
             return None

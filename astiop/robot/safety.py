@@ -56,7 +56,10 @@ class SafetyPolicy:
             )
         msg = checked.message or {}
         notes: list[str] = list(checked.notes)
-        if cmd.key == ("topic", "pub") and name == "/cmd_vel":
+        if cmd.key == ("topic", "pub") and name == "/cmd_vel" and "twist" in msg:
+            twist, notes = self._clamp_twist(msg["twist"], notes)  # TwistStamped: same clamp
+            msg = {**msg, "twist": twist}
+        elif cmd.key == ("topic", "pub") and name == "/cmd_vel":
             msg, notes = self._clamp_twist(msg, notes)
         elif cmd.key == ("service", "call") and name == "/goto_position" and not msg.get("name"):
             if not self.inside_geofence(msg["x"], msg["y"]):
