@@ -14,6 +14,19 @@ import tempfile
 import time
 from pathlib import Path
 
+# The E-STOP's zero-Twist publisher, started ahead of time and waiting on stdin (Jazzy).
+ARMED_ESTOP = [
+    "topic",
+    "pub",
+    "--stdin",
+    "-r",
+    "10",
+    "-t",
+    "10",
+    "/cmd_vel",
+    "geometry_msgs/msg/Twist",
+]
+
 
 @contextlib.contextmanager
 def emulated_robot(*, latency_ms: int = 30, distro: str = "jazzy", missing: tuple[str, ...] = ()):

@@ -12,7 +12,7 @@ import pytest
 from astiop.robot.graph import RobotGraph
 from astiop.robot.safety import SafetyPolicy
 from astiop.store import Store
-from tests.emulator import cmd_vel_received, emulated_robot, on_path, ros2_calls
+from tests.emulator import ARMED_ESTOP, cmd_vel_received, emulated_robot, on_path, ros2_calls
 
 YES = lambda _c: True  # noqa: E731
 GOAL = (
@@ -82,17 +82,7 @@ def test_what_is_sent_is_rebuilt_and_clamped(robot):
     calls = ros2_calls(robot)
     goto = next(c for c in calls if c[:3] == ["service", "call", "/goto_position"])
     assert goto[3] == "astiop_msgs/srv/GotoPosition"  # the type is always sent
-    assert [
-        "topic",
-        "pub",
-        "--stdin",
-        "-r",
-        "10",
-        "-t",
-        "10",
-        "/cmd_vel",
-        "geometry_msgs/msg/Twist",
-    ] in calls  # the E-STOP's publisher, armed ahead of time
+    assert ARMED_ESTOP in calls  # the E-STOP's publisher, armed ahead of time
     pub = next(c for c in calls if c[:3] == ["topic", "pub", "--once"])
     assert "x: 0.8" in pub[-1]  # the clamped message went out, not the typed one
     assert not any("/warp" in c for c in calls)  # a rejected command never runs

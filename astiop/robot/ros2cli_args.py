@@ -67,6 +67,19 @@ def _qos(p, distro: str) -> None:
         p.add_argument("--qos-liveliness-lease-duration-seconds", type=float)
 
 
+def _values_or_stdin(p, distro: str, dest: str, required_on_humble: bool = False) -> None:
+    """The YAML values, or (since Jazzy) --stdin instead: a mutually exclusive pair."""
+    if distro == "humble":
+        if required_on_humble:
+            p.add_argument(dest)
+        else:
+            p.add_argument(dest, nargs="?", default="{}")
+        return
+    g = p.add_mutually_exclusive_group()
+    g.add_argument(dest, nargs="?", default="{}")
+    g.add_argument("--stdin", action="store_true")
+
+
 def build_parser(distro: str, parser_class=argparse.ArgumentParser) -> argparse.ArgumentParser:
     root = parser_class(prog="ros2")
     verbs = root.add_subparsers(dest="command", required=True)
@@ -115,12 +128,7 @@ def build_parser(distro: str, parser_class=argparse.ArgumentParser) -> argparse.
     p = topic.add_parser("pub")
     p.add_argument("topic_name")
     p.add_argument("message_type")
-    if distro == "humble":
-        p.add_argument("values", nargs="?", default="{}")
-    else:
-        g = p.add_mutually_exclusive_group()
-        g.add_argument("values", nargs="?", default="{}")
-        g.add_argument("--stdin", action="store_true")
+    _values_or_stdin(p, distro, "values")
     p.add_argument("-r", "--rate", type=positive_float, default=1.0)
     p.add_argument("-p", "--print", type=int, default=1)
     g = p.add_mutually_exclusive_group()
@@ -146,12 +154,7 @@ def build_parser(distro: str, parser_class=argparse.ArgumentParser) -> argparse.
     p = service.add_parser("call")
     p.add_argument("service_name")
     p.add_argument("service_type")
-    if distro == "humble":
-        p.add_argument("values", nargs="?", default="{}")
-    else:
-        g = p.add_mutually_exclusive_group()
-        g.add_argument("values", nargs="?", default="{}")
-        g.add_argument("--stdin", action="store_true")
+    _values_or_stdin(p, distro, "values")
     p.add_argument("-r", "--rate", type=float)
 
     action = verbs.add_parser("action").add_subparsers(dest="verb", required=True)
@@ -165,12 +168,7 @@ def build_parser(distro: str, parser_class=argparse.ArgumentParser) -> argparse.
     p = action.add_parser("send_goal")
     p.add_argument("action_name")
     p.add_argument("action_type")
-    if distro == "humble":
-        p.add_argument("goal")
-    else:
-        g = p.add_mutually_exclusive_group()
-        g.add_argument("goal", nargs="?", default="{}")
-        g.add_argument("--stdin", action="store_true")
+    _values_or_stdin(p, distro, "goal", required_on_humble=True)
     p.add_argument("-f", "--feedback", action="store_true")
 
     node = verbs.add_parser("node").add_subparsers(dest="verb", required=True)

@@ -177,14 +177,16 @@ class EmulatedRobot:
         call.finish(code)
 
     # -- topic ------------------------------------------------------------------------------
-    def _topic_list(self, call: Call, a: dict) -> int:
-        topics = self.topics()
-        if a.get("count_topics"):
-            call.out(f"{len(topics)}\n")
-            return 0
-        lines = [f"{n} [{t}]" if a.get("show_types") else n for n, t in topics.items()]
-        call.out("\n".join(lines) + "\n")
+    @staticmethod
+    def _listing(call: Call, names: dict[str, str], types: bool, count: bool) -> int:
+        if count:
+            call.out(f"{len(names)}\n")
+        else:
+            call.out("\n".join(f"{n} [{t}]" if types else n for n, t in names.items()) + "\n")
         return 0
+
+    def _topic_list(self, call: Call, a: dict) -> int:
+        return self._listing(call, self.topics(), a.get("show_types"), a.get("count_topics"))
 
     def _topic_type(self, call: Call, a: dict) -> int:
         t = self.topics().get(a["topic_name"])
@@ -331,13 +333,7 @@ class EmulatedRobot:
 
     # -- service ----------------------------------------------------------------------------
     def _service_list(self, call: Call, a: dict) -> int:
-        services = self.services()
-        if a.get("count_services"):
-            call.out(f"{len(services)}\n")
-            return 0
-        lines = [f"{n} [{t}]" if a.get("show_types") else n for n, t in services.items()]
-        call.out("\n".join(lines) + "\n")
-        return 0
+        return self._listing(call, self.services(), a.get("show_types"), a.get("count_services"))
 
     def _service_type(self, call: Call, a: dict) -> int:
         t = self.services().get(a["service_name"])
@@ -372,10 +368,7 @@ class EmulatedRobot:
 
     # -- action -----------------------------------------------------------------------------
     def _action_list(self, call: Call, a: dict) -> int:
-        actions = self.actions()
-        lines = [f"{n} [{t}]" if a.get("show_types") else n for n, t in actions.items()]
-        call.out("\n".join(lines) + "\n")
-        return 0
+        return self._listing(call, self.actions(), a.get("show_types"), a.get("count_actions"))
 
     def _action_info(self, call: Call, a: dict) -> int:
         name = a["action_name"]
