@@ -56,9 +56,12 @@ class RobotGraph:
 
     def estop(self) -> list[str]:
         """Stop the robot, then latch it for every process; returns steps that failed."""
-        failures = self.backend.estop()
+        failures = self.backend.estop()  # the robot first: the record must never delay it
         if self.store is not None:
-            self.store.latch_estop(self.who)
+            try:
+                self.store.latch_estop(self.who)
+            except Exception as exc:  # noqa: BLE001 - reported, the stop itself went out
+                failures.append(f"the E-STOP is not latched for other processes: {exc}")
         return failures
 
     def release_estop(self) -> None:
