@@ -226,3 +226,16 @@ def test_the_graph_is_read_from_the_robot_and_refreshed_when_a_name_is_missing(r
         assert r.executed and not r.error and 0 < r.values["percentage"] <= 1
     finally:
         graph.close()
+
+
+def test_byte_fields_printed_as_characters_are_read_as_numbers(robot):
+    graph = gateway(stream=False)
+    try:
+        r = graph.run("ros2 topic echo /diagnostics --once")
+        assert r.executed and not r.error, r.error
+        levels = [s["level"] for s in r.values["status"]]
+        assert levels and all(isinstance(level, int) for level in levels)
+        echoed = graph.backend._run(["topic", "echo", "/diagnostics", "--once"], 10.0).out
+        assert 'level: "\\0"' in echoed or 'level: "\\x00"' in echoed  # what ros2 printed
+    finally:
+        graph.close()

@@ -238,3 +238,27 @@ def python_repr(type_name: str, value: dict[str, Any], part: int = 0) -> str:
         else:
             items.append(f"{f.name}={v!r}")
     return f"{dotted}({', '.join(items)})"
+
+
+# -- reading what `ros2 topic echo` printed ------------------------------------------------
+def decode_bytes(type_name: str, value: Any, part: int = 0) -> Any:
+    """`byte` and `char` fields print as one-character strings ("\\x02"); give back numbers."""
+    try:
+        mt = get_parts(type_name)[part]
+    except InterfaceError:
+        return value
+    if not isinstance(value, dict):
+        return value
+    out = dict(value)
+    for f in mt.fields:
+        v = out.get(f.name)
+        if v is None:
+            continue
+        if f.type in ("byte", "char", "uint8") and not f.is_array and isinstance(v, (str, bytes)):
+            out[f.name] = v[0] if isinstance(v, bytes) else (ord(v) if len(v) == 1 else v)
+        elif f.type not in PRIMITIVES:
+            if f.is_array and isinstance(v, list):
+                out[f.name] = [decode_bytes(f.type, item) for item in v]
+            elif not f.is_array:
+                out[f.name] = decode_bytes(f.type, v)
+    return out

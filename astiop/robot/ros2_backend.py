@@ -20,6 +20,7 @@ import numpy as np
 
 from astiop.robot import ros2_process
 from astiop.robot.catalog import ActionSpec, Catalog, ServiceSpec, TopicSpec, astibot_catalog
+from astiop.robot.interfaces import decode_bytes
 from astiop.robot.output import BackendError, echo_yaml
 from astiop.robot.render import (
     STAMPED,
@@ -372,6 +373,10 @@ class Ros2Backend:
             return self._hz(checked, argv, timeout)
         if cmd.key == ("action", "send_goal"):
             return self._send_goal(checked, argv, timeout)
+        if cmd.key == ("topic", "pub") and "times" in cmd.options:
+            # never stop a publisher that validation allowed to run this long
+            rate = cmd.options.get("rate", 1.0)
+            timeout = max(timeout, (cmd.options["times"] - 1) / rate + timeout)
         run = self._run(argv, timeout)
         waited = "waiting for service" in run.out and "response:" not in run.out
         if cmd.key == ("service", "call") and waited:
@@ -400,6 +405,7 @@ class Ros2Backend:
             if run.stopped:
                 raise BackendError(f"no message on {checked.command.name} within {timeout:g} s")
             raise BackendError(run.err.strip()[:300] or f"no message on {checked.command.name}")
+        doc = decode_bytes(checked.type, doc)
         return echo_yaml(doc, "no_arr" in checked.command.flags), doc
 
     def _hz(self, checked: Checked, argv: list[str], timeout: float):

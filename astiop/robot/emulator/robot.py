@@ -211,7 +211,10 @@ class EmulatedRobot:
     def _message(self, name: str) -> dict:
         if name == "/map":
             return self._map_msg
-        return self.backend.message(name)
+        msg = self.backend.message(name)
+        if name == "/diagnostics":  # rclpy prints a `byte` as a one-character string
+            msg = {**msg, "status": [{**st, "level": chr(st["level"])} for st in msg["status"]]}
+        return msg
 
     def _topic_echo(self, call: Call, a: dict) -> int:
         name = a["topic_name"]
