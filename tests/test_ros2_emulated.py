@@ -239,3 +239,30 @@ def test_byte_fields_printed_as_characters_are_read_as_numbers(robot):
         assert 'level: "\\0"' in echoed or 'level: "\\x00"' in echoed  # what ros2 printed
     finally:
         graph.close()
+
+
+def test_hz_returns_after_two_windows_with_the_rate(robot):
+    graph = gateway(stream=False)
+    try:
+        t0 = time.monotonic()
+        r = graph.run("ros2 topic hz /robot_pose", timeout=15)
+        assert r.values["windows"] == 2 and 8.0 < r.values["average_rate"] < 12.0
+        assert time.monotonic() - t0 < 8  # stopped after two windows, not at the bound
+    finally:
+        graph.close()
+
+
+def test_a_goal_with_feedback_is_followed_to_its_result(robot):
+    graph = gateway()
+    try:
+        graph.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=YES)
+        assert until(lambda: graph.state().status and graph.state().status.state == "idle")
+        near = GOAL.replace("x: 6.0", "x: 3.0") + " --feedback"
+        r = graph.run(near, confirm=YES)
+        assert r.values["accepted"]
+        assert graph.wait_until_idle(60) == "succeeded"
+        pose = graph.state().pose
+        assert abs(pose.x - 3.0) < 0.3 and abs(pose.y - 3.0) < 0.3  # it got there
+        assert any(e.kind == "goal" and "SUCCEEDED" in e.message for e in graph.events_since(0))
+    finally:
+        graph.close()
