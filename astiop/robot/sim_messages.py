@@ -20,7 +20,9 @@ def stamp(t: float, frame: str) -> dict[str, Any]:
 
 
 def f32(v: float) -> float:
-    return float(f"{v:.6g}") if math.isfinite(v) else float(v)
+    """A float32 field's value as rclpy gives it: the float32, widened to a Python float
+    (27.117 prints as 27.117000579833984, as `ros2 topic echo` shows it)."""
+    return float(np.float32(v))
 
 
 def quaternion(yaw: float) -> dict[str, float]:
