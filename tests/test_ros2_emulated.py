@@ -266,3 +266,15 @@ def test_a_goal_with_feedback_is_followed_to_its_result(robot):
         assert any(e.kind == "goal" and "SUCCEEDED" in e.message for e in graph.events_since(0))
     finally:
         graph.close()
+
+
+def test_the_emulated_ros2_refuses_what_real_ros2_refuses(robot):
+    def ros2(*argv: str) -> subprocess.CompletedProcess:
+        return subprocess.run(["ros2", *argv], capture_output=True, text=True, timeout=20)
+
+    bad_type = ros2("topic", "echo", "/battery_status", "-1")
+    assert bad_type.returncode == 1 and "message type is invalid" in bad_type.stderr
+    exclusive = ros2("topic", "pub", "--once", "-t", "5", "/cmd_vel", "geometry_msgs/msg/Twist")
+    assert exclusive.returncode == 2 and "not allowed with argument" in exclusive.stderr
+    no_type = ros2("service", "call", "/stop")
+    assert no_type.returncode == 2 and "service_type" in no_type.stderr

@@ -227,6 +227,10 @@ class EmulatedRobot:
                 )
                 return 1
             call.wait(1e9)  # nobody publishes it: echo waits
+        given = a.get("message_type")
+        if given and t and given not in (t, t.replace("/msg/", "/")):
+            call.err("The passed message type is invalid\n")  # rosidl cannot load it
+            return 1
         truncate = None if a.get("full_length") else a.get("truncate_length", 128)
         deadline = time.monotonic() + a["timeout"] if a.get("timeout") else math.inf
         for msg in self._publications(name, call, deadline):
