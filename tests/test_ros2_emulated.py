@@ -21,7 +21,7 @@ GOAL = (
 )
 
 
-def until(predicate, timeout: float = 10.0) -> bool:
+def until(predicate, timeout: float = 30.0) -> bool:  # returns as soon as it holds
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         if predicate():

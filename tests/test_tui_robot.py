@@ -18,7 +18,7 @@ from tests.tui_helpers import console, sim_of
 SIZE = (120, 40)
 
 
-async def wait_for(pilot, predicate, timeout: float = 15.0) -> bool:
+async def wait_for(pilot, predicate, timeout: float = 30.0) -> bool:
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         if predicate():

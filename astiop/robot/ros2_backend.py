@@ -13,6 +13,7 @@ import shutil
 import threading
 import time
 from collections import deque
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import replace
 from typing import Any
 
@@ -123,11 +124,16 @@ class Ros2Backend:
         self._run(["daemon", "start"], self.timeout_s)  # a failure here shows in the lists
         previous = None
         for _ in range(3):
-            lists = {v: self._listed(v) for v in ("topic", "service", "action", "node")}
+            lists = self._read_lists()
             if lists == previous:
                 break
             previous = lists
         return self._describe(lists)
+
+    def _read_lists(self) -> dict[str, list[tuple[str, str]]]:
+        verbs = ("topic", "service", "action", "node")
+        with ThreadPoolExecutor(len(verbs)) as pool:  # each call pays ros2's start-up
+            return dict(zip(verbs, pool.map(self._listed, verbs)))
 
     def _listed(self, verb: str) -> list[tuple[str, str]]:
         if verb == "node":
@@ -147,9 +153,7 @@ class Ros2Backend:
     def refresh(self) -> bool:
         """Read the graph again (a name was missing, or 30 s passed); False if it failed."""
         try:
-            self.catalog = self._describe(
-                {v: self._listed(v) for v in ("topic", "service", "action", "node")}
-            )
+            self.catalog = self._describe(self._read_lists())
         except BackendError:
             return False
         self.refreshed_at = time.monotonic()
