@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import contextlib
 import threading
-import time
 from dataclasses import dataclass
 from typing import Any
 
@@ -29,7 +28,7 @@ from astiop.screens.chat import ChatScreen
 from astiop.screens.dashboard import DashboardScreen
 from astiop.screens.locations import LocationsScreen
 from astiop.screens.logs import LogsScreen
-from astiop.screens.messages import EStopChanged, RobotStateSampled, TurnFinished
+from astiop.screens.messages import RobotStateSampled, TurnFinished
 from astiop.screens.modals import ConfirmModal
 from astiop.screens.teleop import TeleopScreen
 from astiop.store import Store
@@ -114,7 +113,6 @@ class AstiopApp(App):
         self.recent_events = services.graph.events_since(0)[-50:]  # shown at once, not later
         self.topic_stats: list[TopicStat] = []
         self.listeners: list[Any] = []  # screens that take broadcasts
-        self.estop_latency_s: float | None = None
         last = self.recent_events[-1].seq if self.recent_events else 0
         self._sampler = StateSampler(self, sample_hz, last)
 
@@ -139,6 +137,8 @@ class AstiopApp(App):
     # -- live state ---------------------------------------------------------------------
     def on_robot_state_sampled(self, msg: RobotStateSampled) -> None:
         self.robot_state = msg.state
+        if msg.events:  # kept here: a screen not shown when they came still shows them
+            self.recent_events = (self.recent_events + msg.events)[-50:]
         if msg.stats is not None:
             self.topic_stats = msg.stats
         for ev in msg.events:
@@ -148,25 +148,20 @@ class AstiopApp(App):
             self.screen.post_message(RobotStateSampled(msg.state, msg.events, msg.stats))
 
     def on_turn_finished(self, msg: TurnFinished) -> None:
-        self.broadcast(lambda: TurnFinished(msg.result, msg.model, msg.reachable))
+        self.broadcast(lambda: TurnFinished(msg.result, msg.model))
 
     # -- safety -------------------------------------------------------------------------
     def action_estop(self) -> None:
-        pressed = time.monotonic()
         if isinstance(self.screen, ConfirmModal):
             self.screen.dismiss(False)  # the E-STOP answers any open question with "no"
-        self.run_worker(
-            lambda: self._estop(pressed), thread=True, group="estop", exit_on_error=False
-        )
+        self.run_worker(self._estop, thread=True, group="estop", exit_on_error=False)
 
-    def _estop(self, pressed: float) -> None:
+    def _estop(self) -> None:
         failures = self.services.graph.estop()
-        self.estop_latency_s = time.monotonic() - pressed
         text = "E-STOP engaged: all motion stopped. ctrl+r releases it."
         if failures:
             text += "\n" + "\n".join(failures)
         self.call_from_thread(self.notify, text, severity="error", title="E-STOP", markup=False)
-        self.call_from_thread(self.broadcast, lambda: EStopChanged(True, failures))
 
     def action_release_estop(self) -> None:
         if not self.services.graph.e_stopped:
@@ -182,7 +177,6 @@ class AstiopApp(App):
     def _release(self) -> None:
         self.services.graph.release_estop()
         self.call_from_thread(self.notify, "E-stop released.")
-        self.call_from_thread(self.broadcast, lambda: EStopChanged(False, []))
 
     def confirm_from_thread(self, checked: Checked, timeout_s: float | None = None) -> bool:
         """The gateway's confirmation hook, called from a worker thread: ask with a modal that

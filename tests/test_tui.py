@@ -63,6 +63,13 @@ async def test_chat_actuation_waits_for_the_operator(tmp_path):
         await pilot.press("y")
         await app.workers.wait_for_complete()
         assert sim_of(app).goal is not None and sim_of(app).goal.name == "shipping"
+        await pilot.press("f1")  # the goal's event came while Chat was shown
+        table = app.screen.query_one("#events", DataTable)
+        for _ in range(40):
+            if any("accepted" in str(table.get_row_at(i)) for i in range(table.row_count)):
+                break
+            await pilot.pause(0.05)
+        assert any("accepted" in str(table.get_row_at(i)) for i in range(table.row_count))
 
 
 async def test_an_unanswered_confirmation_closes_and_says_so(tmp_path):

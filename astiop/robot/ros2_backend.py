@@ -7,7 +7,6 @@ Live state comes from long-lived `ros2 topic echo` streams; long-running verbs r
 from __future__ import annotations
 
 import math
-import os
 import re
 import shutil
 import threading
@@ -21,6 +20,7 @@ import numpy as np
 
 from astiop.robot import ros2_process
 from astiop.robot.catalog import ActionSpec, Catalog, ServiceSpec, TopicSpec, astibot_catalog
+from astiop.robot.grammar import current_distro
 from astiop.robot.interfaces import decode_bytes
 from astiop.robot.output import BackendError, echo_yaml
 from astiop.robot.render import (
@@ -78,10 +78,6 @@ def parse_response(text: str) -> dict[str, Any]:
     return values
 
 
-def ros_distro() -> str:
-    return os.environ.get("ROS_DISTRO", "jazzy").strip().lower() or "jazzy"
-
-
 class Ros2Backend:
     name = "ros2"
     capabilities = frozenset({"commands", "teleop"})
@@ -95,7 +91,7 @@ class Ros2Backend:
             )
         self.executable = path
         self.timeout_s = timeout_s
-        self.distro = ros_distro()
+        self.distro = current_distro()
         self.stream = stream
         self._e_stopped = False
         self._lock = threading.Lock()
@@ -103,7 +99,6 @@ class Ros2Backend:
         self._events: deque[RobotEvent] = deque(maxlen=500)
         self._event_seq = 0
         self._streams: dict[str, TopicStream] = {}
-        self._goals: list[ros2_process.Run] = []
         self._goal_procs: list[Any] = []
         self._last_outcome: str | None = None
         self._map: OccupancyGrid | None = None
@@ -328,8 +323,7 @@ class Ros2Backend:
             self._background(argv, "/stop")
         else:
             failures.append("the robot has no /stop service: goals were canceled directly")
-        for proc in list(self._goal_procs):
-            threading.Thread(target=ros2_process.stop, args=(proc, 3.0), daemon=True).start()
+        self._cancel_goals()
         for f in failures:
             self._event("estop", "error", f)
         return failures

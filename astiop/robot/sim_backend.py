@@ -12,7 +12,7 @@ from astiop.robot import sim_messages as sm
 from astiop.robot.catalog import Catalog, astibot_catalog
 from astiop.robot.interfaces import default_value, interface_show, python_repr
 from astiop.robot.output import BackendError, echo_yaml, indent_yaml
-from astiop.robot.state import RobotEvent, RobotState, TopicStat, from_messages
+from astiop.robot.state import RobotEvent, RobotState, TopicStat, from_messages, yaw_of
 from astiop.robot.validation import Checked
 from astiop.sim.runner import SimRunner
 from astiop.sim.simulator import GoalError, Simulator
@@ -91,12 +91,13 @@ class SimBackend:
     def map_geometry(self):
         return self.sim.map
 
-    def drive(self, twist: dict) -> None:
+    def drive(self, twist: dict, timeout: float = 0.5) -> None:
+        """Hold this velocity for `timeout` s of robot time (teleop, and each `topic pub`)."""
         if self.sim.e_stopped:
             raise BackendError("the E-STOP is engaged")
         try:
             self.sim.set_cmd_vel(
-                twist["linear"]["x"], twist["linear"]["y"], twist["angular"]["z"], timeout=0.5
+                twist["linear"]["x"], twist["linear"]["y"], twist["angular"]["z"], timeout=timeout
             )
         except GoalError as exc:
             raise BackendError(str(exc)) from None
@@ -257,15 +258,7 @@ class SimBackend:
         rate = cmd.options.get("rate", 1.0)
         lines = ["publisher: beginning loop"]
         for i in range(times):
-            if self.sim.e_stopped:
-                raise BackendError("the E-STOP is engaged: publishing stopped")
-            self.sim.set_cmd_vel(
-                twist["linear"]["x"],
-                twist["linear"]["y"],
-                twist["angular"]["z"],
-                timeout=0.5 if times == 1 else max(0.5, 1.5 / rate),
-            )
-            self.last_twist, self.last_twist_t = twist, self.sim.t
+            self.drive(twist, 0.5 if times == 1 else max(0.5, 1.5 / rate))
             lines.append(f"publishing #{i + 1}: {python_repr('geometry_msgs/msg/Twist', twist)}")
             lines.append("")
             if i + 1 < times:
@@ -353,7 +346,7 @@ class SimBackend:
         goal_msg = c.message
         pose = goal_msg["pose"]["pose"]
         x, y = pose["position"]["x"], pose["position"]["y"]
-        th = sm.yaw_of(pose["orientation"])
+        th = yaw_of(pose["orientation"])
         lines = [
             "Waiting for an action server to become available...",
             "Sending goal:",

@@ -29,10 +29,6 @@ def quaternion(yaw: float) -> dict[str, float]:
     return {"x": 0.0, "y": 0.0, "z": math.sin(yaw / 2), "w": math.cos(yaw / 2)}
 
 
-def yaw_of(q: dict[str, float]) -> float:
-    return math.atan2(2 * (q["w"] * q["z"] + q["x"] * q["y"]), 1 - 2 * (q["y"] ** 2 + q["z"] ** 2))
-
-
 def _pose(x: float, y: float, th: float) -> dict[str, Any]:
     return {"position": {"x": x, "y": y, "z": 0.0}, "orientation": quaternion(th)}
 

@@ -120,7 +120,7 @@ class ChatScreen(ConsoleScreen):
         except EmbeddedModelError as exc:
             self._status.update(Text(str(exc), style="red"))
             return
-        self.app.post_message(TurnFinished(result, self.agent.model, ""))
+        self.app.post_message(TurnFinished(result, self.agent.model))
 
     def _before_status(self, widget) -> None:
         self.query_one("#chat-log").mount(widget, before=self._status)

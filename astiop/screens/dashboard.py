@@ -92,7 +92,6 @@ class DashboardScreen(ConsoleScreen):
         self.last_turn = None
         self.query_one("#topics", DataTable).add_columns("topic", "type", "Hz", "age")
         self.query_one("#events", DataTable).add_columns("t", "kind", "message")
-        self._events = [(f"{ev.t:.1f}", ev.kind, ev.message) for ev in self.app.recent_events]
         cat = self.app.services.graph.catalog
         text = Text("services & actions\n", style="bold")
         for s in cat.services.values():
@@ -107,15 +106,15 @@ class DashboardScreen(ConsoleScreen):
         self._show_events()
 
     def on_screen_resume(self) -> None:
-        # on first show too; locations may have changed on the Locations screen
+        # on first show too; locations may have changed on the Locations screen, and events
+        # may have come while another screen was shown
         self.query_one(WarehouseMapView).set_locations(
             [(loc.x, loc.y) for loc in self.app.services.store.list_locations()]
         )
+        self._show_events()
 
     def on_robot_state_sampled(self, msg: RobotStateSampled) -> None:
         self.show_state(msg.state)
-        for ev in msg.events:
-            self._events.append((f"{ev.t:.1f}", ev.kind, ev.message))
         if msg.events:
             self._show_events()
         if msg.stats is not None:
@@ -123,7 +122,6 @@ class DashboardScreen(ConsoleScreen):
 
     def on_turn_finished(self, msg: TurnFinished) -> None:
         self.last_turn = msg.result
-        self.reach = msg.reachable or self.reach
         self.show_agent()
 
     def show_agent(self) -> None:
@@ -185,8 +183,7 @@ class DashboardScreen(ConsoleScreen):
             gauge.show(b.percentage, b.voltage, b.current, b.charging)
 
     def _show_events(self) -> None:
-        self._events = self._events[-EVENT_ROWS:]
         table = self.query_one("#events", DataTable)
         table.clear()
-        for t, kind, message in reversed(self._events):
-            table.add_row(t, Text(kind), Text(message))
+        for ev in reversed(self.app.recent_events[-EVENT_ROWS:]):
+            table.add_row(f"{ev.t:.1f}", Text(ev.kind), Text(ev.message))

@@ -41,15 +41,7 @@ class CommandExecuted(Message):
 
 
 class TurnFinished(Message, bubble=False):
-    def __init__(self, result: Any, model: str, reachable: str):
+    def __init__(self, result: Any, model: str):
         super().__init__()
         self.result = result
         self.model = model
-        self.reachable = reachable
-
-
-class EStopChanged(Message, bubble=False):
-    def __init__(self, engaged: bool, failures: list[str]):
-        super().__init__()
-        self.engaged = engaged
-        self.failures = failures

@@ -26,8 +26,9 @@ from astiop.robot import sim_messages as sm
 from astiop.robot.catalog import astibot_catalog
 from astiop.robot.definitions import DEFINITIONS
 from astiop.robot.interfaces import InterfaceError, fill, interface_show, python_repr
-from astiop.robot.output import echo_yaml, indent_yaml
+from astiop.robot.output import BackendError, echo_yaml, indent_yaml
 from astiop.robot.sim_backend import SimBackend
+from astiop.robot.state import yaw_of
 from astiop.sim.simulator import GoalError, Simulator
 from astiop.store import LocationError, Store
 
@@ -331,12 +332,8 @@ class EmulatedRobot:
         self.cmd_vel_log.append({"mono": time.monotonic(), "twist": twist})
         self._twist_seq += 1
         self.backend.last_twist, self.backend.last_twist_t = twist, self.sim.t
-        if self.sim.e_stopped:
-            return  # the base holds still while e-stopped
-        with contextlib.suppress(GoalError):  # a faulted base ignores velocity commands
-            self.sim.set_cmd_vel(
-                twist["linear"]["x"], twist["linear"]["y"], twist["angular"]["z"], timeout=0.5
-            )
+        with contextlib.suppress(BackendError):  # an e-stopped or faulted base holds still
+            self.backend.drive(twist)
 
     # -- service ----------------------------------------------------------------------------
     def _service_list(self, call: Call, a: dict) -> int:
@@ -404,7 +401,7 @@ class EmulatedRobot:
         pose = goal_msg["pose"]["pose"]
         try:
             goal = self.sim.goto(
-                pose["position"]["x"], pose["position"]["y"], sm.yaw_of(pose["orientation"])
+                pose["position"]["x"], pose["position"]["y"], yaw_of(pose["orientation"])
             )
         except GoalError:
             call.out("Goal was rejected.\n")
