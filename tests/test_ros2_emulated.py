@@ -30,6 +30,11 @@ def until(predicate, timeout: float = 30.0) -> bool:  # returns as soon as it ho
     return False
 
 
+def idle(graph) -> bool:
+    st = graph.state()
+    return st.pose is not None and st.status is not None and st.status.state == "idle"
+
+
 @pytest.fixture
 def robot(monkeypatch):
     with emulated_robot() as folder:
@@ -48,7 +53,12 @@ def gateway(store: Store | None = None, *, stream: bool = True) -> RobotGraph:
 def test_live_state_comes_from_echo_streams(robot):
     graph = gateway()
     try:
-        assert until(lambda: graph.state().battery is not None and graph.state().scan is not None)
+
+        def complete() -> bool:  # each topic has its own stream: wait for all it reads
+            st = graph.state()
+            return None not in (st.battery, st.scan, st.status, st.pose)
+
+        assert until(complete)
         st = graph.state()
         assert st.status.state == "charging" and st.pose.x == pytest.approx(1.15, abs=0.05)
         assert 0.0 < st.battery.percentage <= 1.0
@@ -93,7 +103,7 @@ def test_goal_returns_at_acceptance_and_stop_cancels_it(robot):
     graph = gateway()
     try:
         graph.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=YES)
-        assert until(lambda: graph.state().status and graph.state().status.state == "idle")
+        assert until(lambda: idle(graph))
         t0 = time.monotonic()
         r = graph.run(GOAL, confirm=YES)
         assert r.values["accepted"] and time.monotonic() - t0 < 5
@@ -128,7 +138,7 @@ def test_teleop_holds_one_publisher_and_lapses(robot):
     graph = gateway()
     try:
         graph.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=YES)
-        assert until(lambda: graph.state().status and graph.state().status.state == "idle")
+        assert until(lambda: idle(graph))
         x0 = graph.state().pose.x
         for _ in range(15):
             r = graph.drive(-0.4, 0.0, 0.0)  # it faces west after undocking: +x
@@ -256,7 +266,7 @@ def test_a_goal_with_feedback_is_followed_to_its_result(robot):
     graph = gateway()
     try:
         graph.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=YES)
-        assert until(lambda: graph.state().status and graph.state().status.state == "idle")
+        assert until(lambda: idle(graph))
         near = GOAL.replace("x: 6.0", "x: 3.0") + " --feedback"
         r = graph.run(near, confirm=YES)
         assert r.values["accepted"]

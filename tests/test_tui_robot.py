@@ -71,7 +71,11 @@ async def test_ros2_teleop_moves_the_robot(tmp_path, monkeypatch):
         async with app.run_test(size=SIZE) as pilot:
             graph = app.services.graph
             graph.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=lambda _c: True)
-            idle = lambda: app.robot_state.status and app.robot_state.status.state == "idle"  # noqa: E731
+
+            def idle() -> bool:
+                st = app.robot_state
+                return st.pose is not None and st.status is not None and st.status.state == "idle"
+
             assert await wait_for(pilot, idle)
             x0 = app.robot_state.pose.x
             await pilot.press("f5")
