@@ -73,12 +73,17 @@ def _answers(path: Path) -> bool:
     return True
 
 
-def ros2_calls(folder: Path) -> list[list[str]]:
-    """Every argv the emulated `ros2` was called with, in order."""
+def ros2_log(folder: Path) -> list[dict]:
+    """Every call of the emulated `ros2`: its argv and when it started (time.monotonic)."""
     log = folder / "ros2.log"
     if not log.exists():
         return []
-    return [json.loads(line)["argv"] for line in log.read_text().splitlines()]
+    return [json.loads(line) for line in log.read_text().splitlines()]
+
+
+def ros2_calls(folder: Path) -> list[list[str]]:
+    """Every argv the emulated `ros2` was called with, in order."""
+    return [entry["argv"] for entry in ros2_log(folder)]
 
 
 def cmd_vel_received(folder: Path) -> list[dict]:
