@@ -7,13 +7,14 @@ interpretation reply never is. So nothing a robot prints can make a command run.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import functools
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from astiop.agent import prompts, rules
+from astiop.agent import gate, intent, prompts, rules
 from astiop.agent.llm import (
     Completion,
     LLMError,
@@ -59,10 +60,7 @@ class TurnResult:
     raw_replies: list[str] = field(default_factory=list)
     interaction_id: int | None = None
     repaired: bool = False
-
-    @property
-    def overhead_s(self) -> float:
-        return max(self.total_s - self.llm_s - self.exec_s, 0.0)
+    refused: str = ""  # the intent gate's reason, when it refused the plan
 
     def as_json(self) -> dict[str, Any]:
         return {
@@ -83,6 +81,7 @@ class TurnResult:
             "timings": {"ttft_s": self.ttft_s, "total_s": round(self.total_s, 4)},
             "tokens": {"prompt": self.prompt_tokens, "completion": self.completion_tokens},
             "error": self.error or None,
+            "refused": self.refused or None,
         }
 
 
@@ -99,7 +98,7 @@ class Agent:
         session: str = "",
         nav_wait_s: float = 600.0,
         fallback: bool = True,
-        location_names: list[str] | None = None,
+        places: dict[str, tuple[float, float]] | None = None,
     ):
         if mode not in ("command", "tool") and not endpoint.is_rules:
             raise ValueError(f"mode must be 'command' or 'tool', not '{mode}'")
@@ -113,20 +112,32 @@ class Agent:
         self.nav_wait_s = nav_wait_s
         self.history: list[tuple[str, str]] = []
         self.fallback = fallback  # the rules answer when the model is unreachable
-        self.location_names = location_names
+        self._places = places
         self._schema_ok = True
 
     @property
     def model(self) -> str:
         return self.endpoint.spec.raw
 
-    def locations(self) -> list[str]:
-        if self.location_names is not None:
-            return self.location_names
+    def places(self) -> dict[str, tuple[float, float]]:
+        """The named locations and their x, y: what a request may name."""
+        if self._places is not None:
+            return self._places
         if self.store is not None:
-            return [loc.name for loc in self.store.list_locations()]
+            return {loc.name: (loc.x, loc.y) for loc in self.store.list_locations()}
         geometry = self.graph.map_geometry()
-        return [s.name for s in geometry.stations] if isinstance(geometry, WarehouseMap) else []
+        if isinstance(geometry, WarehouseMap):
+            return {s.name: s.pose[:2] for s in geometry.stations}
+        return {}
+
+    def locations(self) -> list[str]:
+        return list(self.places())
+
+    def gate_reason(self, request: str, commands: list[str]) -> str | None:
+        """Why the plan does not do what the request asks; None when it does."""
+        places = self.places()
+        actions = [(c, gate.action_of(self.graph.review(c).checked)) for c in commands]
+        return gate.check(intent.classify(request, list(places)), actions, places)
 
     # -- the turn ------------------------------------------------------------------------
     async def turn(self, request: str, on_event: OnEvent | None = None) -> TurnResult:
@@ -147,8 +158,12 @@ class Agent:
                 # the baseline answers instead, labelled so; the turn still records the error
                 result.error = f"{exc}; answered by the rules fallback"
                 commands, fallback = rules.plan(request, self.locations()), True
-            await self._execute(commands, result, emit)
-            result.answer = await self._interpret(request, result, emit, fallback)
+            refused = self.gate_reason(request, commands)
+            if refused:
+                self._refuse(commands, refused, result, emit)
+            else:
+                await self._execute(commands, result, emit)
+                result.answer = await self._interpret(request, result, emit, fallback)
         except LLMError as exc:
             result.error = str(exc)
             if not result.answer:
@@ -248,6 +263,10 @@ class Agent:
             commands = await self._repair(messages, c.text, str(exc), ask, parse, result)
         if commands and not result.repaired:
             commands = await self._repair_invalid(messages, c.text, commands, ask, parse, result)
+        refused = self.gate_reason(request, commands)
+        if refused and not result.repaired:
+            with contextlib.suppress(LLMProtocolError):  # else the gate refuses the first plan
+                commands = await self._repair(messages, c.text, refused, ask, parse, result)
         return commands
 
     async def _repair(self, messages, reply, reason, ask, parse, result) -> list[str]:
@@ -277,24 +296,38 @@ class Agent:
         return commands
 
     # -- execution -----------------------------------------------------------------------
+    def _refuse(self, commands: list[str], reason: str, result: TurnResult, emit) -> None:
+        """The gate's refusal: nothing runs, each command is recorded with the reason."""
+        result.refused = reason
+        for seq, cmd in enumerate(commands):
+            ex = Execution(cmd, True, f"refused by the intent gate: {reason}", "actuate")
+            result.commands.append(ex)
+            self._record(result, seq, ex)
+            emit("command", ex)
+        result.answer = f"I did not run this plan: {reason}. Nothing was sent to the robot."
+        emit("answer_token", result.answer)
+
+    def _record(self, result: TurnResult, seq: int, ex: Execution) -> None:
+        if self.store and result.interaction_id:
+            self.store.add_command(
+                result.interaction_id,
+                seq=seq,
+                command=ex.command,
+                valid=int(ex.valid),
+                reason=ex.reason or ex.error or None,
+                kind=ex.kind,
+                executed=int(ex.executed),
+                output=ex.output,
+                values=ex.values,
+            )
+
     async def _execute(self, commands: list[str], result: TurnResult, emit) -> None:
         for seq, cmd in enumerate(commands):
             t0 = time.perf_counter()
             ex = await asyncio.to_thread(self.graph.run, cmd, self.confirm)
             result.exec_s += time.perf_counter() - t0
             result.commands.append(ex)
-            if self.store and result.interaction_id:
-                self.store.add_command(
-                    result.interaction_id,
-                    seq=seq,
-                    command=ex.command,
-                    valid=int(ex.valid),
-                    reason=ex.reason or ex.error or None,
-                    kind=ex.kind,
-                    executed=int(ex.executed),
-                    output=ex.output,
-                    values=ex.values,
-                )
+            self._record(result, seq, ex)
             emit("command", ex)
             more = seq + 1 < len(commands)
             if more and ex.executed and any(k in ex.command for k in NAVIGATING):

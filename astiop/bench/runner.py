@@ -219,7 +219,7 @@ async def _robot_case(store, settings, config, endpoint, case, mode):
         max_tokens=min(config.max_tokens, 160),
         confirm=lambda _c: True,
         fallback=False,
-        location_names=[loc.name for loc in store.list_locations()],
+        places={loc.name: (loc.x, loc.y) for loc in store.list_locations()},
     )
     turn = await agent.turn(case.request)
     truth = sim.snapshot()

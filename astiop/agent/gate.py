@@ -1,0 +1,164 @@
+"""The intent gate: a plan runs only if every command in it does what the request asked.
+
+A question never actuates; a stop request yields only a stop; a request to go to a named place
+yields only a goal at that place's pose; every other actuation must be one the request names.
+The gate sees every plan, from any model or the rules, before confirmation.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from astiop.agent.intent import Intent
+from astiop.robot.validation import Checked
+
+PLACE_TOLERANCE_M = 0.3
+DOCK_PLACE = "charging_dock"
+
+
+@dataclass(frozen=True)
+class Action:
+    """What one checked command would do to the robot."""
+
+    kind: str  # read | list | stop | navigate | dock | undock | load | unload | save | motion
+    # | configure | invalid
+    xy: tuple[float, float] | None = None
+    place: str | None = None
+    twist: tuple[float, float, float] | None = None
+
+    @property
+    def actuating(self) -> bool:
+        return self.kind not in ("read", "list", "invalid")
+
+
+_SERVICE_KINDS = {
+    "/stop": "stop",
+    "/dock": "dock",
+    "/undock": "undock",
+    "/conveyor/load": "load",
+    "/conveyor/unload": "unload",
+    "/save_location": "save",
+    "/list_locations": "list",
+}
+
+
+def action_of(checked: Checked) -> Action:
+    cmd = checked.command
+    if not checked.valid or cmd is None:
+        return Action("invalid")
+    msg = checked.message or {}
+    if cmd.key == ("topic", "pub"):
+        twist = msg.get("twist", msg)
+        lin, ang = twist.get("linear", {}), twist.get("angular", {})
+        v = (float(lin.get("x", 0.0)), float(lin.get("y", 0.0)), float(ang.get("z", 0.0)))
+        return Action("stop" if not any(v) else "motion", twist=v)
+    if cmd.key == ("service", "call"):
+        if cmd.name == "/goto_position":
+            if msg.get("name"):
+                return Action("navigate", place=str(msg["name"]))
+            return Action("navigate", xy=(float(msg.get("x", 0.0)), float(msg.get("y", 0.0))))
+        if cmd.name == "/save_location":
+            return Action("save", place=str(msg.get("name", "")))
+        kind = _SERVICE_KINDS.get(cmd.name or "")
+        if kind:
+            return Action(kind)
+        return Action("read" if checked.kind == "read" else "configure")
+    if cmd.key == ("action", "send_goal"):
+        p = msg.get("pose", {}).get("pose", {}).get("position", {})
+        return Action("navigate", xy=(float(p.get("x", 0.0)), float(p.get("y", 0.0))))
+    if checked.kind == "actuate":
+        return Action("configure")
+    return Action("read")
+
+
+def _sign_matches(asked: float, sent: float) -> bool:
+    return (asked > 0 and sent > 0) or (asked < 0 and sent < 0) or (asked == 0 and sent == 0)
+
+
+def _permits(intent: Intent, action: Action, places: dict[str, tuple[float, float]]) -> bool:
+    if action.kind == intent.kind == "navigate":
+        if intent.xy is not None:
+            want = intent.xy
+        elif intent.place is not None:
+            if action.place is not None:
+                return action.place.lower() == intent.place.lower()
+            want = places.get(intent.place)
+            if want is None:
+                return False
+        else:
+            return False  # the request named no place the robot knows
+        got = places.get(action.place) if action.place is not None else action.xy
+        return got is not None and math.dist(got, want) <= PLACE_TOLERANCE_M
+    if intent.kind == "dock" and action.kind == "navigate":
+        return (action.place or "").lower() == DOCK_PLACE
+    if action.kind == intent.kind == "motion":
+        m = intent.motion
+        if m is None or action.twist is None:
+            return False
+        vx, vy, wz = action.twist
+        return _sign_matches(m.vx, vx) and _sign_matches(m.vy, vy) and _sign_matches(m.wz, wz)
+    if action.kind == intent.kind == "save":
+        return intent.place is None or (action.place or "").lower() == intent.place.lower()
+    return action.kind == intent.kind
+
+
+def check(
+    intents: list[Intent], actions: list[tuple[str, Action]], places: dict[str, tuple[float, float]]
+) -> str | None:
+    """None when the plan does what was asked; else the reason it is refused."""
+    asked = [i for i in intents if i.actuating]
+    only_stop = bool(intents) and all(i.kind == "stop" for i in intents)
+    for text, action in actions:
+        if action.kind == "invalid":
+            continue  # validation refuses it with its own reason
+        if not action.actuating:
+            if only_stop:
+                return f"the request asks only to stop; `{text}` is not a stop"
+            continue
+        if any(_permits(i, action, places) for i in asked):
+            continue
+        return f"`{text}` {_why(action, intents, asked)}"
+    return None
+
+
+def _why(action: Action, intents: list[Intent], asked: list[Intent]) -> str:
+    if not asked:
+        if any(i.kind == "none" for i in intents):
+            return "acts, but the request says not to"
+        return "would act on the robot, but the request only asks a question"
+    wanted = ", ".join(_describe(i) for i in asked)
+    return f"would {_verb(action)}, but the request asks to {wanted}"
+
+
+def _verb(action: Action) -> str:
+    if action.kind == "navigate":
+        where = action.place or (f"({action.xy[0]:g}, {action.xy[1]:g})" if action.xy else "?")
+        return f"drive to {where}"
+    if action.kind == "motion" and action.twist:
+        vx, vy, wz = action.twist
+        return f"move the robot (vx {vx:g}, vy {vy:g}, wz {wz:g})"
+    return {
+        "stop": "stop the robot",
+        "dock": "dock",
+        "undock": "undock",
+        "load": "load the conveyor",
+        "unload": "unload the conveyor",
+        "save": f"save a location '{action.place}'",
+        "configure": "change the robot's configuration",
+    }.get(action.kind, action.kind)
+
+
+def _describe(intent: Intent) -> str:
+    if intent.kind == "navigate":
+        if intent.xy:
+            return f"go to ({intent.xy[0]:g}, {intent.xy[1]:g})"
+        return f"go to {intent.place}" if intent.place else "go to a place it does not know"
+    if intent.kind == "motion" and intent.motion:
+        m = intent.motion
+        return f"move (vx {m.vx:g}, vy {m.vy:g}, wz {m.wz:g})"
+    if intent.kind == "save":
+        return f"save this spot as {intent.place}" if intent.place else "save this spot"
+    return {"load": "load the conveyor", "unload": "unload the conveyor"}.get(
+        intent.kind, intent.kind
+    )
