@@ -133,8 +133,20 @@ def _migrate_v2(db: sqlite_utils.Database) -> None:
     )
 
 
+def _migrate_v3(db: sqlite_utils.Database) -> None:
+    # Grounded answers: the model's own text and why it was replaced; how a started goal ended.
+    db.conn.executescript(
+        """
+        ALTER TABLE interactions ADD COLUMN model_answer TEXT;
+        ALTER TABLE interactions ADD COLUMN grounding TEXT;
+        ALTER TABLE interactions ADD COLUMN outcome TEXT;
+        ALTER TABLE interactions ADD COLUMN outcome_at REAL;
+        """
+    )
+
+
 # Ordered; the database's PRAGMA user_version counts how many have run.
-MIGRATIONS = [_migrate_v1, _migrate_v2]
+MIGRATIONS = [_migrate_v1, _migrate_v2, _migrate_v3]
 SCHEMA_VERSION = len(MIGRATIONS)
 _OUR_TABLES = {
     "locations",

@@ -19,7 +19,8 @@ class ScriptedLLM:
         self.flavour = flavour
         self.replies: list[Reply] = []
         self.default: Reply = "ok"
-        self.mode = "ok"  # ok | slow | garbage | http500 | truncated
+        self.mode = "ok"  # ok | slow | garbage | http500 | truncated | endless
+        self.endless: Callable[[int], str] = lambda i: "again "  # piece i in endless mode
         self.delay_s = 0.0
         self.requests: list[dict] = []
         self.timings = False  # send llama.cpp `timings` in the last chunk
@@ -82,12 +83,24 @@ class ScriptedLLM:
                 self.send_response(200)
                 self.send_header("Content-Type", "text/event-stream")
                 self.end_headers()
+                if server.mode == "endless":  # a server that never stops: until we hang up
+                    self._endless()
+                    return
                 text = server.next_text(body.get("messages", []))
                 pieces = [text[i : i + 3] for i in range(0, len(text), 3)] or [""]
                 if server.flavour == "openai":
                     self._openai(pieces, text)
                 else:
                     self._ollama(pieces)
+
+            def _endless(self):
+                try:
+                    for i in range(10**6):
+                        chunk = {"choices": [{"index": 0, "delta": {"content": server.endless(i)}}]}
+                        self._send(f"data: {json.dumps(chunk)}\n\n")
+                        time.sleep(server.delay_s)
+                except OSError:
+                    pass  # the client hung up
 
             def _send(self, line: str):
                 self.wfile.write(line.encode())

@@ -61,8 +61,11 @@ async def test_chat_actuation_waits_for_the_operator(tmp_path):
         assert type(app.screen).__name__ == "ConfirmModal"
         assert sim_of(app).goal is None  # nothing moved yet
         await pilot.press("y")
-        await app.workers.wait_for_complete()
-        assert sim_of(app).goal is not None and sim_of(app).goal.name == "shipping"
+        await app.workers.wait_for_complete()  # the turn, then its follow-up (fast sim time)
+        await pilot.pause()
+        assert sim_of(app).last_result.name == "shipping"
+        log = " ".join(str(w.render()) for w in app.screen.query(".follow-up"))
+        assert "↳ arrived: shipping (x 37." in log and "(for: send the robot to shipping)" in log
         await pilot.press("f1")  # the goal's event came while Chat was shown
         table = app.screen.query_one("#events", DataTable)
         for _ in range(40):

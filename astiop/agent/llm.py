@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import re
 import time
 from collections.abc import AsyncIterator, Callable
 from dataclasses import dataclass
@@ -60,6 +61,9 @@ class _Options:
     schema: dict | None
     seed: int | None
     grammar: str | None
+    guard: bool = False  # cut a reply that repeats itself or runs past its cap or deadline
+    penalties: bool = False  # llama.cpp's repeat and DRY penalties
+    deadline_s: float | None = None
 
 
 @dataclass(frozen=True)
@@ -109,12 +113,19 @@ class ChatClient:
         on_token: OnToken | None = None,
         seed: int | None = 0,
         grammar: str | None = None,
+        guard: bool = False,
+        penalties: bool = False,
+        deadline_s: float | None = None,
     ) -> Completion:
         """Stream a reply; `on_token` sees each piece of text. One retry if refused.
 
         `schema` constrains the reply to a JSON schema; `grammar` (llama.cpp servers only)
-        to a GBNF grammar, and wins over `schema`."""
-        opts = _Options(max_tokens, temperature, schema, seed, grammar)
+        to a GBNF grammar, and wins over `schema`. With `guard`, a reply that loops, or runs
+        past `max_tokens` or `deadline_s` (a server may ignore the cap or never stop), is cut
+        and ends with finish_reason "repetition", "length" or "deadline"."""
+        opts = _Options(
+            max_tokens, temperature, schema, seed, grammar, guard, penalties, deadline_s
+        )
         for attempt in (0, 1):
             try:
                 return await self._chat_once(messages, opts, on_token)
@@ -144,6 +155,8 @@ class ChatClient:
                         state.add(piece)
                         if on_token:
                             on_token(piece)
+                        if opts.guard and state.cut(opts):
+                            break
         except httpx.ConnectError as exc:
             raise LLMUnavailable(f"{self.label}: cannot connect ({_one_line(str(exc))})") from None
         except httpx.TimeoutException:
@@ -194,6 +207,19 @@ class ChatClient:
         return chunk
 
 
+def repeating(text: str) -> bool:
+    """The text ends in a loop: its last n words three times over (one word: six times)."""
+    words = re.findall(r"\S+", text[-800:])
+    for n in range(1, 16):
+        times = 6 if n == 1 else 3
+        if len(words) < n * times:
+            return False
+        tail = words[-n:]
+        if all(words[len(words) - (k + 1) * n : len(words) - k * n] == tail for k in range(times)):
+            return True
+    return False
+
+
 def _one_line(text: str) -> str:
     return " ".join(text.split())[:200]
 
@@ -214,6 +240,19 @@ class _StreamState:
         if self.ttft is None and piece.strip():
             self.ttft = time.perf_counter() - self.t0
         self.parts.append(piece)
+
+    def cut(self, opts: _Options) -> bool:
+        """Whether the reply must stop here; if so, it is marked done with the reason."""
+        if len(self.parts) > opts.max_tokens + 8:  # a streamed piece is about one token
+            reason = "length"
+        elif opts.deadline_s is not None and time.perf_counter() - self.t0 > opts.deadline_s:
+            reason = "deadline"
+        elif repeating("".join(self.parts[-200:])):
+            reason = "repetition"
+        else:
+            return False
+        self.done, self.finish_reason = True, reason
+        return True
 
     def completion(self) -> Completion:
         total = time.perf_counter() - self.t0
@@ -250,6 +289,8 @@ class OpenAIClient(ChatClient):
         }
         if opts.seed is not None:
             body["seed"] = opts.seed
+        if opts.penalties:  # llama.cpp's server extensions, like `grammar`
+            body.update(repeat_penalty=1.15, repeat_last_n=64, dry_multiplier=0.8)
         if opts.grammar is not None:
             body["grammar"] = opts.grammar  # llama.cpp's server extension
         elif opts.schema is not None:
@@ -305,6 +346,8 @@ class OllamaClient(ChatClient):
         options: dict[str, Any] = {"num_predict": opts.max_tokens, "temperature": opts.temperature}
         if opts.seed is not None:
             options["seed"] = opts.seed
+        if opts.penalties:
+            options["repeat_penalty"] = 1.15
         body: dict[str, Any] = {
             "model": self.model,
             "messages": messages,

@@ -7,8 +7,8 @@ an actuation.
 
 from __future__ import annotations
 
+from astiop.agent.grounding import factual_answer
 from astiop.agent.intent import Intent, classify
-from astiop.agent.summaries import summarize
 from astiop.robot.output import Execution
 
 GOTO = "ros2 service call /goto_position astiop_msgs/srv/GotoPosition"
@@ -64,7 +64,7 @@ def plan(request: str, locations: list[str]) -> list[str]:
     return commands[:3]
 
 
-def interpret(request: str, executions: list[Execution]) -> str:
+def interpret(request: str, executions: list[Execution], waited: list[str] | None = None) -> str:
     if not executions:
         return (
             f"{UNKNOWN}. I understand requests about the robot: position, speed, battery, "
@@ -72,5 +72,4 @@ def interpret(request: str, executions: list[Execution]) -> str:
             "coordinates, short moves, docking, undocking, loading, unloading, saving and "
             "listing locations, stopping."
         )
-    lines = [summarize(ex).split("\n", 1)[-1].strip() for ex in executions]
-    return "[rules] " + " | ".join(lines)
+    return "[rules] " + factual_answer(executions, waited=waited or ())

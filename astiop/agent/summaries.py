@@ -41,8 +41,9 @@ def _summary(command: str, v: Any) -> str | None:
     if "/robot_pose" in command:
         return f"position x {v['x']:.2f} m, y {v['y']:.2f} m, heading {_deg(v['theta']):.0f} deg"
     if "/robot_status" in command:
+        docked = "docked, " if v.get("docked") else ""
         return (
-            f"state {v['state']}, mode {v['mode']}, goal {v['active_goal'] or 'none'}, "
+            f"state {v['state']}, {docked}mode {v['mode']}, goal {v['active_goal'] or 'none'}, "
             f"fault {v['fault'] or 'none'}, speed {v['speed']:.2f} m/s"
         )
     if "/obstacles" in command:

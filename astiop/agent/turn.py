@@ -9,12 +9,13 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import functools
+import re
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from astiop.agent import gate, intent, prompts, rules
+from astiop.agent import gate, grounding, intent, prompts, rules
 from astiop.agent.llm import (
     Completion,
     LLMError,
@@ -41,6 +42,8 @@ from astiop.warehouse import WarehouseMap
 OnEvent = Callable[[str, Any], None]  # ("plan_token" | "command" | "answer_token" | "status", x)
 HISTORY_TURNS = 3
 NAVIGATING = ("/goto_position", "/dock", "/undock", "send_goal")
+MOVING = ("navigating", "docking", "undocking", "blocked")
+DEADLINE_S = 120.0  # no reply streams longer than this, whatever the server does
 
 
 @dataclass
@@ -61,6 +64,11 @@ class TurnResult:
     interaction_id: int | None = None
     repaired: bool = False
     refused: str = ""  # the intent gate's reason, when it refused the plan
+    model_answer: str = ""  # the interpretation as the model wrote it
+    grounding: str = ""  # kept | replaced: why | raw | rules
+    started: str = ""  # the goal this turn started and left running, in words
+    waited: dict[int, str] = field(default_factory=dict)  # command seq -> how its goal ended
+    outcome: str | None = None  # how that goal ended, once it has
 
     def as_json(self) -> dict[str, Any]:
         return {
@@ -82,6 +90,10 @@ class TurnResult:
             "tokens": {"prompt": self.prompt_tokens, "completion": self.completion_tokens},
             "error": self.error or None,
             "refused": self.refused or None,
+            "model_answer": self.model_answer or None,
+            "grounding": self.grounding or None,
+            "started": self.started or None,
+            "outcome": self.outcome,
         }
 
 
@@ -99,7 +111,11 @@ class Agent:
         nav_wait_s: float = 600.0,
         fallback: bool = True,
         places: dict[str, tuple[float, float]] | None = None,
+        interpretation: str = "grounded",
+        interpret_tokens: int = 96,
     ):
+        if interpretation not in ("grounded", "raw"):
+            raise ValueError(f"interpretation must be 'grounded' or 'raw', not '{interpretation}'")
         if mode not in ("command", "tool") and not endpoint.is_rules:
             raise ValueError(f"mode must be 'command' or 'tool', not '{mode}'")
         self.graph = graph
@@ -113,6 +129,8 @@ class Agent:
         self.history: list[tuple[str, str]] = []
         self.fallback = fallback  # the rules answer when the model is unreachable
         self._places = places
+        self.interpretation = interpretation
+        self.interpret_tokens = interpret_tokens
         self._schema_ok = True
 
     @property
@@ -187,6 +205,8 @@ class Agent:
                 result.interaction_id,
                 finished_at=time.time(),
                 answer=result.answer,
+                model_answer=result.model_answer or None,
+                grounding=result.grounding or None,
                 raw_replies=result.raw_replies,
                 ttft_s=result.ttft_s,
                 total_s=result.total_s,
@@ -208,25 +228,38 @@ class Agent:
             self.store.update_interaction(result.interaction_id, raw_replies=result.raw_replies)
 
     async def _ask(
-        self, messages, schema, result: TurnResult, emit, kind: str, grammar: str | None = None
+        self,
+        messages,
+        schema,
+        result: TurnResult,
+        emit,
+        kind: str,
+        grammar: str | None = None,
+        max_tokens: int | None = None,
     ) -> Completion:
         client = await asyncio.to_thread(self.endpoint.client)
         on_token = functools.partial(emit, kind)
         if not self.endpoint.local:
             grammar = None  # GBNF is llama.cpp's; other servers get the JSON schema
+        limits = {
+            "max_tokens": max_tokens or self.max_tokens,
+            "guard": True,
+            "penalties": kind == "answer_token" and self.endpoint.local,
+            "deadline_s": DEADLINE_S,
+        }
         try:
             c = await client.chat(
                 messages,
-                max_tokens=self.max_tokens,
                 on_token=on_token,
                 schema=schema if self._schema_ok else None,
                 grammar=grammar,
+                **limits,
             )
         except LLMHTTPError as exc:
             if schema is None or exc.status not in (400, 422, 501) or not self._schema_ok:
                 raise
             self._schema_ok = False  # this server does not take a JSON schema
-            c = await client.chat(messages, max_tokens=self.max_tokens, on_token=on_token)
+            c = await client.chat(messages, on_token=on_token, **limits)
         self._account(result, c)
         return c
 
@@ -329,25 +362,35 @@ class Agent:
             result.commands.append(ex)
             self._record(result, seq, ex)
             emit("command", ex)
-            more = seq + 1 < len(commands)
-            if more and ex.executed and any(k in ex.command for k in NAVIGATING):
+            if not _started(ex):
+                continue
+            if seq + 1 < len(commands):
                 emit("status", "waiting for the robot to arrive")
                 t1 = time.perf_counter()
-                await asyncio.to_thread(self.graph.wait_until_idle, self.nav_wait_s)
+                outcome = await asyncio.to_thread(self.graph.wait_until_idle, self.nav_wait_s)
                 result.exec_s += time.perf_counter() - t1
+                result.waited[seq] = outcome or "still going"
+            else:
+                result.started = await asyncio.to_thread(self._started_text, ex)
 
     # -- interpretation ------------------------------------------------------------------
     async def _interpret(self, request: str, result: TurnResult, emit, fallback: bool) -> str:
         if self.endpoint.is_rules or fallback:
-            answer = rules.interpret(request, result.commands)
+            answer = rules.interpret(request, result.commands, self._waited_lines(result))
+            if result.started:
+                answer += f" | {result.started}"
             if fallback:
                 answer = "[rules fallback] " + answer
+            result.grounding = "rules"
             emit("answer_token", answer)
             return answer
         if result.commands:
             results = "\n".join(summarize(ex) for ex in result.commands)
+            results += "".join(f"\n{line}" for line in self._waited_lines(result))
         else:
             results = "(no robot command was run)"
+        if result.started:
+            results += f"\n{result.started} (the robot is on its way; it has not arrived)"
         messages = [
             {"role": "system", "content": prompts.interpret_prompt()},
             {
@@ -355,5 +398,106 @@ class Agent:
                 "content": f"Operator request: {request}\n\nResults:\n{results}\n\nAnswer:",
             },
         ]
-        c = await self._ask(messages, None, result, emit, "answer_token")
-        return c.text.strip()
+        c = await self._ask(
+            messages, None, result, emit, "answer_token", max_tokens=self.interpret_tokens
+        )
+        text = result.model_answer = c.text.strip()
+        if self.interpretation == "raw":
+            result.grounding = "raw"
+            return _with_started(text, result.started)
+        outcome = "succeeded" if "succeeded" in result.waited.values() else None
+        facts = grounding.facts_of(request, result.commands, outcome)
+        if c.finish_reason in grounding.REPLY_CUT:
+            reason = f"the reply was cut: {grounding.REPLY_CUT[c.finish_reason]}"
+        else:
+            reason = grounding.unsupported(text, facts) or grounding.missing(text, result.commands)
+        if reason is None:
+            result.grounding = "kept"
+            return _with_started(text, result.started)
+        result.grounding = f"replaced: {reason}"
+        answer = grounding.factual_answer(
+            result.commands, result.started, self._waited_lines(result)
+        )
+        emit("answer_replaced", answer)
+        return answer
+
+    def _waited_lines(self, result: TurnResult) -> list[str]:
+        return [
+            f"{result.commands[seq].command}: goal {outcome}"
+            for seq, outcome in result.waited.items()
+        ]
+
+    def _started_text(self, ex: Execution) -> str:
+        """'goal accepted: shipping, 11.4 m to go' from what the robot reports."""
+        where = _goal_name(ex)
+        deadline = time.monotonic() + 1.0
+        while True:
+            togo = self.graph.state().distance_remaining
+            if togo is not None or time.monotonic() > deadline:
+                break
+            time.sleep(0.05)
+        return f"goal accepted: {where}" + (f", {togo:.1f} m to go" if togo is not None else "")
+
+    # -- the follow-up -------------------------------------------------------------------
+    async def follow_up(self, result: TurnResult, timeout_s: float | None = None) -> str:
+        """Wait for the goal the turn started to end; record and return how it ended.
+
+        Waits in steps of a second, so a canceled follow-up leaves no thread behind for long."""
+        t0 = time.monotonic()
+        deadline = t0 + (self.nav_wait_s if timeout_s is None else timeout_s)
+        outcome, timed_out = None, False
+        while outcome is None:
+            step = max(0.0, min(1.0, deadline - time.monotonic()))
+            outcome = await asyncio.to_thread(self.graph.wait_until_idle, step)
+            if outcome is None and time.monotonic() >= deadline:
+                timed_out = True
+                break
+            state = await asyncio.to_thread(self.graph.state)
+            if state.e_stopped:
+                outcome = "e-stopped"
+            idle = not (state.status and state.status.active_goal)
+            settled = time.monotonic() - t0 > 2.0  # past a status that lags the goal
+            if outcome is None and idle and state.state_word not in MOVING and settled:
+                break
+        state = await asyncio.to_thread(self.graph.state)
+        where = result.started.removeprefix("goal accepted: ").split(",")[0]
+        result.outcome = outcome or ("still going" if timed_out else "ended")
+        if outcome == "succeeded":
+            text = f"arrived: {where}"
+            if state.pose is not None:
+                text += f" (x {state.pose.x:.2f}, y {state.pose.y:.2f})"
+        elif timed_out:
+            text = f"still going to {where}"
+        elif outcome is None:
+            text = f"the goal to {where} ended; the robot did not report how"
+        else:
+            text = f"goal {outcome}: {where}"
+        if self.store and result.interaction_id:
+            self.store.update_interaction(
+                result.interaction_id, outcome=result.outcome, outcome_at=time.time()
+            )
+        return text
+
+
+def _started(ex: Execution) -> bool:
+    """Whether the command started a goal the robot is now driving to."""
+    if not ex.executed or ex.error or not any(k in ex.command for k in NAVIGATING):
+        return False
+    v = ex.values if isinstance(ex.values, dict) else {}
+    return bool(v.get("success") or v.get("accepted"))
+
+
+def _goal_name(ex: Execution) -> str:
+    m = re.search(r"name:\s*'?([\w-]+)", ex.command)
+    if m:
+        return m.group(1)
+    if "/dock" in ex.command:
+        return "the charging dock"
+    if "/undock" in ex.command:
+        return "off the dock"
+    xy = re.search(r"x:\s*(-?[\d.]+).*?y:\s*(-?[\d.]+)", ex.command)
+    return f"({float(xy[1]):g}, {float(xy[2]):g})" if xy else "the goal"
+
+
+def _with_started(text: str, started: str) -> str:
+    return f"{text}\n{started}" if started else text

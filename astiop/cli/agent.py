@@ -17,6 +17,16 @@ def chat(
     model: str = typer.Option(None, "--model", "-m", help="Model spec (default: settings)."),
     mode: str = typer.Option(None, "--mode", help="command (model writes ros2 lines) or tool."),
     yes: bool = typer.Option(False, "--yes", "-y", help="Do not ask before moving the robot."),
+    wait: bool = typer.Option(
+        True,
+        "--wait/--no-wait",
+        help="Wait for a goal the turn started to end, and report how (default: wait).",
+    ),
+    interpretation: str = typer.Option(
+        "grounded",
+        "--interpretation",
+        help="grounded (answers checked against the results) or raw (the model's text).",
+    ),
     as_json: bool = typer.Option(False, "--json"),
 ) -> None:
     """Run one agent turn against the robot (the simulator by default) and print the answer."""
@@ -30,6 +40,8 @@ def chat(
     mode = mode or settings.llm.mode
     if mode not in ("command", "tool"):
         fail(f"--mode must be 'command' or 'tool', not '{mode}'")
+    if interpretation not in ("grounded", "raw"):
+        fail(f"--interpretation must be 'grounded' or 'raw', not '{interpretation}'")
     try:
         endpoint = open_endpoint(
             model or settings.llm.model,
@@ -53,6 +65,7 @@ def chat(
         max_tokens=settings.llm.max_tokens,
         confirm=confirm,
         session="cli",
+        interpretation=interpretation,
     )
 
     def on_event(kind: str, data) -> None:
@@ -65,22 +78,34 @@ def chat(
             )
         elif kind == "answer_token":
             typer.echo(data, nl=False)
+        elif kind == "answer_replaced":
+            typer.echo("\n[checked] the model's reply was not used; from the results:", err=True)
+            typer.echo(data, nl=False)
         elif kind == "status":
             typer.echo(f"... {data}", err=True)
 
+    async def turn_and_follow():
+        result = await agent.turn(text, on_event)
+        follow = ""
+        if result.started and wait:
+            if not as_json:
+                typer.echo(f"\n... {result.started}; waiting for it to end", err=True)
+            follow = await agent.follow_up(result)
+        return result, follow
+
     try:
-        result = asyncio.run(agent.turn(text, on_event))
+        result, follow = asyncio.run(turn_and_follow())
     except EmbeddedModelError as exc:
         fail(str(exc))
     finally:
         endpoint.close()
-    if any(c.executed and c.kind == "actuate" for c in result.commands):
-        graph.wait_until_idle(900.0)  # a started goal ends before this command does
     graph.close()
     if as_json:
-        print_json(result.as_json())
+        print_json({**result.as_json(), "follow_up": follow or None})
     else:
         typer.echo("")
+        if follow:
+            typer.echo(f"↳ {follow}")
         if result.error:
             typer.echo(f"astiop: {result.error}", err=True)
     if result.error:

@@ -117,8 +117,8 @@ class SimBackend:
             time.sleep(0.01)
 
     def wait_until_idle(self, timeout_s: float) -> str | None:
-        if not self.realtime:
-            self.sim.run_goal(timeout_s)
+        if not self.realtime:  # step the simulator; waiting never ends the goal itself
+            self.sim.run_until(lambda: self.sim.goal is None, timeout_s)
         else:
             deadline = time.monotonic() + timeout_s
             while self.sim.goal is not None and time.monotonic() < deadline:

@@ -14,7 +14,12 @@ from astiop.agent.specs import SpecError, open_endpoint
 from astiop.agent.turn import Agent, TurnResult
 from astiop.robot.output import Execution
 from astiop.screens.base import ConsoleScreen
-from astiop.screens.messages import CommandExecuted, ReplyTokenReceived, TurnFinished
+from astiop.screens.messages import (
+    CommandExecuted,
+    GoalEnded,
+    ReplyTokenReceived,
+    TurnFinished,
+)
 
 HELP = (
     "Ask in plain language, e.g. 'what is the battery level?' or 'send the robot to "
@@ -147,7 +152,16 @@ class ChatScreen(ConsoleScreen):
         result = msg.result
         if not self._parts:
             self._before_status(self._answer)
-            self._answer.update(Text(result.answer))
+        self._answer.update(Text(result.answer))  # the checked answer, not the raw stream
+        if result.grounding.startswith("replaced"):
+            why = result.grounding.removeprefix("replaced: ")
+            note = Text(f"⚠ answer built from the results: the model's reply was not used ({why})")
+            note.stylize("yellow italic")
+            self._before_status(Static(note, classes="grounding"))
+        if result.refused:
+            self._before_status(Static(Text("⛔ refused by the intent gate", style="red")))
+        if result.started:
+            self.follow(result)
         info = f"{result.model} · {result.mode} · {result.total_s:.1f} s"
         if result.completion_tokens:
             info += f" · {result.completion_tokens} tokens"
@@ -155,6 +169,17 @@ class ChatScreen(ConsoleScreen):
             info += f" · {result.error}"
         self._status.update(Text(info, style="dim red" if result.error else "dim"))
         self.query_one("#chat-log", VerticalScroll).scroll_end(animate=False)
+
+    @work(group="follow", exit_on_error=False)
+    async def follow(self, result: TurnResult) -> None:
+        text = await self.agent.follow_up(result)
+        self.post_message(GoalEnded(result, text))
+
+    def on_goal_ended(self, msg: GoalEnded) -> None:
+        ok = msg.result.outcome == "succeeded"
+        line = Text(f"↳ {msg.text}   (for: {msg.result.prompt})")
+        line.stylize("green" if ok else "yellow")
+        self._log(Static(line, classes="follow-up"))
 
     def action_cancel(self) -> None:
         cancelled = self.workers.cancel_group(self, "llm")

@@ -45,3 +45,12 @@ class TurnFinished(Message, bubble=False):
         super().__init__()
         self.result = result
         self.model = model
+
+
+class GoalEnded(Message, bubble=False):
+    """How the goal a turn started ended: a follow-up line tied to that turn."""
+
+    def __init__(self, result: Any, text: str):
+        super().__init__()
+        self.result = result
+        self.text = text

@@ -1,0 +1,263 @@
+"""Answers held to what the robot reported.
+
+Every number, state word, arrival, load and health claim in a model's answer is checked against
+this turn's command results. An answer that states what no result supports is replaced by one
+built from the results themselves (`factual_answer`), and the reason is kept.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from typing import Any
+
+from astiop.agent.summaries import STATUS_WORDS, summarize
+from astiop.robot.output import Execution
+
+_NUMBER = re.compile(r"(?<![\w.])-?\d+(?:\.\d+)?(?![\w])")
+_COUNT_WORDS = {
+    "no": 0, "zero": 0, "one": 1, "a single": 1, "two": 2, "three": 3, "four": 4, "five": 5,
+    "six": 6, "seven": 7, "eight": 8, "nine": 9, "ten": 10,
+}  # fmt: skip
+_COUNTED = r"(?:obstacles?|objects?|people|persons?|pallets?|forklifts?|things?|items?)"
+_NEGATION = re.compile(
+    r"\b(?:not|n't|no|never|without|yet to|nor|isn't|aren't|hasn't)\W+(?:\w+\W+){0,2}$", re.I
+)
+# claim word -> the fact words that support it
+STATE_CLAIMS: dict[str, set[str]] = {
+    "idle": {"idle"},
+    "navigating": {"navigating", "moving"},
+    "on its way": {"navigating", "moving"},
+    "en route": {"navigating", "moving"},
+    "moving": {"navigating", "moving", "docking", "undocking"},
+    "driving": {"navigating", "moving", "docking", "undocking"},
+    "stopped": {"stopped"},
+    "stationary": {"stopped"},
+    "standing still": {"stopped"},
+    "docked": {"docked"},
+    "docking": {"docking"},
+    "undocked": {"undocked"},
+    "off the dock": {"undocked"},
+    "undocking": {"undocking"},
+    "charging": {"charging"},
+    "discharging": {"discharging"},
+    "fully charged": {"full"},
+    "blocked": {"blocked", "obstacles"},
+    "obstructed": {"blocked", "obstacles"},
+    "e-stopped": {"e_stopped"},
+    "emergency stop": {"e_stopped"},
+    "fault": {"fault"},
+    "faulted": {"fault"},
+    "error": {"fault", "error"},
+    "loaded": {"loaded"},
+    "empty": {"empty"},
+    "unloaded": {"empty"},
+    "running": {"running"},
+    "healthy": {"healthy"},
+    "no faults": {"healthy"},
+    "no errors": {"healthy"},
+    "nominal": {"healthy"},
+    "clear": {"clear"},
+    "no obstacles": {"clear"},
+    "nothing blocking": {"clear"},
+    "succeeded": {"succeeded"},
+    "successfully": {"succeeded"},
+    "accepted": {"accepted", "succeeded"},
+}
+ARRIVAL = re.compile(
+    r"\b(?:arrived|arrives|has reached|reached|reaches|is now at|is at the|made it to|got to|"
+    r"gets to|is there|has gotten to|"
+    r"successfully navigated|completed the (?:trip|route|navigation)|finished navigating)\b",
+    re.I,
+)
+OBSTACLE_KINDS = re.compile(
+    r"\b(?:person|people|human|worker|pallet|forklift|box|drone|cart|vehicle|robot arm|"
+    r"wall of boxes|crate|animal)s?\b",
+    re.I,
+)
+REPLY_CUT = {"length": "it ran past its token cap", "repetition": "it repeated itself",
+             "deadline": "it ran past its deadline"}  # fmt: skip
+
+
+@dataclass
+class Facts:
+    numbers: list[float] = field(default_factory=list)
+    words: set[str] = field(default_factory=set)
+    kinds: set[str] = field(default_factory=set)  # obstacle kinds reported
+
+
+def _walk(value: Any, key: str = "") -> Iterable[tuple[str, float]]:
+    if isinstance(value, dict):
+        for k, v in value.items():
+            yield from _walk(v, str(k))
+    elif isinstance(value, list):
+        for v in value[:400]:
+            yield from _walk(v, key)
+    elif isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value):
+        yield key, float(value)
+
+
+def facts_of(request: str, executions: list[Execution], outcome: str | None = None) -> Facts:
+    facts = Facts()
+    facts.numbers += [float(n) for n in _NUMBER.findall(request)]
+    for ex in executions:
+        facts.numbers += [float(n) for n in _NUMBER.findall(ex.command)]
+        if not ex.executed or ex.error:
+            facts.words.add("error")
+            continue
+        facts.numbers += [float(n) for n in _NUMBER.findall(summarize(ex))]
+        for key, v in _walk(ex.values):
+            facts.numbers.append(v)
+            if key in ("percentage",):
+                facts.numbers.append(v * 100)
+            if key in ("theta", "bearing", "angle_min", "angle_max", "yaw", "z", "w"):
+                facts.numbers.append(math.degrees(v))
+        _words(ex, facts)
+    if outcome == "succeeded":
+        facts.words |= {"arrived", "succeeded", "stopped"}
+    elif outcome:
+        facts.words.add(outcome)
+    return facts
+
+
+def _words(ex: Execution, facts: Facts) -> None:
+    v = ex.values if isinstance(ex.values, dict) else {}
+    cmd = ex.command
+    if "/robot_status" in cmd and "state" in v:
+        facts.words.add(str(v["state"]))
+        if v.get("fault"):
+            facts.words.add("fault")
+        if float(v.get("speed", 0.0)) < 0.05:
+            facts.words.add("stopped")
+        else:
+            facts.words.add("moving")
+        facts.words.add("docked" if v.get("docked") else "undocked")
+        if v.get("e_stopped"):
+            facts.words.add("e_stopped")
+    if "/battery_status" in cmd and "percentage" in v:
+        facts.words.add(STATUS_WORDS.get(v.get("power_supply_status"), "unknown"))
+    if "/conveyor/status" in cmd and "loaded" in v:
+        facts.words.add("loaded" if v["loaded"] else "empty")
+        facts.words.add("running" if v.get("running") else "stopped")
+    if "/obstacles" in cmd and "count" in v:
+        facts.words.add("obstacles" if v["count"] else "clear")
+        facts.kinds |= {str(o.get("kind", "")).lower() for o in v.get("obstacles", [])}
+    if "/diagnostics" in cmd and "status" in v:
+        levels = [s.get("level", 0) for s in v["status"]]
+        facts.words.add("healthy" if all(lv == 0 for lv in levels) else "fault")
+    if "/odom" in cmd and "twist" in v:
+        t = v["twist"]["twist"]["linear"]
+        facts.words.add("moving" if math.hypot(t["x"], t["y"]) >= 0.05 else "stopped")
+    if "success" in v:
+        facts.words.add("succeeded" if v["success"] else "error")
+        if v["success"] and "/goto_position" in cmd:
+            facts.words |= {"accepted", "navigating", "moving"}
+        if v["success"] and "/stop" in cmd:
+            facts.words.add("stopped")
+        if v["success"] and "/dock" in cmd:
+            facts.words |= {"accepted", "docking", "moving"}
+        if v["success"] and "/undock" in cmd:
+            facts.words |= {"accepted", "undocking", "moving"}
+    if v.get("accepted"):
+        facts.words |= {"accepted", "navigating", "moving"}
+
+
+def _decimals(text: str) -> int:
+    return len(text.split(".", 1)[1]) if "." in text else 0
+
+
+def _negated(answer: str, start: int, end: int | None = None) -> bool:
+    """'not charging', 'no fault', or 'fault none' as the summaries write it."""
+    after = answer[end : end + 8] if end is not None else ""
+    return bool(_NEGATION.search(answer[max(0, start - 40) : start])) or bool(
+        re.match(r"\W*none\b", after)
+    )
+
+
+def unsupported(answer: str, facts: Facts) -> str | None:
+    """The first claim of `answer` the results do not support, as a reason; None if none."""
+    for m in _NUMBER.finditer(answer):
+        claim = float(m.group())
+        tol = 10.0 ** -_decimals(m.group()) + 1e-9
+        if not any(abs(claim - f) <= tol for f in facts.numbers):
+            return f"it states {m.group()}, which no result reported"
+    for m in re.finditer(rf"\b({'|'.join(_COUNT_WORDS)})\s+(?:\w+\s+)?{_COUNTED}", answer, re.I):
+        n = _COUNT_WORDS[m.group(1).lower()]
+        if n == 0 and "clear" in facts.words:
+            continue
+        if not any(abs(n - f) < 1e-9 for f in facts.numbers):
+            return f"it states '{m.group()}', which no result reported"
+    lowered = answer.lower()
+    for claim, support in STATE_CLAIMS.items():
+        for m in re.finditer(rf"\b{re.escape(claim)}\b", lowered):
+            asserted = claim.startswith("no ") or not _negated(lowered, m.start(), m.end())
+            if asserted and not support & facts.words:
+                return f"it says '{claim}', which no result reported"
+    for m in ARRIVAL.finditer(answer):
+        if not _negated(lowered, m.start()) and "arrived" not in facts.words:
+            return f"it says '{m.group()}', but no arrival was reported"
+    for m in OBSTACLE_KINDS.finditer(answer):
+        kind = m.group().lower().rstrip("s")
+        if kind not in facts.kinds and not _negated(lowered, m.start()):
+            return f"it mentions a {kind}, which no result reported"
+    return None
+
+
+def missing(answer: str, executions: list[Execution]) -> str | None:
+    """The first fact a read command reported that the answer leaves out; None if none."""
+    numbers = [float(n) for n in _NUMBER.findall(answer)]
+    text = answer.lower()
+
+    def said(value: float, tol: float) -> bool:
+        return any(abs(n - value) <= tol for n in numbers)
+
+    for ex in executions:
+        v = ex.values
+        if not ex.executed or ex.error or not isinstance(v, dict):
+            continue
+        cmd, gap = ex.command, None
+        if "/robot_pose" in cmd and "x" in v:
+            gap = None if said(v["x"], 0.1) and said(v["y"], 0.1) else "position (x, y)"
+        elif "/battery_status" in cmd and "percentage" in v:
+            p = v["percentage"]
+            gap = None if said(p * 100, 1.0) or said(p, 0.01) else "battery percentage"
+        elif "/obstacles" in cmd and "count" in v:
+            n = v["count"]
+            words = [w for w, k in _COUNT_WORDS.items() if k == n]
+            ok = said(n, 0) or any(re.search(rf"\b{w}\b", text) for w in words)
+            ok = ok or (n == 0 and bool(re.search(r"\b(?:clear|nothing|none)\b", text)))
+            gap = None if ok else "obstacle count"
+        elif "/robot_status" in cmd and "state" in v:
+            state = str(v["state"])
+            ok = state in text or state.replace("_", " ") in text
+            gap = None if ok or (state == "e_stopped" and "e-stop" in text) else "state"
+        elif "/conveyor/status" in cmd and "loaded" in v:
+            words = ["loaded"] if v["loaded"] else ["empty", "not loaded", "unloaded", "no load"]
+            gap = None if any(w in text for w in words) else "load state"
+        elif "/odom" in cmd and "twist" in v:
+            t = v["twist"]["twist"]["linear"]
+            gap = None if said(math.hypot(t["x"], t["y"]), 0.05) else "speed"
+        elif "/diagnostics" in cmd and "status" in v:
+            healthy = all(st.get("level", 0) == 0 for st in v["status"])
+            pattern = (
+                r"\b(?:ok|healthy|normal|no faults?|nominal)\b" if healthy else r"fault|error|warn"
+            )
+            gap = None if re.search(pattern, text) else "health"
+        if gap:
+            return f"it leaves out the {gap} the robot reported"
+    return None
+
+
+def factual_answer(
+    executions: list[Execution], started: str = "", waited: Iterable[str] = ()
+) -> str:
+    """The results in words: the same facts the summaries compute, nothing else."""
+    if not executions:
+        return "No robot command was run."
+    lines = [summarize(ex).split("\n", 1)[-1].strip() for ex in executions]
+    lines += [w.split(": ", 1)[-1] for w in waited]
+    if started:
+        lines.append(started)
+    return " | ".join(lines)
