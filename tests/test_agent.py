@@ -158,3 +158,34 @@ async def test_history_is_kept_within_a_session(llm, store):
     await agent.turn("and again")
     contents = [m["content"] for m in llm.requests[-2]["messages"]]
     assert "hello" in contents
+
+
+async def test_a_plan_the_gate_refuses_never_reaches_confirmation_or_the_robot(llm, store):
+    asked = []
+    llm.replies = [
+        '{"commands": ["ros2 service call /goto_position astiop_msgs/srv/GotoPosition '
+        '\\"{name: \'cps_storage\'}\\""]}',
+        '{"commands": ["ros2 service call /dock std_srvs/srv/Trigger"]}',  # the repair: still no
+    ]
+    agent = make_agent(llm, store, confirm=lambda c: asked.append(c) or True)
+    result = await agent.turn("Cancel the current mission")
+    assert result.refused and "asks to stop" in result.refused
+    assert not asked and not any(c.executed for c in result.commands)
+    assert agent.graph.backend.sim.goal is None and agent.graph.backend.sim.speed() == 0.0
+    assert "did not run" in result.answer
+    reasons = [r[0] for r in store.db.execute("SELECT reason FROM commands").fetchall()]
+    assert reasons and all(r.startswith("refused by the intent gate") for r in reasons)
+    assert "asks to stop" in llm.requests[1]["messages"][-1]["content"]  # one repair, with why
+
+
+async def test_a_repaired_plan_that_passes_the_gate_runs(llm, store):
+    llm.replies = [
+        '{"commands": ["ros2 service call /dock std_srvs/srv/Trigger"]}',
+        '{"commands": ["ros2 service call /undock std_srvs/srv/Trigger"]}',
+        "Undocking.",
+    ]
+    result = await make_agent(llm, store).turn("Leave the dock")
+    assert not result.refused and result.commands[0].command.endswith(
+        "/undock std_srvs/srv/Trigger"
+    )
+    assert result.commands[0].executed

@@ -92,3 +92,27 @@ async def test_agent_sends_the_robot_to_a_named_location(endpoint, store):
     outcome = sim.run_goal(300)
     assert outcome.status == "succeeded" and outcome.name == "assembly_station"
     assert abs(sim.pose[0] - 8.0) < 0.1 and abs(sim.pose[1] - 22.6) < 0.1
+
+
+async def test_every_narrowed_tool_grammar_is_one_llama_cpp_parses(endpoint, store):
+    """The grammar offers only the tools of the request's intent; each variant must parse."""
+    agent = make_agent(endpoint, store)
+    result = await agent.turn("Save this spot as bay_9")
+    assert result.commands and result.commands[0].command.startswith(
+        "ros2 service call /save_location"
+    )
+    assert "bay" in result.commands[0].command and result.commands[0].values["success"] is True
+    result = await agent.turn("Leave the dock")
+    assert [c.command for c in result.commands] == [
+        "ros2 service call /undock std_srvs/srv/Trigger"
+    ]
+
+
+async def test_a_grounded_answer_states_only_what_the_robot_reported(endpoint, store):
+    from astiop.agent import grounding
+
+    result = await make_agent(endpoint, store).turn("is anything blocking the robot?")
+    facts = grounding.facts_of(result.prompt, result.commands)
+    assert result.grounding in ("kept",) or result.grounding.startswith("replaced: ")
+    assert grounding.unsupported(result.answer, facts) is None
+    assert grounding.missing(result.answer, result.commands) is None

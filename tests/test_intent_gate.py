@@ -5,8 +5,11 @@ import pytest
 from astiop.agent import rules
 from astiop.agent.gate import action_of, check
 from astiop.agent.intent import classify
+from astiop.agent.specs import open_endpoint
 from astiop.robot.catalog import astibot_catalog
 from astiop.robot.validation import validate
+from astiop.store import Store
+from benchmarks.agent_requests import load_requests, run_one
 from tests.test_rules import GOTO, LOCS
 
 PLACES = {
@@ -154,6 +157,7 @@ GATE = [
     ),
     ("Load the conveyor", [f"ros2 service call /conveyor/unload {TRIGGER}"], "load the conveyor"),
     ("Drive to the loading bay", [f"{GOTO} \"{{name: 'shipping'}}\""], "does not know"),
+    ("Start charging", [f"{GOTO} \"{{name: 'charging_dock'}}\""], "asks to dock"),  # not docking
 ]
 
 
@@ -174,7 +178,6 @@ PASS = [
             '"{pose: {header: {frame_id: map}, pose: {position: {x: 37.5, y: 4.1}}}}"'
         ],
     ),
-    ("Go charge", [f"{GOTO} \"{{name: 'charging_dock'}}\""]),
     ("Where is the robot?", [READ.format("/robot_pose"), READ.format("/odom")]),
     (
         "Go to shipping then unload",
@@ -196,3 +199,42 @@ def test_gate_passes_a_plan_that_does_what_was_asked(request_text, plan):
 @pytest.mark.parametrize("text", [t for t, _ in INTENTS + RULES])
 def test_the_rules_plan_always_passes_the_gate(text):
     assert gate(text, *rules.plan(text, LOCS)) is None
+
+
+async def test_the_rules_on_the_held_out_requests_are_right_without_wrong_actuations(tmp_path):
+    """The held-out set of benchmarks/agent_requests.py, run through a real turn on seeded
+    simulators with confirmation off: the rules must name the right command for ≥ 90% and
+    never run an actuation the request did not ask for."""
+    store = Store(tmp_path / "held-out.db")
+    endpoint = open_endpoint("rules")
+    rows = [await run_one(c, endpoint, "tool", "grounded", store) for c in load_requests()]
+    assert len(rows) >= 30
+    right = sum(r["right"] and not r["wrong_actuations"] for r in rows)
+    assert right >= 0.9 * len(rows), [r["request"] for r in rows if not r["right"]]
+    assert not [r for r in rows if r["wrong_actuations"]]
+    assert all(r["answer_true"] and not r["loops"] and not r["unsupported"] for r in rows)
+
+
+NARROW = [
+    ("How much juice is left?", {"read"}),
+    ("Leave the dock", {"undock"}),
+    ("Go to shipping then unload", {"navigate", "unload"}),
+    ("Save this spot as bay_2", {"save"}),
+    ("Strafe left", {"motion"}),
+    ("Which places do you know?", {"list"}),
+    ("Sing a song", None),  # unknown: every tool is offered
+]
+
+
+@pytest.mark.parametrize("text,kinds", NARROW)
+def test_the_model_is_offered_the_tools_of_the_requests_intent(text, kinds):
+    from astiop.agent.tools import build_tools, narrow, tool_grammar
+
+    tools = build_tools(astibot_catalog(), LOCS)
+    offered = narrow(tools, classify(text, LOCS))
+    assert {t.kind for t in offered} == (kinds or {t.kind for t in tools})
+    grammar = tool_grammar(offered)
+    ids = {t.id for t in offered}
+    assert ("name ::=" in grammar) == bool(ids - {"drive_xy", "save_here"})
+    assert ("drive_xy" in grammar) == ("drive_xy" in ids)
+    assert ("save_here" in grammar) == ("save_here" in ids)

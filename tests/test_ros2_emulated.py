@@ -297,3 +297,26 @@ def test_the_emulated_ros2_refuses_what_real_ros2_refuses(robot):
     assert exclusive.returncode == 2 and "not allowed with argument" in exclusive.stderr
     no_type = ros2("service", "call", "/stop")
     assert no_type.returncode == 2 and "service_type" in no_type.stderr
+
+
+async def test_a_turn_on_the_robot_says_started_then_follows_up_arrived(robot, store):
+    """A service goal reports no outcome on a real robot: the follow-up reads the robot's
+    own pose at the target, and the gate and grounding work on the live graph."""
+    from astiop.agent.specs import open_endpoint
+    from astiop.agent.turn import Agent
+
+    graph = gateway()
+    try:
+        graph.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=YES)
+        assert until(lambda: idle(graph))
+        agent = Agent(graph, open_endpoint("rules"), store, confirm=YES)
+        result = await agent.turn("go to x 4, y 3")
+        assert result.started.startswith("goal accepted: (4, 3)") and "arriv" not in result.answer
+        follow = await agent.follow_up(result, timeout_s=60)
+        assert follow.startswith("arrived: (4, 3)") and result.outcome == "succeeded"
+        refused = await agent.turn("is anything blocking it? then dock")
+        assert not refused.refused  # a question and a dock: both asked
+        wrong = agent.gate_reason("where is it?", ["ros2 service call /dock std_srvs/srv/Trigger"])
+        assert wrong and "question" in wrong
+    finally:
+        graph.close()

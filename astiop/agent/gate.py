@@ -14,7 +14,6 @@ from astiop.agent.intent import Intent
 from astiop.robot.validation import Checked
 
 PLACE_TOLERANCE_M = 0.3
-DOCK_PLACE = "charging_dock"
 
 
 @dataclass(frozen=True)
@@ -90,8 +89,6 @@ def _permits(intent: Intent, action: Action, places: dict[str, tuple[float, floa
             return False  # the request named no place the robot knows
         got = places.get(action.place) if action.place is not None else action.xy
         return got is not None and math.dist(got, want) <= PLACE_TOLERANCE_M
-    if intent.kind == "dock" and action.kind == "navigate":
-        return (action.place or "").lower() == DOCK_PLACE
     if action.kind == intent.kind == "motion":
         m = intent.motion
         if m is None or action.twist is None:

@@ -99,15 +99,38 @@ def _walk(value: Any, key: str = "") -> Iterable[tuple[str, float]]:
         yield key, float(value)
 
 
-def facts_of(request: str, executions: list[Execution], outcome: str | None = None) -> Facts:
+def _strings(value: Any) -> Iterable[str]:
+    if isinstance(value, dict):
+        for v in value.values():
+            yield from _strings(v)
+    elif isinstance(value, list):
+        for v in value[:100]:
+            yield from _strings(v)
+    elif isinstance(value, str) and len(value) <= 80:
+        yield value.lower()
+
+
+def facts_of(
+    request: str,
+    executions: list[Execution],
+    outcome: str | None = None,
+    reported: Iterable[str] = (),
+) -> Facts:
+    """What this turn's results support; `reported` is other text the robot reported (the
+    started goal's distance to go, a waited goal's outcome)."""
     facts = Facts()
     facts.numbers += [float(n) for n in _NUMBER.findall(request)]
+    for line in reported:
+        facts.numbers += [float(n) for n in _NUMBER.findall(line)]
+        facts.words |= set(re.findall(r"[a-z_-]+", line.lower()))
     for ex in executions:
         facts.numbers += [float(n) for n in _NUMBER.findall(ex.command)]
         if not ex.executed or ex.error:
             facts.words.add("error")
             continue
         facts.numbers += [float(n) for n in _NUMBER.findall(summarize(ex))]
+        for text in _strings(ex.values):
+            facts.words |= {text, *re.findall(r"[a-z_-]+", text)}
         for key, v in _walk(ex.values):
             facts.numbers.append(v)
             if key in ("percentage",):

@@ -21,8 +21,8 @@ _XY = re.compile(
 )
 _THETA = re.compile(rf"\b(?:facing|heading|theta|angle|yaw)\s*(?:of\s*|=\s*)?{_NUM}", re.I)
 _SPLIT = re.compile(
-    r"[.?!;]\s+|\s*(?:,?\s*\band then\b|,?\s*\bthen\b|,?\s*\bafter that\b|,?\s*\band\b(?=\s+(?:"
-    r"report|check|tell|read|give|show|say|what|is|are|look|list|load|unload|dock|undock|"
+    r"[.?!;:]\s+|\s*(?:,?\s*\band then\b|,?\s*\bthen\b|,?\s*\bafter that\b|,?\s*\band\b(?=\s+(?:"
+    r"report|check|tell|read|give|show|say|what|is|are|look|list|load|unload|offload|dock|undock|"
     r"come|go|return|drive|send|stop|save|turn|rotate)))\s*",
     re.I,
 )
@@ -49,15 +49,21 @@ _UNDOCK = re.compile(
     re.I,
 )
 _DOCK = re.compile(
-    r"\b(?:dock|recharge|charge|charging|plug (?:in|it in|yourself in))\b(?!\s+(?:level|left|state))",
+    r"\b(?:dock|recharge|charge|charging|charger|plug\b.{0,20}\bin)\b"
+    r"(?!\s+(?:level|left|state))",
     re.I,
 )
 _UNLOAD = re.compile(
-    r"\b(?:unload|offload|drop (?:it|off|the)|hand (?:it |the \w+ )?over|deliver|put (?:it )?down|"
+    r"\b(?:unload|unloading|offload|drop (?:it|off|the)|hand (?:it |the \w+ )?over|"
+    r"put (?:it )?down|"
     r"release the (?:load|pallet|box|tote))\b",
     re.I,
 )
-_LOAD = re.compile(r"\b(?:load|pick up|take on|receive)\b(?!\s+sensor)", re.I)
+_LOAD = re.compile(
+    r"(?<!the )(?<!a )(?<!its )(?<!your )\b(?:load|(?:start|begin) loading|pick up|take on|"
+    r"receive)\b(?!\s+sensor)",
+    re.I,
+)
 _SAVE = re.compile(
     r"\b(?:save|remember|mark|store|record|bookmark|name|call)\b.*"
     r"\b(?:spot|place|position|location|pose|point|here|this)\b",
@@ -72,6 +78,10 @@ _LIST = re.compile(
 _MOVE = re.compile(
     r"\b(?:go|goes|send|drive|navigate|move|head|take|bring|return|inspect|visit|patrol|travel|"
     r"proceed|get|come|relocate|reposition|roll)\b",
+    re.I,
+)
+_PLACE_VERB = re.compile(
+    r"\b(?:position|place|put|park)\b|\b(?:need|want)\s+(?:the robot|it)\s+(?:at|in|by)\b",
     re.I,
 )
 _MOTION = re.compile(
@@ -93,19 +103,26 @@ _READ_VERB = re.compile(
 READS = [
     (r"conveyor|load sensor|lamp|belt|carrying|loaded|cargo|payload", "/conveyor/status"),
     (
-        r"battery|charge|charged|charging|juice|power level|voltage|percent|how much energy",
+        r"battery|charge|charged|charging|juice|power|voltage|percent|energy",
         "/battery_status",
     ),
     (
-        r"obstacle|blocking|blocked|in the way|around (?:the robot|it|you)|nearby|clear|"
-        r"obstruct|in front",
+        r"obstacle|blocking|blocked|in the way|(?:the|its|robot's) way|around (?:the robot|it|you)|"
+        r"nearby|near it|near the robot|close by|clear|free|obstruct|in front|objects?|detect",
         "/obstacles",
     ),
     (r"lidar|laser|scan|range finder", "/scan"),
     (r"diagnos|health|error|fault|warning|motor|problem", "/diagnostics"),
     (r"how fast|speed|velocity|moving|odometry|odom", "/odom"),
-    (r"where|position|location|pose|coordinates|heading", "/robot_pose"),
-    (r"status|state|doing|busy|idle|docked|navigating|mode|goal|stop", "/robot_status"),
+    (
+        r"where|position|location|pose|coordinates|heading|locate|find the robot|x and y|"
+        r"part of the floor",
+        "/robot_pose",
+    ),
+    (
+        r"status|state|doing|busy|idle|docked|navigating|mode|goal|stop|up to|working on|task",
+        "/robot_status",
+    ),
 ]
 
 
@@ -154,7 +171,7 @@ def _strip(clause: str) -> tuple[str, bool]:
 
 def classify_clause(clause: str, places: list[str]) -> Intent:
     text, asked = _strip(clause)
-    question = not asked and bool(_QUESTION.match(text))
+    question = not asked and (bool(_QUESTION.match(text)) or text.endswith("?"))
     if question:
         if _LIST.search(text):
             return Intent("list", clause)
@@ -184,7 +201,7 @@ def classify_clause(clause: str, places: list[str]) -> Intent:
         return Intent("save", clause, place=m.group(1) if m else None)
     if _LIST.search(text):
         return Intent("list", clause)
-    if _MOVE.search(text) or _MOTION.search(text):
+    if _MOVE.search(text) or _MOTION.search(text) or _PLACE_VERB.search(text) or _XY.search(text):
         target = _target(text, places)
         if target is not None:
             return replace(target, clause=clause)
@@ -230,7 +247,7 @@ def _motion(text: str) -> Motion:
     return Motion(vx=speed, seconds=seconds)
 
 
-_FILLER = {"the", "to", "go", "robot", "send", "drive", "a", "at", "of", "over", "back", "head"}
+_FILLER = {"the", "to", "go", "robot", "send", "drive", "at", "of", "over", "back", "head"}
 
 
 def resolve_place(text: str, places: list[str]) -> str | None:
@@ -250,11 +267,27 @@ def resolve_place(text: str, places: list[str]) -> str | None:
         parts = name.lower().split("_")
         if len(parts) > 1 and re.search(rf"\b{re.escape(' '.join(parts[-2:]))}\b", joined):
             return name
+    # the distinctive words a phrase shares with a name: "inspection area b", "assembly"
+    scores = {name: _shared(tokens, name.lower().split("_")) for name in places}
+    best = max(scores.values(), default=0)
+    winners = [n for n, sc in scores.items() if sc == best]
+    if best > 0 and len(winners) == 1:
+        return winners[0]
     for token in tokens:
-        for name in places:
-            if len(token) >= 5 and token in name.lower().split("_"):
-                return name
         close = difflib.get_close_matches(token, [n.lower() for n in places], n=1, cutoff=0.8)
         if close:
             return next(n for n in places if n.lower() == close[0])
     return None
+
+
+_AREA_WORDS = {"zone", "area", "region", "section", "bay", "aisle", "station", "inspection"}
+
+
+def _shared(tokens: list[str], parts: list[str]) -> int:
+    score = 0
+    for i, token in enumerate(tokens):
+        if len(token) >= 5 and token in parts:
+            score += 1
+        elif len(token) <= 2 and token in parts and i and tokens[i - 1] in _AREA_WORDS:
+            score += 1  # "zone b", "area a": a one-letter part only after an area word
+    return score

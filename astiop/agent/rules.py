@@ -67,9 +67,9 @@ def plan(request: str, locations: list[str]) -> list[str]:
 def interpret(request: str, executions: list[Execution], waited: list[str] | None = None) -> str:
     if not executions:
         return (
-            f"{UNKNOWN}. I understand requests about the robot: position, speed, battery, "
-            "status, obstacles, the lidar, diagnostics, the conveyor, going to a location or "
-            "coordinates, short moves, docking, undocking, loading, unloading, saving and "
-            "listing locations, stopping."
+            f"{UNKNOWN}. I understand requests about the robot's position, speed, battery, "
+            "status, obstacles, lidar, diagnostics and conveyor, and requests to go to a "
+            "location or coordinates, move a little, dock, undock, load, unload, save or list "
+            "locations, and stop."
         )
     return "[rules] " + factual_answer(executions, waited=waited or ())

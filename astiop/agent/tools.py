@@ -7,8 +7,11 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from dataclasses import dataclass
 
+from astiop.agent.intent import Intent, Motion
+from astiop.agent.rules import command_for
 from astiop.robot.catalog import Catalog
 
 READABLE_EXCLUDED = {"/cmd_vel", "/tf", "/tf_static", "/plan"}
@@ -20,7 +23,8 @@ GOTO_TYPE = "astiop_msgs/srv/GotoPosition"
 class Tool:
     id: str
     description: str
-    command: str | None  # None: rendered from x, y, theta_deg
+    command: str | None  # None: rendered from the step's own fields
+    kind: str = "read"  # what it does, as the request's intent names it (astiop.agent.intent)
 
 
 class ToolError(ValueError):
@@ -46,7 +50,24 @@ SERVICE_TOOLS = {
     "/conveyor/load": "load",
     "/conveyor/unload": "unload",
 }
+SERVICE_KINDS = {
+    "/stop": "stop",
+    "/dock": "dock",
+    "/undock": "undock",
+    "/conveyor/load": "load",
+    "/conveyor/unload": "unload",
+}
 COORDINATES = "drive_xy"
+SAVE = "save_here"
+# short bounded moves, rendered like the rules render them (always inside the safety clamp)
+MOTION_TOOLS = {
+    "forward": Motion(vx=0.3),
+    "backward": Motion(vx=-0.3),
+    "strafe_left": Motion(vy=0.3),
+    "strafe_right": Motion(vy=-0.3),
+    "turn_left": Motion(wz=0.6),
+    "turn_right": Motion(wz=-0.6),
+}
 
 
 def build_tools(catalog: Catalog, locations: list[str]) -> list[Tool]:
@@ -62,30 +83,57 @@ def build_tools(catalog: Catalog, locations: list[str]) -> list[Tool]:
             name,
             f"drives to {name}",
             f"ros2 service call /goto_position {GOTO_TYPE} \"{{name: '{name}'}}\"",
+            "navigate",
         )
         for name in locations
     ]
     if "/goto_position" in catalog.services:
-        tools.append(Tool(COORDINATES, "drives to x, y in metres", None))
+        tools.append(Tool(COORDINATES, "drives to x, y in metres", None, "navigate"))
     tools += [
         Tool(
             SERVICE_TOOLS.get(s.name, s.name),
             f"calls {s.name}",
             f"ros2 service call {s.name} {TRIGGER}",
+            SERVICE_KINDS.get(s.name, "other"),
         )
         for s in catalog.services.values()
         if s.type == TRIGGER
     ]
+    if "/cmd_vel" in catalog.topics:
+        tools += [
+            Tool(name, f"moves the robot ({name.replace('_', ' ')}) for 2 s", _motion(m), "motion")
+            for name, m in MOTION_TOOLS.items()
+        ]
+    if "/save_location" in catalog.services:
+        tools.append(Tool(SAVE, "saves the robot's pose under a new name", None, "save"))
     if "/list_locations" in catalog.services:
         tools.append(
             Tool(
                 "locations",
                 "calls /list_locations",
                 "ros2 service call /list_locations astiop_msgs/srv/ListLocations",
+                "list",
             )
         )
-    tools.append(Tool("none", "no robot command is needed", None))
+    tools.append(Tool("none", "no robot command is needed", None, "none"))
     return tools
+
+
+def narrow(tools: list[Tool], intents: list[Intent]) -> list[Tool]:
+    """The tools that can do what the request asks, when every clause's intent is known:
+    a question gets the reads, a stop the stop, a trip the places. The model still picks
+    which; the gate checks the pick."""
+    kinds = {i.kind for i in intents}
+    if not kinds or kinds & {"unknown", "none"}:
+        return tools
+    kept = [t for t in tools if t.kind in kinds]
+    return kept or tools
+
+
+def _motion(m: Motion) -> str:
+    command = command_for(Intent("motion", motion=m))
+    assert command is not None
+    return command
 
 
 def _gbnf_literal(text: str) -> str:
@@ -94,15 +142,21 @@ def _gbnf_literal(text: str) -> str:
 
 def tool_grammar(tools: list[Tool]) -> str:
     """GBNF for llama.cpp: the schema's language with no free whitespace, which small models
-    otherwise fill until the token limit."""
-    names = " | ".join(_gbnf_literal(t.id) for t in tools if t.id != COORDINATES)
-    return (
-        'root ::= "{\\"steps\\":[" step ("," step)? ("," step)? "]}"\n'
-        'step ::= "{\\"tool\\":" name "}" | "{\\"tool\\":\\"drive_xy\\",\\"x\\":" '
-        'num ",\\"y\\":" num "}"\n'
-        f"name ::= {names}\n"
-        'num ::= "-"? [0-9]{1,3} ("." [0-9]{1,3})?\n'
-    )
+    otherwise fill until the token limit. Only the offered tools can be written."""
+    ids = {t.id for t in tools}
+    steps = []
+    names = " | ".join(_gbnf_literal(t.id) for t in tools if t.id not in (COORDINATES, SAVE))
+    if names:
+        steps.append('"{\\"tool\\":" name "}"')
+    if COORDINATES in ids:
+        steps.append('"{\\"tool\\":\\"drive_xy\\",\\"x\\":" num ",\\"y\\":" num "}"')
+    if SAVE in ids:
+        steps.append('"{\\"tool\\":\\"save_here\\",\\"name\\":\\"" [a-z0-9_]{1,32} "\\"}"')
+    grammar = 'root ::= "{\\"steps\\":[" step ("," step)? ("," step)? "]}"\n'
+    grammar += f"step ::= {' | '.join(steps)}\n"
+    if names:
+        grammar += f"name ::= {names}\n"
+    return grammar + 'num ::= "-"? [0-9]{1,3} ("." [0-9]{1,3})?\n'
 
 
 def command_grammar() -> str:
@@ -128,6 +182,7 @@ def tool_schema(tools: list[Tool]) -> dict:
                         "x": {"type": "number"},
                         "y": {"type": "number"},
                         "theta_deg": {"type": "number"},
+                        "name": {"type": "string", "pattern": "^[a-z0-9_]{1,32}$"},
                     },
                     "required": ["tool"],
                 },
@@ -163,6 +218,13 @@ def render(step: dict, tools: list[Tool]) -> str | None:
         return None
     if tool.command is not None:
         return tool.command
+    if tool.id == SAVE:
+        name = step.get("name")
+        if not isinstance(name, str) or not re.fullmatch(r"[a-z0-9_]{1,32}", name):
+            raise ToolError(f'"{SAVE}" needs a "name" of lower-case letters, digits and _')
+        command = command_for(Intent("save", place=name))
+        assert command is not None
+        return command
     try:
         x, y = float(step["x"]), float(step["y"])
         theta = math.radians(float(step.get("theta_deg", 0.0)))

@@ -1,7 +1,9 @@
 """One agent turn: plan commands with the model, check and run them, explain the results.
 
 Only the planning reply, written before any robot output is seen, is turned into commands; the
-interpretation reply never is. So nothing a robot prints can make a command run.
+interpretation reply never is. So nothing a robot prints can make a command run. The intent
+gate (`gate`) holds the plan to what the request asked before anything runs, and the answer is
+held to what the robot reported (`grounding`).
 """
 
 from __future__ import annotations
@@ -9,13 +11,11 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import functools
-import re
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from typing import Any
 
-from astiop.agent import gate, grounding, intent, prompts, rules
+from astiop.agent import gate, goals, grounding, intent, prompts, rules
 from astiop.agent.llm import (
     Completion,
     LLMError,
@@ -25,12 +25,14 @@ from astiop.agent.llm import (
     LLMUnavailable,
 )
 from astiop.agent.replies import ReplyError, commands_from_reply, steps_from_reply
+from astiop.agent.result import TurnResult
 from astiop.agent.specs import LLMEndpoint
 from astiop.agent.summaries import summarize
 from astiop.agent.tools import (
     build_tools,
     command_grammar,
     command_schema,
+    narrow,
     tool_grammar,
     tool_schema,
 )
@@ -41,60 +43,7 @@ from astiop.warehouse import WarehouseMap
 
 OnEvent = Callable[[str, Any], None]  # ("plan_token" | "command" | "answer_token" | "status", x)
 HISTORY_TURNS = 3
-NAVIGATING = ("/goto_position", "/dock", "/undock", "send_goal")
-MOVING = ("navigating", "docking", "undocking", "blocked")
 DEADLINE_S = 120.0  # no reply streams longer than this, whatever the server does
-
-
-@dataclass
-class TurnResult:
-    model: str
-    mode: str
-    prompt: str
-    commands: list[Execution] = field(default_factory=list)
-    answer: str = ""
-    ttft_s: float | None = None
-    total_s: float = 0.0
-    llm_s: float = 0.0
-    exec_s: float = 0.0
-    prompt_tokens: int = 0
-    completion_tokens: int = 0
-    error: str = ""
-    raw_replies: list[str] = field(default_factory=list)
-    interaction_id: int | None = None
-    repaired: bool = False
-    refused: str = ""  # the intent gate's reason, when it refused the plan
-    model_answer: str = ""  # the interpretation as the model wrote it
-    grounding: str = ""  # kept | replaced: why | raw | rules
-    started: str = ""  # the goal this turn started and left running, in words
-    waited: dict[int, str] = field(default_factory=dict)  # command seq -> how its goal ended
-    outcome: str | None = None  # how that goal ended, once it has
-
-    def as_json(self) -> dict[str, Any]:
-        return {
-            "model": self.model,
-            "mode": self.mode,
-            "prompt": self.prompt,
-            "commands": [
-                {
-                    "command": c.command,
-                    "valid": c.valid,
-                    "reason": c.reason,
-                    "executed": c.executed,
-                    "output": c.output,
-                }
-                for c in self.commands
-            ],
-            "answer": self.answer,
-            "timings": {"ttft_s": self.ttft_s, "total_s": round(self.total_s, 4)},
-            "tokens": {"prompt": self.prompt_tokens, "completion": self.completion_tokens},
-            "error": self.error or None,
-            "refused": self.refused or None,
-            "model_answer": self.model_answer or None,
-            "grounding": self.grounding or None,
-            "started": self.started or None,
-            "outcome": self.outcome,
-        }
 
 
 class Agent:
@@ -113,6 +62,7 @@ class Agent:
         places: dict[str, tuple[float, float]] | None = None,
         interpretation: str = "grounded",
         interpret_tokens: int = 96,
+        narrow_tools: bool = True,
     ):
         if interpretation not in ("grounded", "raw"):
             raise ValueError(f"interpretation must be 'grounded' or 'raw', not '{interpretation}'")
@@ -131,6 +81,7 @@ class Agent:
         self._places = places
         self.interpretation = interpretation
         self.interpret_tokens = interpret_tokens
+        self.narrow_tools = narrow_tools
         self._schema_ok = True
 
     @property
@@ -270,6 +221,8 @@ class Agent:
             return rules.plan(request, locations)
         if self.mode == "tool":
             tools = build_tools(self.graph.catalog, locations)
+            if self.narrow_tools:
+                tools = narrow(tools, intent.classify(request, locations))
             system, schema = prompts.tool_prompt(tools), tool_schema(tools)
             grammar = tool_grammar(tools)
 
@@ -362,7 +315,7 @@ class Agent:
             result.commands.append(ex)
             self._record(result, seq, ex)
             emit("command", ex)
-            if not _started(ex):
+            if not goals.started(ex):
                 continue
             if seq + 1 < len(commands):
                 emit("status", "waiting for the robot to arrive")
@@ -371,7 +324,8 @@ class Agent:
                 result.exec_s += time.perf_counter() - t1
                 result.waited[seq] = outcome or "still going"
             else:
-                result.started = await asyncio.to_thread(self._started_text, ex)
+                result.started = await asyncio.to_thread(goals.started_text, self.graph, ex)
+                result.target = goals.target_of(ex, self.places())
 
     # -- interpretation ------------------------------------------------------------------
     async def _interpret(self, request: str, result: TurnResult, emit, fallback: bool) -> str:
@@ -406,7 +360,9 @@ class Agent:
             result.grounding = "raw"
             return _with_started(text, result.started)
         outcome = "succeeded" if "succeeded" in result.waited.values() else None
-        facts = grounding.facts_of(request, result.commands, outcome)
+        facts = grounding.facts_of(
+            request, result.commands, outcome, [result.started, *self._waited_lines(result)]
+        )
         if c.finish_reason in grounding.REPLY_CUT:
             reason = f"the reply was cut: {grounding.REPLY_CUT[c.finish_reason]}"
         else:
@@ -427,76 +383,16 @@ class Agent:
             for seq, outcome in result.waited.items()
         ]
 
-    def _started_text(self, ex: Execution) -> str:
-        """'goal accepted: shipping, 11.4 m to go' from what the robot reports."""
-        where = _goal_name(ex)
-        deadline = time.monotonic() + 1.0
-        while True:
-            togo = self.graph.state().distance_remaining
-            if togo is not None or time.monotonic() > deadline:
-                break
-            time.sleep(0.05)
-        return f"goal accepted: {where}" + (f", {togo:.1f} m to go" if togo is not None else "")
-
     # -- the follow-up -------------------------------------------------------------------
     async def follow_up(self, result: TurnResult, timeout_s: float | None = None) -> str:
-        """Wait for the goal the turn started to end; record and return how it ended.
-
-        Waits in steps of a second, so a canceled follow-up leaves no thread behind for long."""
-        t0 = time.monotonic()
-        deadline = t0 + (self.nav_wait_s if timeout_s is None else timeout_s)
-        outcome, timed_out = None, False
-        while outcome is None:
-            step = max(0.0, min(1.0, deadline - time.monotonic()))
-            outcome = await asyncio.to_thread(self.graph.wait_until_idle, step)
-            if outcome is None and time.monotonic() >= deadline:
-                timed_out = True
-                break
-            state = await asyncio.to_thread(self.graph.state)
-            if state.e_stopped:
-                outcome = "e-stopped"
-            idle = not (state.status and state.status.active_goal)
-            settled = time.monotonic() - t0 > 2.0  # past a status that lags the goal
-            if outcome is None and idle and state.state_word not in MOVING and settled:
-                break
-        state = await asyncio.to_thread(self.graph.state)
-        where = result.started.removeprefix("goal accepted: ").split(",")[0]
-        result.outcome = outcome or ("still going" if timed_out else "ended")
-        if outcome == "succeeded":
-            text = f"arrived: {where}"
-            if state.pose is not None:
-                text += f" (x {state.pose.x:.2f}, y {state.pose.y:.2f})"
-        elif timed_out:
-            text = f"still going to {where}"
-        elif outcome is None:
-            text = f"the goal to {where} ended; the robot did not report how"
-        else:
-            text = f"goal {outcome}: {where}"
+        """Wait for the goal the turn started to end; record and return how it ended."""
+        wait = self.nav_wait_s if timeout_s is None else timeout_s
+        result.outcome, text = await goals.follow(self.graph, result.started, wait, result.target)
         if self.store and result.interaction_id:
             self.store.update_interaction(
                 result.interaction_id, outcome=result.outcome, outcome_at=time.time()
             )
         return text
-
-
-def _started(ex: Execution) -> bool:
-    """Whether the command started a goal the robot is now driving to."""
-    if not ex.executed or ex.error or not any(k in ex.command for k in NAVIGATING):
-        return False
-    v = ex.values if isinstance(ex.values, dict) else {}
-    return bool(v.get("success") or v.get("accepted"))
-
-
-def _goal_name(ex: Execution) -> str:
-    m = re.search(r"name:\s*'?([\w-]+)", ex.command)
-    if m:
-        return m.group(1)
-    if "/dock" in ex.command:
-        return "the charging dock"
-    if "/undock" in ex.command:
-        return "off the dock"
-    xy = re.search(r"x:\s*(-?[\d.]+).*?y:\s*(-?[\d.]+)", ex.command)
-    return f"({float(xy[1]):g}, {float(xy[2]):g})" if xy else "the goal"
 
 
 def _with_started(text: str, started: str) -> str:

@@ -26,6 +26,7 @@ class ModelResult:
     timeouts: int
     by_category: dict[str, float] = field(default_factory=dict)
     by_level: dict[str, float] = field(default_factory=dict)
+    by_case: dict[str, float] = field(default_factory=dict)  # stage 2: over its paraphrases
 
     def as_json(self) -> dict[str, Any]:
         return {
@@ -38,6 +39,7 @@ class ModelResult:
             "timeouts": self.timeouts,
             "by_category": {k: round(v, 1) for k, v in self.by_category.items()},
             "by_level": {k: round(v, 1) for k, v in self.by_level.items()},
+            "by_case": {k: round(v, 1) for k, v in self.by_case.items()},
         }
 
 
@@ -85,10 +87,10 @@ def load_report(store: Store, run_id: int) -> Report:
     return Report(run_id, run["stage"], run["status"], wall, results, rows)
 
 
-def _breakdown(rows: list[dict], key: str, value) -> dict[str, float]:
+def _breakdown(rows: list[dict], key, value) -> dict[str, float]:
     by: dict[str, list[float]] = defaultdict(list)
     for r in rows:
-        by[r[key]].append(value(r))
+        by[key(r) if callable(key) else r[key]].append(value(r))
     return {k: _mean(v) for k, v in sorted(by.items())}
 
 
@@ -144,6 +146,9 @@ def _stage2(groups, all_rows) -> list[ModelResult]:
             "both_valid": bv,
             "speed": sp,
             "mean_total_s": _mean(r["metrics"].get("total_s") or 0.0 for r in rows),
+            # actuations a model ran that its case did not ask for; the gate's refusals
+            "wrong_actuations": float(sum(r["metrics"].get("wrong_actuations", 0) for r in rows)),
+            "refused": float(sum(bool(r["metrics"].get("refused")) for r in rows)),
         }
 
         def both_valid(r):
@@ -160,6 +165,7 @@ def _stage2(groups, all_rows) -> list[ModelResult]:
                 sum(r["outcome"] == "timeout" for r in rows),
                 _breakdown(rows, "category", both_valid),
                 _breakdown(rows, "category", lambda r: r["metrics"].get("command", 0.0)),
+                _breakdown(rows, lambda r: r["metrics"].get("base", r["case_id"]), both_valid),
             )
         )
     return out
@@ -193,6 +199,9 @@ def to_markdown(rep: Report) -> str:
     what = "quality" if rep.stage == 1 else "command score"
     lines += ["", f"## By {'level' if rep.stage == 1 else 'category'} ({what}, 0-100)", ""]
     lines += _matrix(rep.results, "by_level")
+    if rep.stage == 2:
+        lines += ["", "## By case (both-valid over the request and its paraphrases, 0-100)", ""]
+        lines += _matrix(rep.results, "by_case")
     return "\n".join(lines) + "\n"
 
 

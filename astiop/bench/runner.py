@@ -33,6 +33,7 @@ class RunConfig:
     timeout_s: float = 120.0
     max_tokens: int = 384
     concurrency: int = 1
+    interpretation: str = "grounded"  # or raw: the model's words, as the paper scores them
 
 
 @dataclass(frozen=True)
@@ -220,6 +221,7 @@ async def _robot_case(store, settings, config, endpoint, case, mode):
         confirm=lambda _c: True,
         fallback=False,
         places={loc.name: (loc.x, loc.y) for loc in store.list_locations()},
+        interpretation=config.interpretation,
     )
     turn = await agent.turn(case.request)
     truth = sim.snapshot()
@@ -235,6 +237,10 @@ async def _robot_case(store, settings, config, endpoint, case, mode):
         "total_s": turn.total_s,
         "ttft_s": turn.ttft_s,
         "tokens": turn.completion_tokens,
+        "base": case.base or case.id,
+        "wrong_actuations": len(stage2.wrong_actuations(turn, case.expect)),
+        "refused": bool(turn.refused),
+        "grounding": turn.grounding,
         **score.details,
     }
     outcome = "error" if turn.error and not turn.commands else "ok"

@@ -79,27 +79,59 @@ class CaseScore:
     details: dict[str, Any] = field(default_factory=dict)
 
 
-def _matches(expected: str, command: str, store: Store) -> bool:
-    words = expected.split()
-    verb, sub, name, args = words[0], words[1], words[2], dict(w.split("=", 1) for w in words[3:])
+def matches(expected: str, command: str) -> bool:
+    """Whether `command` is what `expected` names: "verb sub /name" with name=, x= y=, or
+    sign=vx,vy,wz for a velocity; alternatives separated by " | "."""
     try:
         cmd = parse(command)
     except CommandSyntaxError:
         return False
+    return any(_matches(alt.split(), cmd) for alt in expected.split("|"))
+
+
+def _sign(v: Any) -> int:
+    try:
+        f = float(v)
+    except (TypeError, ValueError):
+        return 0
+    return (f > 1e-9) - (f < -1e-9)
+
+
+def _matches(words: list[str], cmd) -> bool:
+    verb, sub, name, args = words[0], words[1], words[2], dict(w.split("=", 1) for w in words[3:])
     if cmd.key != (verb, sub) or cmd.name != name:
         return False
     values = cmd.args.get("values") or {}
+    if not isinstance(values, dict):
+        return not args
+    if "sign" in args:
+        twist = values.get("twist", values)
+        lin, ang = twist.get("linear") or {}, twist.get("angular") or {}
+        got = [_sign(lin.get("x", 0)), _sign(lin.get("y", 0)), _sign(ang.get("z", 0))]
+        return got == [int(v) for v in args["sign"].split(",")]
     if "name" in args:
         return str(values.get("name", "")).lower() == args["name"].lower()
     if "x" in args:
+        pose = (
+            values.get("pose", {}).get("pose", {}).get("position") if "pose" in values else values
+        )
         try:
             return (
-                abs(float(values.get("x", math.nan)) - float(args["x"])) <= 0.3
-                and abs(float(values.get("y", math.nan)) - float(args["y"])) <= 0.3
+                abs(float(pose.get("x", math.nan)) - float(args["x"])) <= 0.3
+                and abs(float(pose.get("y", math.nan)) - float(args["y"])) <= 0.3
             )
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, AttributeError):
             return False
     return True
+
+
+def wrong_actuations(turn: TurnResult, expect: tuple[str, ...] | list[str]) -> list[str]:
+    """Actuating commands that ran although the case did not ask for them."""
+    return [
+        c.command
+        for c in turn.commands
+        if c.executed and c.kind == "actuate" and not any(matches(e, c.command) for e in expect)
+    ]
 
 
 def check_outcome(case: RobotCase, sim: Simulator, store: Store) -> dict[str, bool]:
@@ -158,7 +190,7 @@ def score_case(
     case: RobotCase, turn: TurnResult, truth: SimState, sim: Simulator, store: Store
 ) -> CaseScore:
     ran = [c.command for c in turn.commands if c.executed and not c.error]
-    matched = [any(_matches(e, c, store) for c in ran) for e in case.expect]
+    matched = [any(matches(e, c) for c in ran) for e in case.expect]
     outcome = check_outcome(case, sim, store)
     # full marks need every expected command and the outcome; half for part of it
     if all(matched) and all(outcome.values()):

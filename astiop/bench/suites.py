@@ -36,6 +36,7 @@ class RobotCase:
     setup: dict[str, Any] = field(default_factory=dict)
     answer: tuple[str, ...] = ()
     outcome: dict[str, Any] = field(default_factory=dict)
+    base: str = ""  # for a paraphrase: the id of the case it rephrases
 
     @property
     def level(self) -> str:
@@ -66,16 +67,22 @@ def stage1() -> tuple[str, tuple[KnowledgeCase, ...]]:
 
 @cache
 def stage2() -> tuple[RobotCase, ...]:
+    """Every case, then its paraphrases as cases of their own (ID.p1, ID.p2, ...)."""
     data = yaml.safe_load(prompts_path("bench", "stage2.yaml").read_text(encoding="utf-8"))
-    return tuple(
-        RobotCase(
-            c["id"],
-            c["category"],
-            c["request"],
-            tuple(c["expect"]),
-            c.get("setup", {}),
-            tuple(c.get("answer", [])),
-            c.get("outcome", {}),
-        )
-        for c in data["cases"]
-    )
+    cases = []
+    for c in data["cases"]:
+        requests = [c["request"], *c.get("paraphrases", [])]
+        for k, request in enumerate(requests):
+            cases.append(
+                RobotCase(
+                    c["id"] if k == 0 else f"{c['id']}.p{k}",
+                    c["category"],
+                    request,
+                    tuple(c["expect"]),
+                    c.get("setup", {}),
+                    tuple(c.get("answer", [])),
+                    c.get("outcome", {}),
+                    base=c["id"],
+                )
+            )
+    return tuple(cases)

@@ -35,6 +35,11 @@ def run_bench(
     timeout: float = typer.Option(120.0, help="Seconds a case may take."),
     max_tokens: int = typer.Option(384, help="Longest reply, in tokens."),
     concurrency: int = typer.Option(1, help="Cases at once, for servers that allow it."),
+    interpretation: str = typer.Option(
+        "grounded",
+        "--interpretation",
+        help="Stage 2 answers: grounded (checked against the results) or raw (as the paper).",
+    ),
     resume: int = typer.Option(None, help="Finish an interrupted run by its id."),
     as_json: bool = typer.Option(False, "--json"),
 ) -> None:
@@ -57,6 +62,8 @@ def run_bench(
                 fail("give at least one --model (e.g. --model rules --model embedded)")
             if mode not in ("command", "tool", "both"):
                 fail("--mode is command, tool or both")
+            if interpretation not in ("grounded", "raw"):
+                fail("--interpretation is grounded or raw")
             if limit is not None and limit < 1:
                 fail("--limit must be at least 1")
             for spec in models:
@@ -71,6 +78,7 @@ def run_bench(
                 timeout,
                 max_tokens,
                 concurrency,
+                interpretation,
             )
             run_id = runner.create_run(store, config)
     except (runner.BenchError, SpecError) as exc:

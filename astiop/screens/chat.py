@@ -145,7 +145,8 @@ class ChatScreen(ConsoleScreen):
         if not self._parts:
             self._before_status(self._answer)
         self._parts.append(msg.text)
-        self._answer.update(Text("".join(self._parts)))
+        # dim until the turn ends: the shown answer is the checked one, not this stream
+        self._answer.update(Text("".join(self._parts), style="dim italic"))
 
     def on_turn_finished(self, msg: TurnFinished) -> None:
         # after every token and command message of the turn: they were posted before it

@@ -1,0 +1,110 @@
+"""A goal a turn started: what the robot reported when it accepted it, and how it ended.
+
+A turn never waits for its last goal; it says what was started, and the follow-up says how it
+ended (arrived, aborted, canceled, e-stopped) when it does.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import math
+import re
+import time
+
+from astiop.robot.graph import RobotGraph
+from astiop.robot.output import Execution
+
+NAVIGATING = ("/goto_position", "/dock", "/undock", "send_goal")
+MOVING = ("navigating", "docking", "undocking", "blocked")
+ARRIVED_M = 0.3
+STATUS_LAG_S = 2.0  # a status stream may still say idle this long after a goal starts
+
+
+def started(ex: Execution) -> bool:
+    """Whether the command started a goal the robot is now driving to."""
+    if not ex.executed or ex.error or not any(k in ex.command for k in NAVIGATING):
+        return False
+    v = ex.values if isinstance(ex.values, dict) else {}
+    return bool(v.get("success") or v.get("accepted"))
+
+
+def goal_name(ex: Execution) -> str:
+    m = re.search(r"name:\s*'?([\w-]+)", ex.command)
+    if m:
+        return m.group(1)
+    if "/undock" in ex.command:
+        return "undock"
+    if "/dock" in ex.command:
+        return "dock"
+    xy = re.search(r"x:\s*(-?[\d.]+).*?y:\s*(-?[\d.]+)", ex.command)
+    return f"({float(xy[1]):g}, {float(xy[2]):g})" if xy else "the goal"
+
+
+def target_of(ex: Execution, places: dict[str, tuple[float, float]]) -> tuple[float, float] | None:
+    """Where the goal is, when the command says: a named place's x, y or the coordinates."""
+    name = goal_name(ex)
+    if name in places:
+        return places[name]
+    xy = re.search(r"x:\s*(-?[\d.]+).*?y:\s*(-?[\d.]+)", ex.command)
+    return (float(xy[1]), float(xy[2])) if xy else None
+
+
+def started_text(graph: RobotGraph, ex: Execution) -> str:
+    """'goal accepted: shipping, 11.4 m to go', the distance along the robot's own /plan."""
+    deadline = time.monotonic() + 1.0
+    while True:
+        togo = graph.state().distance_remaining
+        if togo is not None or time.monotonic() > deadline:
+            break
+        time.sleep(0.05)
+    text = f"goal accepted: {goal_name(ex)}"
+    return text + (f", {togo:.1f} m to go" if togo is not None else "")
+
+
+async def follow(
+    graph: RobotGraph,
+    started_line: str,
+    timeout_s: float,
+    target: tuple[float, float] | None = None,
+) -> tuple[str, str]:
+    """Wait for the goal to end: (outcome, a line for the operator).
+
+    A robot that reports no outcome (a service goal ends as an idle status) arrived when its
+    reported pose is within ARRIVED_M of the target. Waits in steps of a second, so a canceled
+    follow-up leaves no thread behind for long."""
+    t0 = time.monotonic()
+    deadline = t0 + timeout_s
+    outcome, timed_out = None, False
+    while outcome is None:
+        step = max(0.0, min(1.0, deadline - time.monotonic()))
+        outcome = await asyncio.to_thread(graph.wait_until_idle, step)
+        if outcome is None and time.monotonic() >= deadline:
+            timed_out = True
+            break
+        state = await asyncio.to_thread(graph.state)
+        if state.e_stopped:
+            outcome = "e-stopped"
+        idle = not (state.status and state.status.active_goal)
+        settled = time.monotonic() - t0 > STATUS_LAG_S
+        if outcome is None and idle and state.state_word not in MOVING and settled:
+            break
+    state = await asyncio.to_thread(graph.state)
+    where = re.sub(r", [\d.]+ m to go$", "", started_line.removeprefix("goal accepted: "))
+    off = None
+    if outcome is None and not timed_out and target is not None and state.pose is not None:
+        off = math.dist((state.pose.x, state.pose.y), target)
+        if off <= ARRIVED_M:
+            outcome = "succeeded"
+    if outcome == "succeeded":
+        text = f"arrived: {where}"
+        if state.pose is not None:
+            text += f" (x {state.pose.x:.2f}, y {state.pose.y:.2f})"
+    elif timed_out:
+        text = f"still going to {where}"
+    elif off is not None:
+        outcome, text = "stopped short", f"stopped short of {where}: {off:.1f} m from it"
+    elif outcome is None:
+        text = f"the goal to {where} ended; the robot did not report how"
+    else:
+        text = f"goal {outcome}: {where}"
+    return outcome or ("still going" if timed_out else "ended"), text
