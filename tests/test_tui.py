@@ -195,3 +195,32 @@ async def test_dashboard_says_when_the_model_server_is_down(tmp_path):
         await app.workers.wait_for_complete()
         await pilot.pause()
         assert "DOWN" in str(app.screen.query_one("#agent").render())
+
+
+async def test_a_refused_plan_and_a_replaced_answer_are_shown_as_such(tmp_path):
+    from tests.scripted_llm import ScriptedLLM
+
+    llm = ScriptedLLM("openai")
+    llm.replies = [  # tool mode; an unclear request is offered every tool
+        '{"steps": [{"tool": "dock"}]}',
+        '{"steps": [{"tool": "dock"}]}',  # the repair: still no
+        '{"steps": [{"tool": "obstacles"}]}',
+        "A forklift blocks the robot.",
+    ]
+    try:
+        app = console(tmp_path, model=f"openai:scripted@{llm.url}")
+        async with app.run_test(size=SIZE) as pilot:
+            await pilot.press("f2")
+            await pilot.pause()
+            for request in ("hmm, the robot", "is anything blocking the robot?"):
+                app.screen.query_one(Input).value = request
+                await pilot.press("enter")
+                await app.workers.wait_for_complete()
+                await pilot.pause()
+                assert type(app.screen).__name__ == "ChatScreen"  # no confirmation asked
+            text = " ".join(str(w.render()) for w in app.screen.query("Static"))
+            assert "⛔ refused by the intent gate" in text and "did not run this plan" in text
+            assert "⚠ answer built from the results" in text and "0 obstacles detected" in text
+            assert sim_of(app).docked()
+    finally:
+        llm.close()

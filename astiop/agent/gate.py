@@ -123,7 +123,9 @@ def _why(action: Action, intents: list[Intent], asked: list[Intent]) -> str:
     if not asked:
         if any(i.kind == "none" for i in intents):
             return "acts, but the request says not to"
-        return "would act on the robot, but the request only asks a question"
+        if intents and all(i.kind in ("read", "list") for i in intents):
+            return "would act on the robot, but the request only asks a question"
+        return "would act on the robot, but the request does not say what to do (say it plainly)"
     wanted = ", ".join(_describe(i) for i in asked)
     return f"would {_verb(action)}, but the request asks to {wanted}"
 

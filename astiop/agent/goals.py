@@ -49,6 +49,21 @@ def target_of(ex: Execution, places: dict[str, tuple[float, float]]) -> tuple[fl
     return (float(xy[1]), float(xy[2])) if xy else None
 
 
+def outcome_at(graph: RobotGraph, target: tuple[float, float] | None, name: str = "") -> str:
+    """How a goal that reported no outcome ended, from the robot's reported state and pose
+    (for a dock or undock, from its reported docked flag)."""
+    state = graph.state()
+    if state.state_word in MOVING:
+        return "still going"
+    if name in ("dock", "undock") and state.status is not None:
+        return "succeeded" if state.status.docked == (name == "dock") else "stopped short"
+    if target is not None and state.pose is not None:
+        if math.dist((state.pose.x, state.pose.y), target) <= ARRIVED_M:
+            return "succeeded"
+        return "stopped short"
+    return "ended"
+
+
 def started_text(graph: RobotGraph, ex: Execution) -> str:
     """'goal accepted: shipping, 11.4 m to go', the distance along the robot's own /plan."""
     deadline = time.monotonic() + 1.0
@@ -88,23 +103,25 @@ async def follow(
         settled = time.monotonic() - t0 > STATUS_LAG_S
         if outcome is None and idle and state.state_word not in MOVING and settled:
             break
-    state = await asyncio.to_thread(graph.state)
+    if timed_out:
+        outcome = "still going"
     where = re.sub(r", [\d.]+ m to go$", "", started_line.removeprefix("goal accepted: "))
-    off = None
-    if outcome is None and not timed_out and target is not None and state.pose is not None:
-        off = math.dist((state.pose.x, state.pose.y), target)
-        if off <= ARRIVED_M:
-            outcome = "succeeded"
+    if outcome is None:
+        outcome = await asyncio.to_thread(outcome_at, graph, target, where)
+    state = await asyncio.to_thread(graph.state)
     if outcome == "succeeded":
-        text = f"arrived: {where}"
+        text = {"dock": "docked", "undock": "undocked"}.get(where, f"arrived: {where}")
         if state.pose is not None:
             text += f" (x {state.pose.x:.2f}, y {state.pose.y:.2f})"
-    elif timed_out:
+    elif outcome == "still going":
         text = f"still going to {where}"
-    elif off is not None:
-        outcome, text = "stopped short", f"stopped short of {where}: {off:.1f} m from it"
-    elif outcome is None:
+    elif outcome == "stopped short" and where in ("dock", "undock"):
+        text = f"not {where}ed: the robot reports docked {state.status and state.status.docked}"
+    elif outcome == "stopped short" and target is not None and state.pose is not None:
+        off = math.dist((state.pose.x, state.pose.y), target)
+        text = f"stopped short of {where}: {off:.1f} m from it"
+    elif outcome == "ended":
         text = f"the goal to {where} ended; the robot did not report how"
     else:
         text = f"goal {outcome}: {where}"
-    return outcome or ("still going" if timed_out else "ended"), text
+    return outcome, text

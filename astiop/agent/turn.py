@@ -286,7 +286,10 @@ class Agent:
         """The gate's refusal: nothing runs, each command is recorded with the reason."""
         result.refused = reason
         for seq, cmd in enumerate(commands):
-            ex = Execution(cmd, True, f"refused by the intent gate: {reason}", "actuate")
+            checked = self.graph.review(cmd).checked
+            ex = Execution(
+                cmd, checked.valid, f"refused by the intent gate: {reason}", checked.kind
+            )
             result.commands.append(ex)
             self._record(result, seq, ex)
             emit("command", ex)
@@ -321,8 +324,13 @@ class Agent:
                 emit("status", "waiting for the robot to arrive")
                 t1 = time.perf_counter()
                 outcome = await asyncio.to_thread(self.graph.wait_until_idle, self.nav_wait_s)
+                if outcome is None:  # a robot that reports none: its pose says
+                    target = goals.target_of(ex, self.places())
+                    outcome = await asyncio.to_thread(
+                        goals.outcome_at, self.graph, target, goals.goal_name(ex)
+                    )
                 result.exec_s += time.perf_counter() - t1
-                result.waited[seq] = outcome or "still going"
+                result.waited[seq] = outcome
             else:
                 result.started = await asyncio.to_thread(goals.started_text, self.graph, ex)
                 result.target = goals.target_of(ex, self.places())
