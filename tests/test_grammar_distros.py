@@ -110,3 +110,33 @@ def test_a_stamped_cmd_vel_gets_the_same_clamp_and_a_fresh_stamp(store):
     assert sent[-2] == STAMPED and "header: auto" in sent[-1] and "x: 0.8" in sent[-1]
     result = graph.drive(2.0, 0.0, 0.0)  # teleop on a stamped base
     assert result.executed and result.values["twist"]["linear"]["x"] == 0.8
+
+
+def test_types_are_as_each_distro_defines_them():
+    """Read from `git show humble:` / `jazzy:` of common_interfaces and navigation2."""
+    from astiop.robot.interfaces import interface_show
+
+    humble = interface_show("nav2_msgs/action/NavigateToPose", "humble")
+    jazzy = interface_show("nav2_msgs/action/NavigateToPose", "jazzy")
+    assert "std_msgs/Empty result" in humble and "error_code" not in humble
+    assert "uint16 NONE=0\nuint16 error_code\nstring error_msg" in jazzy
+    battery_h = interface_show("sensor_msgs/msg/BatteryState", "humble")
+    battery_j = interface_show("sensor_msgs/msg/BatteryState", "jazzy")
+    assert "POWER_SUPPLY_TECHNOLOGY_LIMN = 6" in battery_h and "VRLA" not in battery_h
+    assert "uint8 POWER_SUPPLY_TECHNOLOGY_VRLA = 8" in battery_j
+    assert "uint8 POWER_SUPPLY_HEALTH_SAFETY_TIMER_EXPIRE = 8" in battery_h
+
+
+@pytest.mark.parametrize("distro,technology", [("humble", 0), ("jazzy", 8)])
+def test_the_astibot_reports_its_lead_acid_battery_where_the_distro_can_say_so(
+    monkeypatch, distro, technology
+):
+    from astiop.robot.graph import RobotGraph
+    from astiop.robot.safety import SafetyPolicy
+    from astiop.robot.sim_backend import SimBackend
+    from astiop.sim.simulator import Simulator
+
+    monkeypatch.setenv("ROS_DISTRO", distro)
+    graph = RobotGraph(SimBackend(Simulator(seed=0), None), SafetyPolicy())
+    r = graph.run("ros2 topic echo /battery_status --once")
+    assert r.values["power_supply_technology"] == technology

@@ -318,3 +318,16 @@ def test_interface_show_like_ros2():
     scan = interface_show("sensor_msgs/msg/LaserScan")
     assert "std_msgs/Header header\n\tbuiltin_interfaces/Time stamp\n\t\tint32 sec" in scan
     assert "---" in interface_show("std_srvs/srv/Trigger")
+
+
+def test_echo_text_follows_the_operators_options_and_the_values_stay_whole(graph):
+    r = graph.run("ros2 topic echo /scan --once -l 5")
+    ranges = r.output.split("ranges:\n", 1)[1].split("intensities:")[0]
+    assert ranges.count("\n- ") == 6 - 1 and ranges.rstrip().endswith("- '...'")  # 5, then ...
+    assert len(r.values["ranges"]) == 360  # what astiop reads is never cut
+    r = graph.run("ros2 topic echo /robot_status --once --no-str")
+    state = r.values["state"]  # PyYAML quotes it, as ros2's own yaml.dump does
+    assert f"state: '<string length: <{len(state)}>>'" in r.output
+    assert f"state: {state}" not in r.output
+    r = graph.run("ros2 topic echo /battery_status --once -l 3")
+    assert "location: 2x ..." in r.output  # strings are cut too, with '...'

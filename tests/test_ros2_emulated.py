@@ -320,3 +320,37 @@ async def test_a_turn_on_the_robot_says_started_then_follows_up_arrived(robot, s
         assert wrong and "question" in wrong
     finally:
         graph.close()
+
+
+def test_parameters_are_read_from_the_robot_with_their_types(robot):
+    graph = gateway()
+    try:
+        params = graph.catalog.params
+        assert params[("/astibot_base", "max_linear_speed")].type == "double"
+        assert params[("/astibot_base", "max_linear_speed")].writable  # astiop knows its limits
+        sim_time = params[("/navigator", "use_sim_time")]  # on the robot, not in astiop's table
+        assert sim_time.type == "boolean" and not sim_time.writable
+        r = graph.run("ros2 param get /navigator use_sim_time")
+        assert r.executed and not r.error and "Boolean value is: False" in r.output
+        refused = graph.run("ros2 param set /navigator use_sim_time true", confirm=YES)
+        assert not refused.executed and "read-only" in refused.reason
+        assert ["param", "list", "--param-type"] in ros2_calls(robot)
+    finally:
+        graph.close()
+
+
+def test_echo_text_is_what_ros2_prints_with_the_same_options(robot):
+    graph = gateway(stream=False)
+    try:
+        argv = ["topic", "echo", "/battery_status", "--once", "-l", "3", "--no-arr"]
+        ours = graph.run("ros2 " + " ".join(argv)).output
+        theirs = subprocess.run(
+            [str(robot / "ros2"), *argv], capture_output=True, text=True, timeout=30
+        ).stdout
+        keep = ("location:", "serial_number:", "cell_voltage:", "power_supply_technology:")
+        assert [ln for ln in ours.splitlines() if ln.startswith(keep)] == [
+            ln for ln in theirs.splitlines() if ln.startswith(keep)
+        ]
+        assert "location: 2x ..." in ours
+    finally:
+        graph.close()

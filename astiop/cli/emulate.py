@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import os
 from pathlib import Path
 
 import typer
@@ -32,6 +33,7 @@ def emulate_ros2(
         fail(f"--dir {folder} is too long for a Unix socket path; use a shorter one")
     try:
         exe = write_client(folder, distro=distro, latency_ms=latency_ms, missing=tuple(missing))
+        os.environ["ROS_DISTRO"] = distro  # as a sourced ROS 2 sets it, for the robot's types
         robot = EmulatedRobot(folder, seed=seed, distro=distro, missing=tuple(missing))
     except OSError as exc:
         fail(f"cannot set up {folder}: {exc.strerror or exc}")

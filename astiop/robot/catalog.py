@@ -44,11 +44,12 @@ class ActionSpec:
 class ParamSpec:
     node: str
     name: str
-    value: float | int | str | bool
-    writable: bool = False
+    value: float | int | str | bool | None  # None: listed by the robot, value not read
+    writable: bool = False  # astiop writes only parameters whose limits it knows
     minimum: float | None = None
     maximum: float | None = None
     description: str = ""
+    type: str = ""  # as `ros2 param list --param-type` prints it: double, integer, ...
 
 
 @dataclass

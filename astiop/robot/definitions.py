@@ -1,14 +1,20 @@
 """ROS 2 interface definitions the robot graph speaks, in the .msg/.srv/.action text format.
 
-Standard types follow their upstream definitions (Humble/Jazzy), with long comments shortened;
-`astiop_msgs` holds the project's own types where no standard one fits.
+Standard types state their upstream interface (field names and types, constants and their
+values, as `git show humble:` / `jazzy:` of ros2/common_interfaces and navigation2 have them),
+written here without upstream's comments: the project ships only what we write. On a real
+robot `ros2 interface show` is the robot's own and prints upstream's text. `astiop_msgs` holds
+the project's own types where no standard one fits. Where the distros differ, HUMBLE holds
+Humble's version; DEFINITIONS is Jazzy's.
 """
+
+import re
 
 DEFINITIONS: dict[str, str] = {
     "builtin_interfaces/msg/Time": "int32 sec\nuint32 nanosec\n",
+    "std_msgs/msg/Empty": "",
     "builtin_interfaces/msg/Duration": "int32 sec\nuint32 nanosec\n",
     "std_msgs/msg/Header": """\
-# Standard metadata for higher-level stamped data types.
 builtin_interfaces/Time stamp
 string frame_id
 """,
@@ -17,7 +23,6 @@ string frame_id
     "geometry_msgs/msg/Quaternion": "float64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n",
     "geometry_msgs/msg/Pose": "Point position\nQuaternion orientation\n",
     "geometry_msgs/msg/Pose2D": """\
-# Deprecated upstream but still shipped; the robot's pose in the map frame.
 float64 x
 float64 y
 float64 theta
@@ -25,13 +30,10 @@ float64 theta
     "geometry_msgs/msg/PoseStamped": "std_msgs/Header header\nPose pose\n",
     "geometry_msgs/msg/PoseWithCovariance": "Pose pose\nfloat64[36] covariance\n",
     "geometry_msgs/msg/TwistStamped": """\
-# A twist with reference coordinate frame and timestamp
 std_msgs/Header header
 Twist twist
 """,
     "geometry_msgs/msg/Twist": """\
-# This expresses velocity in free space broken into its linear and angular parts.
-
 Vector3  linear
 Vector3  angular
 """,
@@ -43,29 +45,26 @@ string child_frame_id
 Transform transform
 """,
     "nav_msgs/msg/Odometry": """\
-# This represents an estimate of a position and velocity in free space.
 std_msgs/Header header
 string child_frame_id
 geometry_msgs/PoseWithCovariance pose
 geometry_msgs/TwistWithCovariance twist
 """,
     "nav_msgs/msg/Path": """\
-# An array of poses that represents a Path for a robot to follow.
 std_msgs/Header header
 geometry_msgs/PoseStamped[] poses
 """,
     "sensor_msgs/msg/LaserScan": """\
-# Single scan from a planar laser range-finder
 std_msgs/Header header
-float32 angle_min        # start angle of the scan [rad]
-float32 angle_max        # end angle of the scan [rad]
-float32 angle_increment  # angular distance between measurements [rad]
-float32 time_increment   # time between measurements [seconds]
-float32 scan_time        # time between scans [seconds]
-float32 range_min        # minimum range value [m]
-float32 range_max        # maximum range value [m]
-float32[] ranges         # range data [m]
-float32[] intensities    # intensity data [device-specific units]
+float32 angle_min
+float32 angle_max
+float32 angle_increment
+float32 time_increment
+float32 scan_time
+float32 range_min
+float32 range_max
+float32[] ranges
+float32[] intensities
 """,
     "sensor_msgs/msg/BatteryState": """\
 uint8 POWER_SUPPLY_STATUS_UNKNOWN = 0
@@ -75,15 +74,30 @@ uint8 POWER_SUPPLY_STATUS_NOT_CHARGING = 3
 uint8 POWER_SUPPLY_STATUS_FULL = 4
 uint8 POWER_SUPPLY_HEALTH_UNKNOWN = 0
 uint8 POWER_SUPPLY_HEALTH_GOOD = 1
+uint8 POWER_SUPPLY_HEALTH_OVERHEAT = 2
+uint8 POWER_SUPPLY_HEALTH_DEAD = 3
+uint8 POWER_SUPPLY_HEALTH_OVERVOLTAGE = 4
+uint8 POWER_SUPPLY_HEALTH_UNSPEC_FAILURE = 5
+uint8 POWER_SUPPLY_HEALTH_COLD = 6
+uint8 POWER_SUPPLY_HEALTH_WATCHDOG_TIMER_EXPIRE = 7
+uint8 POWER_SUPPLY_HEALTH_SAFETY_TIMER_EXPIRE = 8
 uint8 POWER_SUPPLY_TECHNOLOGY_UNKNOWN = 0
+uint8 POWER_SUPPLY_TECHNOLOGY_NIMH = 1
+uint8 POWER_SUPPLY_TECHNOLOGY_LION = 2
+uint8 POWER_SUPPLY_TECHNOLOGY_LIPO = 3
+uint8 POWER_SUPPLY_TECHNOLOGY_LIFE = 4
+uint8 POWER_SUPPLY_TECHNOLOGY_NICD = 5
+uint8 POWER_SUPPLY_TECHNOLOGY_LIMN = 6
+uint8 POWER_SUPPLY_TECHNOLOGY_TERNARY = 7
+uint8 POWER_SUPPLY_TECHNOLOGY_VRLA = 8
 std_msgs/Header  header
-float32 voltage          # Voltage in Volts (Mandatory)
-float32 temperature      # Temperature in Degrees Celsius (If unmeasured NaN)
-float32 current          # Negative when discharging (A)  (If unmeasured NaN)
-float32 charge           # Current charge in Ah  (If unmeasured NaN)
-float32 capacity         # Capacity in Ah (last full capacity)  (If unmeasured NaN)
-float32 design_capacity  # Capacity in Ah (design capacity)  (If unmeasured NaN)
-float32 percentage       # Charge percentage on 0 to 1 range  (If unmeasured NaN)
+float32 voltage
+float32 temperature
+float32 current
+float32 charge
+float32 capacity
+float32 design_capacity
+float32 percentage
 uint8   power_supply_status
 uint8   power_supply_health
 uint8   power_supply_technology
@@ -109,19 +123,17 @@ KeyValue[] values
     "tf2_msgs/msg/TFMessage": "geometry_msgs/TransformStamped[] transforms\n",
     "std_srvs/srv/Trigger": """\
 ---
-bool success   # indicate successful run of triggered service
-string message # informational, e.g. for error messages
+bool success
+string message
 """,
     "nav2_msgs/action/NavigateToPose": """\
-#goal definition
 geometry_msgs/PoseStamped pose
 string behavior_tree
 ---
-#result definition
+uint16 NONE=0
 uint16 error_code
 string error_msg
 ---
-#feedback definition
 geometry_msgs/PoseStamped current_pose
 builtin_interfaces/Duration navigation_time
 builtin_interfaces/Duration estimated_time_remaining
@@ -184,3 +196,22 @@ string[] names
 geometry_msgs/Pose2D[] poses
 """,
 }
+
+# Humble's versions, where Jazzy changed a type.
+HUMBLE: dict[str, str] = {
+    # no TERNARY (7) or VRLA (8) technology yet
+    "sensor_msgs/msg/BatteryState": re.sub(
+        r"uint8 POWER_SUPPLY_TECHNOLOGY_(TERNARY|VRLA) = \d\n",
+        "",
+        DEFINITIONS["sensor_msgs/msg/BatteryState"],
+    ),
+    # the result was empty; error codes came in Jazzy
+    "nav2_msgs/action/NavigateToPose": DEFINITIONS["nav2_msgs/action/NavigateToPose"].replace(
+        "uint16 NONE=0\nuint16 error_code\nstring error_msg\n", "std_msgs/Empty result\n"
+    ),
+}
+
+
+def definitions(distro: str) -> dict[str, str]:
+    """Every known type as `distro` defines it."""
+    return {**DEFINITIONS, **HUMBLE} if distro == "humble" else DEFINITIONS

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from functools import cache
 from typing import Any
 
-from astiop.robot.definitions import DEFINITIONS
+from astiop.robot.definitions import DEFINITIONS, definitions
 
 INT_RANGES = {
     "int8": (-(2**7), 2**7 - 1),
@@ -102,13 +102,27 @@ def _parse_block(name: str, text: str) -> MessageType:
     return MessageType(name, tuple(fields), tuple(constants))
 
 
+def _distro(distro: str | None) -> str:
+    if distro is None:
+        from astiop.robot.grammar import current_distro
+
+        return current_distro()
+    return distro
+
+
+def get_parts(type_name: str, distro: str | None = None) -> tuple[MessageType, ...]:
+    """A message: one part; a service: request, response; an action: goal, result, feedback;
+    as the robot's distro (ROS_DISTRO, default jazzy) defines it."""
+    return _parts(type_name, _distro(distro))
+
+
 @cache
-def get_parts(type_name: str) -> tuple[MessageType, ...]:
-    """A message: one part; a service: request, response; an action: goal, result, feedback."""
+def _parts(type_name: str, distro: str) -> tuple[MessageType, ...]:
     name = normalize_type(type_name)
-    if name not in DEFINITIONS:
+    defs = definitions(distro)
+    if name not in defs:
         raise InterfaceError(f"unknown interface type '{type_name}'")
-    blocks = re.split(r"^---\s*$", DEFINITIONS[name], flags=re.M)
+    blocks = re.split(r"^---\s*$", defs[name], flags=re.M)
     suffixes = {1: [""], 2: ["_Request", "_Response"], 3: ["_Goal", "_Result", "_Feedback"]}
     return tuple(_parse_block(name + sfx, blk) for sfx, blk in zip(suffixes[len(blocks)], blocks))
 
@@ -118,18 +132,19 @@ def get_message(type_name: str) -> MessageType:
 
 
 # -- `ros2 interface show` --------------------------------------------------------------
-def interface_show(type_name: str) -> str:
+def interface_show(type_name: str, distro: str | None = None) -> str:
     name = normalize_type(type_name)
-    if name not in DEFINITIONS:
+    defs = definitions(_distro(distro))
+    if name not in defs:
         raise InterfaceError(f"unknown interface type '{type_name}'")
     lines: list[str] = []
-    for raw in DEFINITIONS[name].rstrip("\n").splitlines():
+    for raw in defs[name].rstrip("\n").splitlines():
         lines.append(raw)
-        _expand(raw, name.split("/")[0], 1, lines)
+        _expand(raw, name.split("/")[0], 1, lines, defs)
     return "\n".join(lines) + "\n"
 
 
-def _expand(raw: str, package: str, depth: int, out: list[str]) -> None:
+def _expand(raw: str, package: str, depth: int, out: list[str], defs: dict[str, str]) -> None:
     line = raw.split("#", 1)[0].strip()
     m = _FIELD.match(line) if line and line != "---" else None
     if not m or m["const"] is not None:
@@ -137,11 +152,11 @@ def _expand(raw: str, package: str, depth: int, out: list[str]) -> None:
     ftype = _resolve(m["type"], package)
     if ftype in PRIMITIVES:
         return
-    for sub in DEFINITIONS[ftype].rstrip("\n").splitlines():
+    for sub in defs[ftype].rstrip("\n").splitlines():
         if not sub.strip() or sub.lstrip().startswith("#"):
             continue
         out.append("\t" * depth + sub)
-        _expand(sub, ftype.split("/")[0], depth + 1, out)
+        _expand(sub, ftype.split("/")[0], depth + 1, out, defs)
 
 
 # -- defaults and checking -----------------------------------------------------------

@@ -38,15 +38,23 @@ class Execution:
         return data
 
 
-def _prepare(value: Any, no_arr: bool, truncate: int | None) -> Any:
+def _prepare(value: Any, no_arr: bool, truncate: int | None, no_str: bool = False) -> Any:
+    # as rosidl_runtime_py/convert.py `_convert_value` does it (humble and jazzy): strings and
+    # sequences cut at the truncate length with '...', --no-str shows only a string's length
     if isinstance(value, dict):
-        return {k: _prepare(v, no_arr, truncate) for k, v in value.items()}
+        return {k: _prepare(v, no_arr, truncate, no_str) for k, v in value.items()}
+    if isinstance(value, str):
+        if no_str:
+            return f"<string length: <{len(value)}>>"
+        if truncate is not None and len(value) > truncate:
+            return value[:truncate] + "..."
+        return value
     if isinstance(value, list):
         if no_arr and value and not isinstance(value[0], dict):
             kind = "double" if isinstance(value[0], float) else type(value[0]).__name__
             return f"<sequence type: {kind}, length: {len(value)}>"
         cut = len(value) if truncate is None else truncate
-        items = [_prepare(v, no_arr, truncate) for v in value[:cut]]
+        items = [_prepare(v, no_arr, truncate, no_str) for v in value[:cut]]
         return items + ["..."] if len(value) > cut else items
     if isinstance(value, float) and math.isnan(value):
         return float("nan")
@@ -54,13 +62,27 @@ def _prepare(value: Any, no_arr: bool, truncate: int | None) -> Any:
 
 
 def echo_yaml(
-    message: dict[str, Any], no_arr: bool = False, truncate: int | None = TRUNCATE
+    message: dict[str, Any],
+    no_arr: bool = False,
+    truncate: int | None = TRUNCATE,
+    no_str: bool = False,
 ) -> str:
     """As `ros2 topic echo` prints one message; `truncate=None` is its --full-length."""
     body = yaml.safe_dump(
-        _prepare(message, no_arr, truncate), sort_keys=False, default_flow_style=False, width=1000
+        _prepare(message, no_arr, truncate, no_str),
+        sort_keys=False,
+        default_flow_style=False,
+        width=1000,
     )
     return body + "---\n"
+
+
+def echo_text(message: dict[str, Any], command: Any) -> str:
+    """The operator's text for an echo, with the options they typed: -l/--truncate-length,
+    -f/--full-length, --no-arr, --no-str."""
+    flags = command.flags
+    truncate = None if "full_length" in flags else command.options.get("truncate", TRUNCATE)
+    return echo_yaml(message, "no_arr" in flags, truncate, "no_str" in flags)
 
 
 def indent_yaml(message: dict[str, Any], spaces: int = 4) -> str:

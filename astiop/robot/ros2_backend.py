@@ -19,10 +19,17 @@ from typing import Any
 import numpy as np
 
 from astiop.robot import ros2_process
-from astiop.robot.catalog import ActionSpec, Catalog, ServiceSpec, TopicSpec, astibot_catalog
+from astiop.robot.catalog import (
+    ActionSpec,
+    Catalog,
+    ParamSpec,
+    ServiceSpec,
+    TopicSpec,
+    astibot_catalog,
+)
 from astiop.robot.grammar import current_distro
 from astiop.robot.interfaces import decode_bytes
-from astiop.robot.output import BackendError, echo_yaml
+from astiop.robot.output import BackendError, echo_text
 from astiop.robot.render import (
     STAMPED,
     flow_yaml,
@@ -78,6 +85,24 @@ def parse_response(text: str) -> dict[str, Any]:
     return values
 
 
+_PARAM_LINE = re.compile(r"^  (?P<name>\S+)(?: \(type: (?P<type>[^)]+)\))?\s*$")
+
+
+def _params(known: Catalog, listed: list[tuple[str, str]]) -> dict[tuple[str, str], ParamSpec]:
+    """The robot's parameters: astiop's own entry where it has one (limits, writable), else
+    read-only with the type the robot gave. Before the robot lists any, astiop's table."""
+    if not listed:
+        return dict(known.params)
+    params = {}
+    for key, typ in listed:
+        node, name = key.split(" ", 1)
+        spec = known.params.get((node, name))
+        params[(node, name)] = (
+            replace(spec, type=typ) if spec else ParamSpec(node, name, None, type=typ)
+        )
+    return params
+
+
 class Ros2Backend:
     name = "ros2"
     capabilities = frozenset({"commands", "teleop"})
@@ -126,11 +151,13 @@ class Ros2Backend:
         return self._describe(lists)
 
     def _read_lists(self) -> dict[str, list[tuple[str, str]]]:
-        verbs = ("topic", "service", "action", "node")
+        verbs = ("topic", "service", "action", "node", "param")
         with ThreadPoolExecutor(len(verbs)) as pool:  # each call pays ros2's start-up
             return dict(zip(verbs, pool.map(self._listed, verbs)))
 
     def _listed(self, verb: str) -> list[tuple[str, str]]:
+        if verb == "param":
+            return self._listed_params()
         if verb == "node":
             out = self._run(["node", "list"], self.timeout_s)
             return sorted((n.strip(), "") for n in out.out.splitlines() if n.startswith("/"))
@@ -143,6 +170,20 @@ class Ros2Backend:
             m = _LISTED.match(line.strip())
             if m:
                 pairs.append((m["name"], m["type"].split(",")[0].strip()))
+        return sorted(pairs)
+
+    def _listed_params(self) -> list[tuple[str, str]]:
+        """("/node name", "double") per parameter: `ros2 param list --param-type` prints
+        "/node:" then "  name (type: double)" (ros2param/verb/list.py, humble and jazzy)."""
+        out = self._run(["param", "list", "--param-type"], self.timeout_s)
+        if out.returncode != 0:
+            return []  # parameters are optional: the rest of the graph still stands
+        pairs, node = [], None
+        for line in out.out.splitlines():
+            if line.startswith("/") and line.rstrip().endswith(":"):
+                node = line.strip()[:-1]
+            elif node and (m := _PARAM_LINE.match(line)):
+                pairs.append((f"{node} {m['name']}", m["type"] or ""))
         return sorted(pairs)
 
     def refresh(self) -> bool:
@@ -161,7 +202,7 @@ class Ros2Backend:
     def _describe(self, lists: dict[str, list[tuple[str, str]]]) -> Catalog:
         known = astibot_catalog()
         nodes = tuple(n for n, _ in lists["node"]) or known.nodes
-        cat = Catalog(nodes=nodes, params=known.params)
+        cat = Catalog(nodes=nodes, params=_params(known, lists.get("param", [])))
         for name, typ in lists["topic"]:
             spec = known.topics.get(name)
             if name == "/cmd_vel" and spec and typ == STAMPED:  # Jazzy's diff_drive_controller
@@ -404,7 +445,7 @@ class Ros2Backend:
                 raise BackendError(f"no message on {checked.command.name} within {timeout:g} s")
             raise BackendError(run.err.strip()[:300] or f"no message on {checked.command.name}")
         doc = decode_bytes(checked.type, doc)
-        return echo_yaml(doc, "no_arr" in checked.command.flags), doc
+        return echo_text(doc, checked.command), doc
 
     def _hz(self, checked: Checked, argv: list[str], timeout: float):
         windows = 2

@@ -11,7 +11,7 @@ from typing import Any
 from astiop.robot import sim_messages as sm
 from astiop.robot.catalog import Catalog, astibot_catalog
 from astiop.robot.interfaces import default_value, interface_show, python_repr
-from astiop.robot.output import BackendError, echo_yaml, indent_yaml
+from astiop.robot.output import BackendError, echo_text, indent_yaml
 from astiop.robot.state import RobotEvent, RobotState, TopicStat, from_messages, yaw_of
 from astiop.robot.validation import Checked
 from astiop.sim.runner import SimRunner
@@ -235,7 +235,7 @@ class SimBackend:
     def _topic_echo(self, c: Checked, timeout: float):
         timeout = c.command.options.get("timeout", timeout)
         msg = self._wait_for_message(c.command.name, timeout)
-        return echo_yaml(msg, "no_arr" in c.command.flags), msg
+        return echo_text(msg, c.command), msg
 
     def _topic_hz(self, c: Checked, timeout: float):
         spec = self.catalog.topics[c.command.name]

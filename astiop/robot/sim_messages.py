@@ -74,13 +74,21 @@ def battery_state(s: SimState) -> dict:
         "percentage": f32(s.battery_soc),
         "power_supply_status": status,
         "power_supply_health": 1,
-        "power_supply_technology": 0,
+        "power_supply_technology": battery_technology(),
         "present": True,
         "cell_voltage": [],
         "cell_temperature": [],
         "location": "2x UCG22-12 VRLA in series",
         "serial_number": "",
     }
+
+
+def battery_technology() -> int:
+    """The ASTIbot's two 12 V lead-acid batteries: VRLA (8), a constant Jazzy's BatteryState
+    has and Humble's does not (there: UNKNOWN, 0)."""
+    from astiop.robot.grammar import current_distro
+
+    return 0 if current_distro() == "humble" else 8
 
 
 def robot_status(s: SimState) -> dict:

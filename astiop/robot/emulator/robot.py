@@ -40,6 +40,9 @@ MAP_TYPE = "nav_msgs/msg/OccupancyGrid"
 MAP_RESOLUTION = 0.2
 
 
+_PARAM_TYPES = {bool: "boolean", int: "integer", float: "double", str: "string"}
+
+
 class Interrupted(Exception):
     """The client got SIGINT, or went away."""
 
@@ -96,6 +99,8 @@ class EmulatedRobot:
         self.store = Store(folder / "robot.db")  # the robot's own named locations
         self.backend = SimBackend(self.sim, self.store, realtime=True)
         self.catalog = astibot_catalog()
+        for node in self.catalog.nodes:  # every ROS 2 node declares it
+            self.backend.params.setdefault((node, "use_sim_time"), False)
         self.cmd_vel_log: collections.deque = collections.deque(maxlen=2000)
         self._twist_seq = 0
         self._map_msg = self._occupancy_grid()
@@ -235,7 +240,7 @@ class EmulatedRobot:
         truncate = None if a.get("full_length") else a.get("truncate_length", 128)
         deadline = time.monotonic() + a["timeout"] if a.get("timeout") else math.inf
         for msg in self._publications(name, call, deadline):
-            call.out(echo_yaml(msg, a.get("no_arr", False), truncate))
+            call.out(echo_yaml(msg, a.get("no_arr", False), truncate, a.get("no_str", False)))
             if a.get("once"):
                 return 0
         return 0
@@ -428,8 +433,12 @@ class EmulatedRobot:
         ok = result is not None and result.id == goal.id and result.status == "succeeded"
         canceled = result is not None and result.status == "canceled"
         status = "SUCCEEDED" if ok else "CANCELED" if canceled else "ABORTED"
-        body = "{}" if self.distro == "humble" else f"error_code: {0 if ok else 1}"
-        call.out(f"Result:\n    {body}\n\nGoal finished with status: {status}\n")
+        # message_to_yaml of the result, as send_goal.py prints it (Humble: an Empty `result`)
+        fields = {"result": {}} if self.distro == "humble" else {"error_code": 0, "error_msg": ""}
+        if not ok and "error_code" in fields:
+            fields = {"error_code": 1, "error_msg": result.message if result else "aborted"}
+        body = yaml.safe_dump(fields, sort_keys=False, default_flow_style=False)
+        call.out(f"Result:\n    {body}\nGoal finished with status: {status}\n")
         return 0
 
     # -- node, interface, param, daemon ------------------------------------------------------
@@ -470,15 +479,22 @@ class EmulatedRobot:
         return 0
 
     def _param_list(self, call: Call, a: dict) -> int:
+        # as ros2param/verb/list.py prints it: a "/node:" header only when no node is named
+        node_name = a.get("node_name")
+        if node_name and node_name not in self.catalog.nodes:
+            call.out("Node not found\n")
+            return 0
         lines = []
         for node in sorted(self.catalog.nodes):
-            if a.get("node_name") and node != a["node_name"]:
+            if node_name and node != node_name:
                 continue
             names = sorted(p for (n, p) in self.backend.params if n == node)
-            if names:
+            if names and not node_name:
                 lines.append(f"{node}:")
-                lines += [f"  {p}" for p in names]
-        call.out("\n".join(lines) + "\n")
+            for p in names:
+                typ = _PARAM_TYPES[type(self.backend.params[(node, p)])]
+                lines.append(f"  {p} (type: {typ})" if a.get("param_type") else f"  {p}")
+        call.out("".join(f"{line}\n" for line in lines))
         return 0
 
     def _param_get(self, call: Call, a: dict) -> int:
