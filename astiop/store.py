@@ -4,10 +4,13 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import re
 import sqlite3
 import threading
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -19,6 +22,7 @@ from astiop.resources import data_path
 from astiop.warehouse import Rect, default_map
 
 SQLITE_HEADER = b"SQLite format 3\x00"
+BUSY_TIMEOUT_MS = 10_000  # how long a write waits for another process's
 NAME_RE = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
 
 
@@ -133,6 +137,18 @@ def _migrate_v2(db: sqlite_utils.Database) -> None:
     )
 
 
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
 def _migrate_v3(db: sqlite_utils.Database) -> None:
     # Grounded answers: the model's own text and why it was replaced; how a started goal ended.
     db.conn.executescript(
@@ -145,8 +161,18 @@ def _migrate_v3(db: sqlite_utils.Database) -> None:
     )
 
 
+def _migrate_v4(db: sqlite_utils.Database) -> None:
+    # Every command astiop runs, with where it came from; the process behind a running turn.
+    db.conn.executescript(
+        """
+        ALTER TABLE commands ADD COLUMN source TEXT;
+        ALTER TABLE interactions ADD COLUMN pid INTEGER;
+        """
+    )
+
+
 # Ordered; the database's PRAGMA user_version counts how many have run.
-MIGRATIONS = [_migrate_v1, _migrate_v2, _migrate_v3]
+MIGRATIONS = [_migrate_v1, _migrate_v2, _migrate_v3, _migrate_v4]
 SCHEMA_VERSION = len(MIGRATIONS)
 _OUR_TABLES = {
     "locations",
@@ -163,10 +189,26 @@ def check_database_file(path: Path) -> None:
     """Refuse anything that is not a SQLite file before SQLite touches it."""
     if path.is_dir():
         raise StoreError(f"database path {path} is a directory")
+    if path.exists() and not path.is_file():
+        raise StoreError(f"database path {path} is not a regular file")
     if path.exists() and path.stat().st_size > 0:
-        with path.open("rb") as fh:
-            if fh.read(16) != SQLITE_HEADER:
-                raise StoreError(f"{path} is not a SQLite database; it was left untouched")
+        try:
+            with path.open("rb") as fh:
+                header = fh.read(16)
+        except OSError as exc:
+            raise StoreError(f"cannot read {path}: {exc.strerror or exc}") from None
+        if header != SQLITE_HEADER:
+            raise StoreError(f"{path} is not a SQLite database; it was left untouched")
+
+
+def _writable(path: Path) -> bool:
+    """Whether astiop may write: the file (if it exists) and its folder (WAL's side files)."""
+    folder = path.parent
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    if path.exists() and not os.access(path, os.W_OK):
+        return False
+    return os.access(folder, os.W_OK | os.X_OK)
 
 
 class Store:
@@ -177,19 +219,73 @@ class Store:
         self.bounds = bounds or default_map().bounds  # named locations must lie inside
         self._local = threading.local()
         check_database_file(self.path)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.readonly = not _writable(self.path)
+        if self.readonly and not self.path.exists():
+            raise StoreError(f"cannot create {self.path}: its folder is not writable")
+        if not self.readonly:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._check_integrity()
         self._migrate()
+        if not self.readonly:
+            self._mark_interrupted()
 
     # -- connections and schema -------------------------------------------------
     @property
     def db(self) -> sqlite_utils.Database:
         db = getattr(self._local, "db", None)
         if db is None:
-            conn = sqlite3.connect(self.path, timeout=10)
-            conn.execute("PRAGMA busy_timeout=10000")
+            if self.readonly:  # reads work; any write fails, and _tx says so first
+                conn = sqlite3.connect(f"{self.path.as_uri()}?mode=ro", uri=True, timeout=10)
+            else:
+                conn = sqlite3.connect(self.path, timeout=10)
+            conn.execute(f"PRAGMA busy_timeout={BUSY_TIMEOUT_MS}")  # SQLite retries, bounded
             db = sqlite_utils.Database(conn)
             self._local.db = db
         return db
+
+    def _check_integrity(self) -> None:
+        """PRAGMA quick_check before anything is written: a damaged file is refused whole."""
+        if not self.path.exists() or self.path.stat().st_size == 0:
+            return
+        try:
+            rows = self.db.conn.execute("PRAGMA quick_check(1)").fetchall()
+        except sqlite3.DatabaseError as exc:
+            self.close()
+            raise StoreError(f"{self.path} is damaged ({exc}); it was left untouched") from None
+        if rows != [("ok",)]:
+            self.close()
+            raise StoreError(f"{self.path} is damaged ({rows[0][0][:120]}); it was left untouched")
+
+    @contextmanager
+    def _tx(self) -> Iterator[None]:
+        """One write transaction; a read-only or busy database and a broken write become one
+        StoreError, a duplicate name a LocationError."""
+        if self.readonly:
+            raise StoreError(f"{self.path} is read-only: nothing was written")
+        try:
+            with self.db.conn:
+                yield
+        except sqlite3.IntegrityError as exc:
+            if "UNIQUE" in str(exc) and "locations.name" in str(exc):
+                raise LocationError("a location with that name already exists") from None
+            raise StoreError(f"{self.path}: {exc}") from None
+        except sqlite3.OperationalError as exc:
+            raise StoreError(f"{self.path}: {exc}; nothing was written") from None
+
+    def _mark_interrupted(self) -> None:
+        """Turns left `running` by a process that is gone are marked `interrupted`."""
+        rows = self.db.conn.execute(
+            "SELECT id, pid FROM interactions WHERE status = 'running'"
+        ).fetchall()
+        dead = [i for i, pid in rows if pid is None or not _alive(pid)]
+        if dead:
+            with self._tx():
+                self.db.conn.executemany(
+                    "UPDATE interactions SET status = 'interrupted', "
+                    "error = coalesce(error, 'the astiop process ended during the turn') "
+                    "WHERE id = ?",
+                    [(i,) for i in dead],
+                )
 
     def _migrate(self) -> None:
         try:
@@ -205,6 +301,12 @@ class Store:
             )
         if version == 0 and tables and not tables <= _OUR_TABLES:
             raise StoreError(f"{self.path} is a SQLite database of another application")
+        if self.readonly:
+            if version < SCHEMA_VERSION:
+                raise StoreError(
+                    f"{self.path} is read-only and needs an upgrade this astiop cannot write"
+                )
+            return
         db.conn.execute("PRAGMA journal_mode=WAL")
         for index in range(version, SCHEMA_VERSION):
             with db.conn:
@@ -257,7 +359,7 @@ class Store:
         self._check_pose(x, y, theta)
         theta = math.atan2(math.sin(theta), math.cos(theta))
         now = time.time()
-        with self.db.conn:
+        with self._tx():
             self.db["locations"].insert(
                 {
                     "name": name,
@@ -277,7 +379,7 @@ class Store:
             self._check_new_name(new)
         elif not NAME_RE.match(new):
             raise LocationError(f"invalid location name '{new}'")
-        with self.db.conn:
+        with self._tx():
             self.db.conn.execute(
                 "UPDATE locations SET name = ?, updated_at = ? WHERE name = ? COLLATE NOCASE",
                 [new, time.time(), loc.name],
@@ -286,13 +388,13 @@ class Store:
 
     def remove_location(self, name: str) -> Location:
         loc = self.require_location(name)
-        with self.db.conn:
+        with self._tx():
             self.db.conn.execute("DELETE FROM locations WHERE name = ? COLLATE NOCASE", [loc.name])
         return loc
 
     # -- interactions, commands, events --------------------------------------------
     def start_interaction(self, *, model: str, mode: str, prompt: str, session: str = "") -> int:
-        with self.db.conn:
+        with self._tx():
             row = self.db["interactions"].insert(
                 {
                     "session": session,
@@ -301,6 +403,7 @@ class Store:
                     "mode": mode,
                     "prompt": prompt,
                     "status": "running",
+                    "pid": os.getpid(),
                 }
             )
         return int(row.last_pk)
@@ -308,20 +411,20 @@ class Store:
     def update_interaction(self, interaction_id: int, **fields: Any) -> None:
         if "raw_replies" in fields and not isinstance(fields["raw_replies"], str):
             fields["raw_replies"] = json.dumps(fields["raw_replies"])
-        with self.db.conn:
+        with self._tx():
             self.db["interactions"].update(interaction_id, fields)
 
     def add_command(self, interaction_id: int | None, **fields: Any) -> int:
         record = {"interaction_id": interaction_id, "created_at": time.time(), **fields}
         if "values" in record and not isinstance(record["values"], (str, type(None))):
             record["values"] = json.dumps(record["values"], default=str)
-        with self.db.conn:
+        with self._tx():
             return int(self.db["commands"].insert(record).last_pk)
 
     def add_event(
         self, kind: str, message: str, *, severity: str = "info", sim_t: float | None = None
     ) -> None:
-        with self.db.conn:
+        with self._tx():
             self.db["events"].insert(
                 {
                     "t": time.time(),
@@ -363,14 +466,14 @@ class Store:
         return None
 
     def latch_estop(self, who: str) -> None:
-        with self.db.conn:
+        with self._tx():
             self.db.conn.execute(
                 "UPDATE estop SET engaged = 1, engaged_by = ?, engaged_at = ? WHERE id = 1",
                 [who, time.time()],
             )
 
     def release_estop(self, who: str) -> None:
-        with self.db.conn:
+        with self._tx():
             self.db.conn.execute(
                 "UPDATE estop SET engaged = 0, released_by = ?, released_at = ? WHERE id = 1",
                 [who, time.time()],
@@ -378,6 +481,51 @@ class Store:
 
     def events(self, limit: int = 500) -> list[dict[str, Any]]:
         return list(self.db.query("SELECT * FROM events ORDER BY id DESC LIMIT ?", [limit]))
+
+    # -- benchmark runs ----------------------------------------------------------------
+    def create_bench_run(self, stage: int, config: dict[str, Any]) -> int:
+        with self._tx():
+            row = self.db["bench_runs"].insert(
+                {
+                    "started_at": time.time(),
+                    "stage": stage,
+                    "models": json.dumps(config["models"]),
+                    "modes": json.dumps(config["modes"]),
+                    "seed": config["seed"],
+                    "case_limit": config["limit"],
+                    "status": "running",
+                    "config": json.dumps(config),
+                }
+            )
+        return int(row.last_pk)
+
+    def bench_run(self, run_id: int) -> dict[str, Any] | None:
+        rows = list(self.db.query("SELECT * FROM bench_runs WHERE id = ?", [run_id]))
+        return rows[0] if rows else None
+
+    def bench_runs(self) -> list[dict[str, Any]]:
+        return list(
+            self.db.query(
+                "SELECT r.*, (SELECT count(*) FROM bench_results b WHERE b.run_id = r.id) "
+                "AS results FROM bench_runs r ORDER BY r.id DESC"
+            )
+        )
+
+    def bench_results(self, run_id: int) -> list[dict[str, Any]]:
+        return list(
+            self.db.query("SELECT * FROM bench_results WHERE run_id = ? ORDER BY id", [run_id])
+        )
+
+    def add_bench_result(self, run_id: int, row: dict[str, Any]) -> None:
+        with self._tx():
+            self.db["bench_results"].insert(
+                {"run_id": run_id, **row, "created_at": time.time()}, replace=True
+            )
+
+    def end_bench_run(self, run_id: int, status: str) -> None:
+        """done or interrupted; an interrupted run keeps its results and can resume."""
+        with self._tx():
+            self.db["bench_runs"].update(run_id, {"status": status, "finished_at": time.time()})
 
 
 def _location(row: dict[str, Any]) -> Location:

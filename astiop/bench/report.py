@@ -68,16 +68,10 @@ def _mean(values) -> float:
 
 
 def load_report(store: Store, run_id: int) -> Report:
-    runs = list(store.db.query("SELECT * FROM bench_runs WHERE id = ?", [run_id]))
-    if not runs:
+    run = store.bench_run(run_id)
+    if run is None:
         raise BenchError(f"there is no benchmark run {run_id} (astiop bench list shows them)")
-    run = runs[0]
-    rows = [
-        dict(r, metrics=json.loads(r["metrics"]))
-        for r in store.db.query(
-            "SELECT * FROM bench_results WHERE run_id = ? ORDER BY id", [run_id]
-        )
-    ]
+    rows = [dict(r, metrics=json.loads(r["metrics"])) for r in store.bench_results(run_id)]
     groups: dict[tuple[str, str], list[dict]] = defaultdict(list)
     for r in rows:
         groups[(r["model"], r["mode"])].append(r)
@@ -242,8 +236,7 @@ def to_csv(rep: Report) -> str:
 
 
 def list_runs(store: Store) -> list[dict[str, Any]]:
-    rows = store.db.query(
-        "SELECT r.*, (SELECT count(*) FROM bench_results b WHERE b.run_id = r.id) AS results "
-        "FROM bench_runs r ORDER BY r.id DESC"
-    )
-    return [dict(r, models=json.loads(r["models"]), modes=json.loads(r["modes"])) for r in rows]
+    return [
+        dict(r, models=json.loads(r["models"]), modes=json.loads(r["modes"]))
+        for r in store.bench_runs()
+    ]

@@ -58,34 +58,18 @@ class BenchError(ValueError):
 def create_run(store: Store, config: RunConfig) -> int:
     if config.stage not in (1, 2):
         raise BenchError("--stage is 1 or 2")
-    with store.db.conn:
-        row = store.db["bench_runs"].insert(
-            {
-                "started_at": time.time(),
-                "stage": config.stage,
-                "models": json.dumps(config.models),
-                "modes": json.dumps(config.modes),
-                "seed": config.seed,
-                "case_limit": config.limit,
-                "status": "running",
-                "config": json.dumps(asdict(config)),
-            }
-        )
-    return int(row.last_pk)
+    return store.create_bench_run(config.stage, asdict(config))
 
 
 def load_config(store: Store, run_id: int) -> RunConfig:
-    rows = list(store.db.query("SELECT config FROM bench_runs WHERE id = ?", [run_id]))
-    if not rows:
+    run = store.bench_run(run_id)
+    if run is None:
         raise BenchError(f"there is no benchmark run {run_id} (astiop bench list shows them)")
-    return RunConfig(**json.loads(rows[0]["config"]))
+    return RunConfig(**json.loads(run["config"]))
 
 
 def _done(store: Store, run_id: int) -> set[tuple[str, str, str]]:
-    rows = store.db.query(
-        "SELECT model, mode, case_id FROM bench_results WHERE run_id = ?", [run_id]
-    )
-    return {(r["model"], r["mode"], r["case_id"]) for r in rows}
+    return {(r["model"], r["mode"], r["case_id"]) for r in store.bench_results(run_id)}
 
 
 def _save(
@@ -98,22 +82,19 @@ def _save(
     metrics: dict,
     response: str,
 ) -> None:
-    with store.db.conn:
-        store.db["bench_results"].insert(
-            {
-                "run_id": run_id,
-                "model": model,
-                "mode": mode,
-                "case_id": case.id,
-                "level": case.level,
-                "category": case.category,
-                "outcome": outcome,
-                "metrics": json.dumps(metrics, default=str),
-                "response": response,
-                "created_at": time.time(),
-            },
-            replace=True,
-        )
+    store.add_bench_result(
+        run_id,
+        {
+            "model": model,
+            "mode": mode,
+            "case_id": case.id,
+            "level": case.level,
+            "category": case.category,
+            "outcome": outcome,
+            "metrics": json.dumps(metrics, default=str),
+            "response": response,
+        },
+    )
 
 
 async def run(
@@ -145,8 +126,7 @@ async def run(
         finished = await _run_todo(store, settings, config, run_id, system, todo, on_progress)
         status = "done"
     finally:
-        with store.db.conn:
-            store.db["bench_runs"].update(run_id, {"finished_at": time.time(), "status": status})
+        store.end_bench_run(run_id, status)
     return finished
 
 

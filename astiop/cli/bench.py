@@ -102,8 +102,7 @@ def run_bench(
     try:
         asyncio.run(runner.run(store, st.settings, config, run_id, progress))
     except KeyboardInterrupt:
-        with store.db.conn:
-            store.db["bench_runs"].update(run_id, {"status": "interrupted"})
+        store.end_bench_run(run_id, "interrupted")
         typer.echo(
             f"\ninterrupted; finished cases are stored. Resume with: astiop bench run "
             f"--resume {run_id}",
