@@ -1,3 +1,3 @@
-from astiop.cli import app
+from astiop.cli import run
 
-app(prog_name="astiop")
+run()

@@ -123,6 +123,13 @@ class AstiopApp(App):
         self.topic_stats = graph.topic_stats()
         self.switch_mode("dashboard")
         self._sampler.start()
+        if not self.services.settings.robot.confirm_actuation:
+            self.notify(
+                "robot.confirm_actuation is false: actuating commands run without asking",
+                title="confirmation is off",
+                severity="warning",
+                timeout=30,
+            )
 
     def on_unmount(self) -> None:
         self._sampler.halt.set()

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 import platformdirs
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, StrictBool, ValidationError
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -29,16 +29,23 @@ class _Section(BaseModel):
 
 class RobotSettings(_Section):
     backend: Literal["sim", "ros2"] = "sim"
-    max_linear_speed: float = Field(0.8, gt=0, le=1.4, description="m/s, clamp on /cmd_vel")
-    max_angular_speed: float = Field(1.0, gt=0, le=3.0, description="rad/s, clamp on /cmd_vel")
-    confirm_actuation: bool = True
+    max_linear_speed: float = Field(
+        0.8, gt=0, le=1.4, allow_inf_nan=False, description="m/s, clamp on /cmd_vel"
+    )
+    max_angular_speed: float = Field(
+        1.0, gt=0, le=3.0, allow_inf_nan=False, description="rad/s, clamp on /cmd_vel"
+    )
+    # a safety switch takes only true or false (not "no", 0 or "off")
+    confirm_actuation: StrictBool = True
     ros2_executable: str = "ros2"
-    ros2_timeout_s: float = Field(10.0, gt=0)
+    ros2_timeout_s: float = Field(10.0, gt=0, le=3600, allow_inf_nan=False)
 
 
 class SimSettings(_Section):
-    seed: int = 0
-    speed: float = Field(1.0, gt=0, le=100, description="real-time factor of the console's sim")
+    seed: int = Field(0, ge=0, le=2**32 - 1)
+    speed: float = Field(
+        1.0, gt=0, le=100, allow_inf_nan=False, description="real-time factor of the console's sim"
+    )
 
 
 class LLMSettings(_Section):
@@ -47,7 +54,7 @@ class LLMSettings(_Section):
     threads: int | None = Field(None, ge=1, le=64)
     context: int = Field(4096, ge=512)
     max_tokens: int = Field(256, ge=16, le=8192)
-    timeout_s: float = Field(120.0, gt=0)
+    timeout_s: float = Field(120.0, gt=0, le=86400, allow_inf_nan=False)
     endpoints: list[str] = Field(default_factory=list, description="extra specs for `models`")
 
 
@@ -103,6 +110,8 @@ def _env_values(env: Mapping[str, str]) -> dict[str, Any]:
         else:
             continue
         value: Any = raw
+        if raw.strip().lower() in ("true", "false"):  # a TOML boolean, spelled in a variable
+            value = raw.strip().lower() == "true"
         if keys[-1] == "endpoints":
             value = [v.strip() for v in raw.split(",") if v.strip()]
         _set_nested(values, keys, value)
@@ -124,6 +133,8 @@ def read_config_file(path: Path) -> dict[str, Any]:
         return {}
     try:
         return tomllib.loads(path.read_text(encoding="utf-8"))
+    except RecursionError:
+        raise ConfigError(f"{path}: the TOML nests too deeply to read") from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"config error: {path}: invalid TOML: {exc}") from None
     except (OSError, UnicodeDecodeError) as exc:

@@ -7,6 +7,7 @@ import re
 from typing import Any
 
 from astiop.agent.tools import Tool, ToolError, render
+from astiop.bounded import MAX_DEPTH, MAX_REPLY_CHARS, load_json_object, nesting
 
 
 class ReplyError(ValueError):
@@ -14,10 +15,14 @@ class ReplyError(ValueError):
 
 
 def find_json_object(text: str) -> dict[str, Any] | None:
-    decoder = json.JSONDecoder()
+    """The first JSON object in the reply; a reply past the size or depth cap is refused."""
+    if len(text) > MAX_REPLY_CHARS:
+        raise ReplyError(f"the reply is {len(text):,} characters; the cap is {MAX_REPLY_CHARS:,}")
+    if nesting(text) > MAX_DEPTH:
+        raise ReplyError(f"the reply nests deeper than {MAX_DEPTH} levels")
     for match in re.finditer(r"\{", text):
         try:
-            obj, _ = decoder.raw_decode(text, match.start())
+            obj, _ = load_json_object(text, match.start())
         except json.JSONDecodeError:
             continue
         if isinstance(obj, dict):
@@ -34,7 +39,7 @@ def commands_from_reply(text: str) -> list[str]:
             cmds = [cmds]
         if isinstance(cmds, list) and all(isinstance(c, str) for c in cmds):
             return [c.strip() for c in cmds if c.strip()][:3]
-    lines = [ln.strip().strip("`").strip() for ln in text.splitlines()]
+    lines = [ln.strip().strip("`").strip() for ln in text.splitlines()[:200]]
     found = [ln for ln in lines if ln.startswith("ros2 ")]
     if found:
         return found[:3]

@@ -228,8 +228,10 @@ def render(step: dict, tools: list[Tool]) -> str | None:
     try:
         x, y = float(step["x"]), float(step["y"])
         theta = math.radians(float(step.get("theta_deg", 0.0)))
-    except (KeyError, TypeError, ValueError):
+    except (KeyError, TypeError, ValueError, OverflowError):
         raise ToolError(f'"{COORDINATES}" needs numbers "x" and "y"') from None
+    if not all(math.isfinite(v) for v in (x, y, theta)):
+        raise ToolError(f'"{COORDINATES}" needs finite numbers')
     return (
         f"ros2 service call /goto_position {GOTO_TYPE} "
         f'"{{x: {x:.3f}, y: {y:.3f}, theta: {theta:.4f}}}"'

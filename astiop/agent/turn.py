@@ -244,7 +244,7 @@ class Agent:
         )
         c = await ask(messages)
         try:
-            commands = parse(c.text)
+            commands = _parsed(parse, c.text)
         except ReplyError as exc:
             commands = await self._repair(messages, c.text, str(exc), ask, parse, result)
         if commands and not result.repaired:
@@ -266,7 +266,7 @@ class Agent:
         ]
         c = await ask(retry)
         try:
-            return parse(c.text)
+            return _parsed(parse, c.text)
         except ReplyError as exc:
             raise LLMProtocolError(f"the model's reply could not be used: {exc}") from None
 
@@ -401,6 +401,16 @@ class Agent:
                 result.interaction_id, outcome=result.outcome, outcome_at=time.time()
             )
         return text
+
+
+def _parsed(parse, text: str) -> list[str]:
+    """A reply's commands; whatever a hostile reply breaks becomes a ReplyError."""
+    try:
+        return parse(text)
+    except ReplyError:
+        raise
+    except (ValueError, TypeError, OverflowError, RecursionError) as exc:
+        raise ReplyError(f"the reply could not be read ({type(exc).__name__})") from None
 
 
 def _with_started(text: str, started: str) -> str:

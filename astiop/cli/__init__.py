@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import typer
@@ -60,3 +61,23 @@ def main(
         from astiop.cli.console import run_console
 
         run_console(ctx.obj)
+
+
+def run() -> None:
+    """The `astiop` executable: the app, with one line (never a traceback) for any failure."""
+    from astiop.cli.errors import guarded, usage
+
+    def main() -> None:
+        try:
+            code = app(prog_name="astiop", standalone_mode=False)
+        except Exception as exc:  # typer vendors click: its errors are known by class name
+            kinds = {cls.__name__ for cls in type(exc).__mro__}
+            if "UsageError" in kinds:  # typer would draw a box: one line instead
+                sys.exit(usage(exc))
+            if "Abort" in kinds:
+                print("astiop: aborted", file=sys.stderr)
+                sys.exit(1)
+            raise
+        sys.exit(code if isinstance(code, int) else 0)
+
+    guarded(main)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import math
 import sys
 import time
 
@@ -66,6 +67,14 @@ def run_bench(
                 fail("--interpretation is grounded or raw")
             if limit is not None and limit < 1:
                 fail("--limit must be at least 1")
+            if not 0 <= seed <= 2**32 - 1:
+                fail("--seed must be within 0..4294967295")
+            if not (math.isfinite(timeout) and 0 < timeout <= 86400):
+                fail("--timeout must be a number of seconds within (0, 86400]")
+            if concurrency < 1 or concurrency > 64:
+                fail("--concurrency must be within 1..64")
+            if not 1 <= max_tokens <= 32768:
+                fail("--max-tokens must be within 1..32768")
             for spec in models:
                 parse_spec(spec)
             modes = ["command", "tool"] if mode == "both" else [mode]

@@ -36,6 +36,12 @@ class CliState:
                 self._settings = load_settings(self.overrides)
             except ConfigError as exc:
                 fail(str(exc))
+            if not self._settings.robot.confirm_actuation:
+                typer.echo(
+                    "astiop: warning: robot.confirm_actuation is false: actuating commands run "
+                    "without asking",
+                    err=True,
+                )
         return self._settings
 
     @property

@@ -18,7 +18,7 @@ app = typer.Typer(
 
 @app.command("bench")
 def bench(
-    seed: int = typer.Option(0, help="Seed of the run (lidar noise)."),
+    seed: int = typer.Option(0, min=0, max=2**32 - 1, help="Seed of the run (lidar noise)."),
     as_json: bool = typer.Option(False, "--json", help="Print the figures as JSON."),
 ) -> None:
     """Run a seeded mission (undock, three stations, dock) as fast as possible; print figures."""
@@ -75,7 +75,7 @@ def goto(
     ctx: typer.Context,
     target: str = typer.Argument(..., help="A named location, or X,Y[,THETA_DEG] in metres."),
     start: str = typer.Option("", "--from", help="Start at this named location (default: docked)."),
-    seed: int = typer.Option(0),
+    seed: int = typer.Option(0, min=0, max=2**32 - 1),
     as_json: bool = typer.Option(False, "--json"),
 ) -> None:
     """Drive from the dock (or --from) to TARGET in fast mode and report how it went."""

@@ -18,6 +18,13 @@ from typing import Any
 
 import yaml
 
+from astiop.bounded import (
+    MAX_COMMAND_CHARS,
+    BoundsError,
+    has_controls,
+    load_yaml,
+    preview,
+)
 from astiop.robot.ros2cli_args import DISTROS, build_parser
 
 SHELL_OPERATORS = {"|", "||", "&", "&&", ";", ";;", ">", ">>", "<", "<<", "$(", "`", "(", ")"}
@@ -157,23 +164,35 @@ def normalize_name(name: str) -> str:
 
 def parse_values(text: str) -> dict[str, Any]:
     try:
-        value = yaml.safe_load(text) if text.strip() else {}
+        value = load_yaml(text) if text.strip() else {}
+    except BoundsError as exc:
+        raise CommandSyntaxError(f"the values {preview(text)} were refused: {exc}") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem", None) or str(exc).splitlines()[0]
         raise CommandSyntaxError(
-            f"the values {text!r} are not valid YAML ({mark}); write them as a YAML mapping, "
-            'e.g. "{linear: {x: 0.2}}"'
+            f"the values {preview(text)} are not valid YAML ({mark}); write them as a YAML "
+            'mapping, e.g. "{linear: {x: 0.2}}"'
         ) from None
     if value is None:
         return {}
     if not isinstance(value, dict):
-        raise CommandSyntaxError(f'the values {text!r} must be a YAML mapping like "{{x: 1.0}}"')
+        raise CommandSyntaxError(
+            f'the values {preview(text)} must be a YAML mapping like "{{x: 1.0}}"'
+        )
     return value
 
 
 def _tokens(text: str) -> list[str]:
     if not isinstance(text, str) or not text.strip():
         raise CommandSyntaxError("the command is empty; send one ros2 command")
+    if len(text) > MAX_COMMAND_CHARS:  # checked first: everything after is linear in this
+        raise CommandSyntaxError(
+            f"the command is {len(text):,} characters; the limit is {MAX_COMMAND_CHARS:,}"
+        )
+    if has_controls(text.strip()):
+        raise CommandSyntaxError(
+            f"the command holds control characters ({preview(text.strip(), 40)}); send plain text"
+        )
     if "\n" in text.strip():
         raise CommandSyntaxError("send one ros2 command per line")
     try:

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from functools import cache
 from typing import Any
 
+from astiop.bounded import preview
 from astiop.robot.definitions import DEFINITIONS, definitions
 
 INT_RANGES = {
@@ -183,32 +184,40 @@ def default_value(type_name: str, part: int = 0) -> dict[str, Any]:
     return out
 
 
+FLOAT32_MAX = 3.4028234663852886e38
+
+
 def _check_scalar(f: Field, value: Any, where: str) -> Any:
     t = f.type
+    shown = preview(repr(value), 40)
     if t in FLOATS:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise InterfaceError(f"field '{where}' must be a number ({t}), got {value!r}")
-        if not math.isfinite(float(value)):
-            raise InterfaceError(f"field '{where}' must be a finite number, got {value!r}")
-        return float(value)
+            raise InterfaceError(f"field '{where}' must be a number ({t}), got {shown}")
+        try:
+            number = float(value)
+        except OverflowError:
+            number = math.inf
+        if not math.isfinite(number) or (t == "float32" and abs(number) > FLOAT32_MAX):
+            raise InterfaceError(f"field '{where}' must be a finite {t}, got {shown}")
+        return number
     if t in INT_RANGES:
         if isinstance(value, bool) or not isinstance(value, int):
-            raise InterfaceError(f"field '{where}' must be an integer ({t}), got {value!r}")
+            raise InterfaceError(f"field '{where}' must be an integer ({t}), got {shown}")
         lo, hi = INT_RANGES[t]
         if not lo <= value <= hi:
-            raise InterfaceError(f"field '{where}' must be within {lo}..{hi} ({t}), got {value}")
+            raise InterfaceError(f"field '{where}' must be within {lo}..{hi} ({t}), got {shown}")
         return value
     if t == "bool":
         if not isinstance(value, bool):
-            raise InterfaceError(f"field '{where}' must be true or false, got {value!r}")
+            raise InterfaceError(f"field '{where}' must be true or false, got {shown}")
         return value
     if t in ("string", "wstring"):
         if not isinstance(value, (str, int, float)) or isinstance(value, bool):
-            raise InterfaceError(f"field '{where}' must be a string, got {value!r}")
+            raise InterfaceError(f"field '{where}' must be a string, got {shown}")
         return str(value)
     if not isinstance(value, dict):
         raise InterfaceError(
-            f"field '{where}' is a {t} and takes a mapping like {{...}}, got {value!r}"
+            f"field '{where}' is a {t} and takes a mapping like {{...}}, got {shown}"
         )
     return fill(t, value, where=where)
 

@@ -165,8 +165,13 @@ class RobotState:
 
 
 def yaw_of(q: dict[str, Any]) -> float:
+    """The heading of a quaternion, normalised first (so 1e308 components do not overflow)."""
     w, x, y, z = (float(q.get(k, 0.0)) for k in ("w", "x", "y", "z"))
-    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+    scale = max(abs(w), abs(x), abs(y), abs(z))
+    if not math.isfinite(scale) or scale == 0.0:
+        return 0.0
+    w, x, y, z = w / scale, x / scale, y / scale, z / scale
+    return math.atan2(2 * (w * z + x * y), w * w + x * x - y * y - z * z)
 
 
 def _f(value: Any, default: float = math.nan) -> float:
