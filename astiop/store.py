@@ -18,8 +18,9 @@ from typing import Any
 import sqlite_utils
 import yaml
 
+from astiop.bounded import has_controls
 from astiop.resources import data_path
-from astiop.warehouse import Rect, default_map
+from astiop.warehouse import GEOFENCE_MARGIN, Rect, default_map
 
 SQLITE_HEADER = b"SQLite format 3\x00"
 BUSY_TIMEOUT_MS = 10_000  # how long a write waits for another process's
@@ -191,13 +192,13 @@ def check_database_file(path: Path) -> None:
         raise StoreError(f"database path {path} is a directory")
     if path.exists() and not path.is_file():
         raise StoreError(f"database path {path} is not a regular file")
-    if path.exists() and path.stat().st_size > 0:
-        try:
+    if path.exists():
+        try:  # read, not stat: /proc files say size 0 and still have content
             with path.open("rb") as fh:
                 header = fh.read(16)
         except OSError as exc:
             raise StoreError(f"cannot read {path}: {exc.strerror or exc}") from None
-        if header != SQLITE_HEADER:
+        if header and header != SQLITE_HEADER:
             raise StoreError(f"{path} is not a SQLite database; it was left untouched")
 
 
@@ -251,10 +252,12 @@ class Store:
             rows = self.db.conn.execute("PRAGMA quick_check(1)").fetchall()
         except sqlite3.DatabaseError as exc:
             self.close()
-            raise StoreError(f"{self.path} is damaged ({exc}); it was left untouched") from None
+            why = " ".join(str(exc).split())[:160]
+            raise StoreError(f"{self.path} is damaged ({why}); it was left untouched") from None
         if rows != [("ok",)]:
             self.close()
-            raise StoreError(f"{self.path} is damaged ({rows[0][0][:120]}); it was left untouched")
+            why = " ".join(str(rows[0][0]).split())[:160]
+            raise StoreError(f"{self.path} is damaged ({why}); it was left untouched")
 
     @contextmanager
     def _tx(self) -> Iterator[None]:
@@ -307,7 +310,10 @@ class Store:
                     f"{self.path} is read-only and needs an upgrade this astiop cannot write"
                 )
             return
-        db.conn.execute("PRAGMA journal_mode=WAL")
+        try:
+            db.conn.execute("PRAGMA journal_mode=WAL")
+        except sqlite3.DatabaseError as exc:
+            raise StoreError(f"{self.path} cannot be written: {exc}") from None
         for index in range(version, SCHEMA_VERSION):
             with db.conn:
                 MIGRATIONS[index](db)
@@ -347,9 +353,11 @@ class Store:
         if not all(math.isfinite(v) for v in (x, y, theta)):
             raise LocationError("x, y and theta must be finite numbers")
         x0, y0, x1, y1 = self.bounds
-        if not (x0 <= x <= x1 and y0 <= y <= y1):
+        m = GEOFENCE_MARGIN
+        if not (x0 + m <= x <= x1 - m and y0 + m <= y <= y1 - m):
             raise LocationError(
-                f"({x:g}, {y:g}) is outside the warehouse (x {x0:g}..{x1:g}, y {y0:g}..{y1:g} m)"
+                f"({x:g}, {y:g}) is outside the geofence "
+                f"(x {x0 + m:g}..{x1 - m:g}, y {y0 + m:g}..{y1 - m:g} m)"
             )
 
     def add_location(
@@ -357,6 +365,8 @@ class Store:
     ) -> Location:
         self._check_new_name(name)
         self._check_pose(x, y, theta)
+        if has_controls(description) or len(description) > 500:
+            raise LocationError("a description is plain text of at most 500 characters")
         theta = math.atan2(math.sin(theta), math.cos(theta))
         now = time.time()
         with self._tx():

@@ -13,6 +13,9 @@ from astiop.resources import data_path
 Rect = tuple[float, float, float, float]  # x_min, y_min, x_max, y_max
 
 
+GEOFENCE_MARGIN = 0.5  # m kept clear of the walls: no goal, no named location closer
+
+
 @dataclass(frozen=True)
 class Station:
     name: str

@@ -80,6 +80,9 @@ class ScriptedLLM:
                 if server.mode == "http500":
                     self._json(500, {"error": {"message": "model crashed\nbadly"}})
                     return
+                if server.mode == "http503":
+                    self._json(503, {"error": {"message": "loading model"}})
+                    return
                 self.send_response(200)
                 self.send_header("Content-Type", "text/event-stream")
                 self.end_headers()

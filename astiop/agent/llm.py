@@ -21,7 +21,9 @@ OnToken = Callable[[str], None]
 
 
 class LLMError(Exception):
-    """A one-line reason the model could not answer."""
+    """A one-line reason the model could not answer; `partial` holds any text streamed first."""
+
+    partial: str = ""
 
 
 class LLMUnavailable(LLMError):
@@ -158,15 +160,25 @@ class ChatClient:
                         if opts.guard and state.cut(opts):
                             break
         except httpx.ConnectError as exc:
-            raise LLMUnavailable(f"{self.label}: cannot connect ({_one_line(str(exc))})") from None
-        except httpx.TimeoutException:
-            raise LLMTimeout(f"{self.label}: no answer within {self.timeout_s:g} s") from None
-        except httpx.HTTPError as exc:
-            raise LLMProtocolError(
-                f"{self.label}: {type(exc).__name__}: {_one_line(str(exc))}"
+            raise _partial(
+                LLMUnavailable(f"{self.label}: cannot connect ({_one_line(str(exc))})"), state
             ) from None
+        except httpx.TimeoutException:
+            raise _partial(
+                LLMTimeout(f"{self.label}: no answer within {self.timeout_s:g} s"), state
+            ) from None
+        except httpx.HTTPError as exc:
+            raise _partial(
+                LLMProtocolError(f"{self.label}: {type(exc).__name__}: {_one_line(str(exc))}"),
+                state,
+            ) from None
+        except LLMError as exc:
+            raise _partial(exc, state) from None
         if not state.done:
-            raise LLMProtocolError(f"{self.label}: the stream ended before the reply was complete")
+            raise _partial(
+                LLMProtocolError(f"{self.label}: the stream ended before the reply was complete"),
+                state,
+            )
         return state.completion()
 
     async def list_models(self) -> list[ModelInfo]:
@@ -205,6 +217,12 @@ class ChatClient:
         if "error" in chunk:
             raise LLMHTTPError(500, f"{self.label}: {_one_line(str(chunk['error']))}")
         return chunk
+
+
+def _partial(exc: LLMError, state: _StreamState) -> LLMError:
+    """The exception, carrying what the reply said before it failed (kept with the turn)."""
+    exc.partial = "".join(state.parts)
+    return exc
 
 
 def repeating(text: str) -> bool:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from urllib.parse import urlsplit
 
 from astiop.agent.embedded import EmbeddedServer, smollm2_path
 from astiop.agent.llm import ChatClient, OllamaClient, OpenAIClient
@@ -26,10 +27,6 @@ class ModelSpec:
     url: str = ""
     path: Path | None = None
 
-    @property
-    def label(self) -> str:
-        return self.raw
-
 
 def parse_spec(text: str) -> ModelSpec:
     raw = (text or "").strip()
@@ -42,20 +39,42 @@ def parse_spec(text: str) -> ModelSpec:
         path = Path(rest).expanduser()
         if not path.is_file():
             raise SpecError(f"GGUF file {path} does not exist")
+        try:
+            with path.open("rb") as fh:
+                magic = fh.read(4)
+        except OSError as exc:
+            raise SpecError(f"cannot read {path}: {exc.strerror or exc}") from None
+        if magic != b"GGUF":
+            raise SpecError(f"{path} is not a GGUF file (it does not start with 'GGUF')")
         return ModelSpec(raw, "gguf", path.stem, path=path)
     name, at, url = rest.rpartition("@") if "@" in rest else (rest, "", "")
+    if url:
+        _check_url(raw, url)
     if kind == "ollama":
         return ModelSpec(raw, "ollama", name, url or OLLAMA_URL)
     if kind == "dmr":
         return ModelSpec(raw, "dmr", name, url or DMR_URL)
     if kind == "openai":
-        if not at or not url.startswith(("http://", "https://")):
+        if not at or not url:
             raise SpecError(
                 f"'{raw}': an openai spec needs a URL, like "
                 "openai:ai/gemma3@http://localhost:12434/engines/v1"
             )
         return ModelSpec(raw, "openai", name, url)
     raise SpecError(f"unknown model kind '{kind}' in '{raw}' (use {SPEC_HELP})")
+
+
+def _check_url(raw: str, url: str) -> None:
+    """An http(s) URL with a host and a port in range, or a one-line reason."""
+    try:
+        parts = urlsplit(url)
+        port = parts.port  # raises on a port that is not a number in 0..65535
+    except ValueError as exc:
+        raise SpecError(f"'{raw}': the URL {url!r} is malformed ({exc})") from None
+    if parts.scheme not in ("http", "https") or not parts.hostname:
+        raise SpecError(f"'{raw}': the URL must be http(s)://HOST[:PORT][/PATH], not {url!r}")
+    if port == 0:
+        raise SpecError(f"'{raw}': port 0 is not a server's port")
 
 
 class LLMEndpoint:

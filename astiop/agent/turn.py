@@ -121,8 +121,10 @@ class Agent:
             fallback = False
             try:
                 commands = await self._plan(request, result, emit)
-            except (LLMUnavailable, LLMTimeout) as exc:
-                if not self.fallback:
+            except (LLMUnavailable, LLMTimeout, LLMHTTPError) as exc:
+                _keep_partial(result, exc)
+                unavailable = not isinstance(exc, LLMHTTPError) or exc.status in (502, 503, 504)
+                if not self.fallback or not unavailable:
                     raise
                 # the baseline answers instead, labelled so; the turn still records the error
                 result.error = f"{exc}; answered by the rules fallback"
@@ -134,6 +136,7 @@ class Agent:
                 await self._execute(commands, result, emit)
                 result.answer = await self._interpret(request, result, emit, fallback)
         except LLMError as exc:
+            _keep_partial(result, exc)
             result.error = str(exc)
             if not result.answer:
                 result.answer = f"The model could not answer: {exc}"
@@ -308,6 +311,7 @@ class Agent:
                 executed=int(ex.executed),
                 output=ex.output,
                 values=ex.values,
+                source="chat",
             )
 
     async def _execute(self, commands: list[str], result: TurnResult, emit) -> None:
@@ -401,6 +405,11 @@ class Agent:
                 result.interaction_id, outcome=result.outcome, outcome_at=time.time()
             )
         return text
+
+
+def _keep_partial(result: TurnResult, exc: LLMError) -> None:
+    if exc.partial and f"{exc.partial} [cut off]" not in result.raw_replies:
+        result.raw_replies.append(f"{exc.partial} [cut off]")
 
 
 def _parsed(parse, text: str) -> list[str]:

@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import asyncio
-import sys
 
 import typer
 
-from astiop.cli.common import fail, print_json, state
+from astiop.cli.common import fail, interactive, print_json, state
 from astiop.robot.output import BackendError
 
 
@@ -56,7 +55,7 @@ def chat(
     def ask(checked) -> bool:
         return typer.confirm(f"run '{checked.command.display()}' (it moves the robot)?", err=True)
 
-    confirm = (lambda _c: True) if yes else (ask if sys.stdin.isatty() else None)
+    confirm = (lambda _c: True) if yes else (ask if interactive() else None)
     agent = Agent(
         graph,
         endpoint,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import sys
 from dataclasses import dataclass, field
 from typing import Any, NoReturn
 
@@ -15,8 +16,16 @@ USER_ERROR = 2
 
 
 def fail(message: str, code: int = USER_ERROR) -> NoReturn:
-    typer.echo(f"astiop: {message}", err=True)
+    typer.echo(f"astiop: {' '.join(message.split())}", err=True)  # always one line
     raise typer.Exit(code)
+
+
+def interactive() -> bool:
+    """Whether a person can answer a y/n prompt (stdin may be closed: `<&-`)."""
+    try:
+        return sys.stdin is not None and sys.stdin.isatty()
+    except (ValueError, OSError):  # closed or detached
+        return False
 
 
 def print_json(data: Any) -> None:

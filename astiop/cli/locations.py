@@ -6,6 +6,7 @@ import math
 
 import typer
 
+from astiop.bounded import escape_controls
 from astiop.cli.common import fail, print_json, state
 from astiop.store import LocationError
 
@@ -27,7 +28,7 @@ def list_locations(ctx: typer.Context, as_json: bool = typer.Option(False, "--js
     for loc in locations:
         typer.echo(
             f"{loc.name:<{width}}  {loc.x:7.2f}  {loc.y:7.2f}  "
-            f"{math.degrees(loc.theta):6.1f}°  {loc.description}"
+            f"{math.degrees(loc.theta):6.1f}°  {escape_controls(loc.description)}"
         )
 
 
@@ -43,7 +44,7 @@ def show(ctx: typer.Context, name: str, as_json: bool = typer.Option(False, "--j
     else:
         typer.echo(
             f"{loc.name}: x={loc.x:.3f} m  y={loc.y:.3f} m  theta={math.degrees(loc.theta):.1f}°"
-            + (f"  ({loc.description})" if loc.description else "")
+            + (f"  ({escape_controls(loc.description)})" if loc.description else "")
         )
 
 

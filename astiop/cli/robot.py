@@ -2,11 +2,9 @@
 
 from __future__ import annotations
 
-import sys
-
 import typer
 
-from astiop.cli.common import fail, print_json, state
+from astiop.cli.common import fail, interactive, print_json, state
 from astiop.robot.output import BackendError
 from astiop.robot.validation import Checked
 
@@ -54,8 +52,8 @@ def exec_command(
         return typer.confirm(f"run '{checked.command.display()}' (it moves the robot)?")
 
     # no terminal to ask on and no --yes: the graph refuses actuating commands
-    confirm = (lambda _c: True) if yes else (ask if sys.stdin.isatty() else None)
-    result = graph.run(command, confirm=confirm)
+    confirm = (lambda _c: True) if yes else (ask if interactive() else None)
+    result = graph.run(command, confirm=confirm, source="exec")
     if result.executed and settle and result.kind == "actuate":
         graph.wait_until_idle(900.0)
     graph.close()

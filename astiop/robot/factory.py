@@ -11,11 +11,17 @@ from astiop.store import Store
 
 def make_safety(settings: Settings, store: Store | None) -> SafetyPolicy:
     bounds = store.bounds if store else (0.0, 0.0, 40.0, 25.0)
+
+    def locate(name: str) -> tuple[float, float] | None:
+        loc = store.get_location(name) if store else None
+        return (loc.x, loc.y) if loc else None
+
     return SafetyPolicy(
         max_linear=settings.robot.max_linear_speed,
         max_angular=settings.robot.max_angular_speed,
         geofence=bounds,
         confirm_actuation=settings.robot.confirm_actuation,
+        locate=locate,
     )
 
 

@@ -7,6 +7,7 @@ before anything is sent.
 
 from __future__ import annotations
 
+import contextlib
 import time
 from collections.abc import Callable
 
@@ -17,7 +18,7 @@ from astiop.robot.render import STAMPED
 from astiop.robot.safety import ALWAYS_ALLOWED, Review, SafetyPolicy
 from astiop.robot.state import RobotEvent, RobotState, TopicStat
 from astiop.robot.validation import Checked, validate
-from astiop.store import Store
+from astiop.store import Store, StoreError
 
 Confirm = Callable[[Checked], bool]
 ESTOP_REASON = "the E-STOP is engaged: no motion command runs until the operator releases it"
@@ -38,6 +39,7 @@ class RobotGraph:
         self.timeout_s = timeout_s
         self.store = store
         self.who = who
+        self._last_drive: tuple[float, float, float] | None = None
         if self.latched and not backend.e_stopped:
             backend.estop()  # a restart keeps the E-STOP until it is released
 
@@ -107,9 +109,39 @@ class RobotGraph:
         return refresh()
 
     def run(
-        self, text: str, confirm: Confirm | None = None, timeout: float | None = None
+        self,
+        text: str,
+        confirm: Confirm | None = None,
+        timeout: float | None = None,
+        source: str | None = None,
     ) -> Execution:
-        """Run one command. Nothing reaches the backend unless it is valid, safe and confirmed."""
+        """Run one command. Nothing reaches the backend unless it is valid, safe and confirmed.
+        With a `source` (exec, teleop), a valid command is recorded in the store, whether it
+        ran or safety, the E-STOP or the operator held it; text that is not a command is not."""
+        result = self._run(text, confirm, timeout)
+        if source and result.valid:
+            self.record(result, source)
+        return result
+
+    def record(self, ex: Execution, source: str, interaction_id: int | None = None) -> None:
+        if self.store is None:
+            return
+        # a read-only database still drives the robot; it cannot keep the record
+        with contextlib.suppress(StoreError):
+            self.store.add_command(
+                interaction_id,
+                seq=0,
+                command=ex.command,
+                valid=int(ex.valid),
+                reason=ex.reason or ex.error or None,
+                kind=ex.kind,
+                executed=int(ex.executed),
+                output=ex.output,
+                values=ex.values,
+                source=source,
+            )
+
+    def _run(self, text: str, confirm: Confirm | None, timeout: float | None) -> Execution:
         t0 = time.perf_counter()
         review = self.review(text)
         checked = review.checked
@@ -144,7 +176,15 @@ class RobotGraph:
         return result
 
     def drive(self, vx: float, vy: float, wz: float) -> Execution:
-        """Teleop: the key press is the operator's consent; safety still clamps and holds."""
+        """Teleop: the key press is the operator's consent; safety still clamps and holds.
+        Each change of velocity is recorded (source teleop), not each repeat of a held key."""
+        result = self._drive(vx, vy, wz)
+        if (vx, vy, wz) != self._last_drive:
+            self._last_drive = (vx, vy, wz)
+            self.record(result, "teleop")
+        return result
+
+    def _drive(self, vx: float, vy: float, wz: float) -> Execution:
         twist = f"{{linear: {{x: {vx:g}, y: {vy:g}}}, angular: {{z: {wz:g}}}}}"
         spec = self.catalog.topics.get("/cmd_vel")
         type_ = spec.type if spec else "geometry_msgs/msg/Twist"

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 from astiop.robot.validation import Checked
+from astiop.warehouse import GEOFENCE_MARGIN
 
 # Services that only ever make the robot safer: never held by the e-stop, never confirmed.
 ALWAYS_ALLOWED = {"/stop"}
@@ -24,8 +26,10 @@ class SafetyPolicy:
     max_linear: float = 0.8
     max_angular: float = 1.0
     geofence: tuple[float, float, float, float] = (0.0, 0.0, 40.0, 25.0)
-    geofence_margin: float = 0.5
+    geofence_margin: float = GEOFENCE_MARGIN
     confirm_actuation: bool = True
+    # where a named location is (x, y), so a goal by name is fenced like one by coordinates
+    locate: Callable[[str], tuple[float, float] | None] | None = None
 
     def inside_geofence(self, x: float, y: float) -> bool:
         x0, y0, x1, y1 = self.geofence
@@ -61,9 +65,12 @@ class SafetyPolicy:
             msg = {**msg, "twist": twist}
         elif cmd.key == ("topic", "pub") and name == "/cmd_vel":
             msg, notes = self._clamp_twist(msg, notes)
-        elif cmd.key == ("service", "call") and name == "/goto_position" and not msg.get("name"):
-            if not self.inside_geofence(msg["x"], msg["y"]):
-                return Review(False, self._fence_reason(msg["x"], msg["y"]), checked, False)
+        elif cmd.key == ("service", "call") and name == "/goto_position":
+            where = self.locate(msg["name"]) if msg.get("name") and self.locate else None
+            x, y = where if where else (msg.get("x", 0.0), msg.get("y", 0.0))
+            if (where or not msg.get("name")) and not self.inside_geofence(x, y):
+                label = f"'{msg['name']}' at " if where else ""
+                return Review(False, label + self._fence_reason(x, y), checked, False)
         elif cmd.key == ("action", "send_goal"):
             pose = msg["pose"]
             frame = pose["header"]["frame_id"]

@@ -12,6 +12,7 @@ from textual.widgets import Collapsible, Footer, Header, Input, Static
 from astiop.agent.embedded import EmbeddedModelError
 from astiop.agent.specs import SpecError, open_endpoint
 from astiop.agent.turn import Agent, TurnResult
+from astiop.bounded import escape_controls
 from astiop.robot.output import Execution
 from astiop.screens.base import ConsoleScreen
 from astiop.screens.messages import (
@@ -31,10 +32,10 @@ class CommandView(Static):
     def __init__(self, ex: Execution):
         ok = ex.executed and not ex.error
         mark = "✓" if ok else "✗"
-        line = Text(f"{mark} {ex.command}", style="green" if ok else "red")
+        line = Text(f"{mark} {escape_controls(ex.command)}", style="green" if ok else "red")
         why = ex.reason or ex.error
         if why:
-            line.append(f"\n  {why}", style="italic")
+            line.append(f"\n  {escape_controls(why)}", style="italic")
         for note in ex.notes:
             line.append(f"\n  note: {note}", style="yellow")
         super().__init__(line, classes="cmd-ok" if ok else "cmd-bad")
@@ -88,7 +89,7 @@ class ChatScreen(ConsoleScreen):
             self.agent = self._make_agent(self.agent.endpoint, mode)
             self.notify(f"reply mode: {mode}")
         else:
-            self._log(Static(Text(f"you: {text}"), classes="user-msg"))
+            self._log(Static(Text(f"you: {escape_controls(text)}"), classes="user-msg"))
             self.run_turn(text)
 
     def _switch_model(self, spec: str) -> None:
@@ -135,7 +136,7 @@ class ChatScreen(ConsoleScreen):
         ex: Execution = msg.execution
         self._before_status(CommandView(ex))
         if ex.output:
-            out = Static(ex.output.rstrip(), markup=False)
+            out = Static(Text(escape_controls(ex.output.rstrip())))
             self._before_status(Collapsible(out, title="output", collapsed=True))
 
     def on_reply_token_received(self, msg: ReplyTokenReceived) -> None:
@@ -146,14 +147,14 @@ class ChatScreen(ConsoleScreen):
             self._before_status(self._answer)
         self._parts.append(msg.text)
         # dim until the turn ends: the shown answer is the checked one, not this stream
-        self._answer.update(Text("".join(self._parts), style="dim italic"))
+        self._answer.update(Text(escape_controls("".join(self._parts)), style="dim italic"))
 
     def on_turn_finished(self, msg: TurnFinished) -> None:
         # after every token and command message of the turn: they were posted before it
         result = msg.result
         if not self._parts:
             self._before_status(self._answer)
-        self._answer.update(Text(result.answer))  # the checked answer, not the raw stream
+        self._answer.update(Text(escape_controls(result.answer)))  # checked, not the stream
         if result.grounding.startswith("replaced"):
             why = result.grounding.removeprefix("replaced: ")
             note = Text(f"⚠ answer built from the results: the model's reply was not used ({why})")

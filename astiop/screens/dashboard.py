@@ -15,6 +15,7 @@ from textual.containers import Vertical, VerticalScroll
 from textual.widgets import DataTable, Footer, Header, Static
 
 from astiop.agent.llm import LLMError
+from astiop.bounded import escape_controls
 from astiop.robot.state import RobotState, TopicStat
 from astiop.screens.base import ConsoleScreen
 from astiop.screens.messages import RobotStateSampled, TurnFinished
@@ -186,4 +187,4 @@ class DashboardScreen(ConsoleScreen):
         table = self.query_one("#events", DataTable)
         table.clear()
         for ev in reversed(self.app.recent_events[-EVENT_ROWS:]):
-            table.add_row(f"{ev.t:.1f}", Text(ev.kind), Text(ev.message))
+            table.add_row(f"{ev.t:.1f}", Text(ev.kind), Text(escape_controls(ev.message)))

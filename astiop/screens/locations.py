@@ -9,6 +9,7 @@ from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.widgets import DataTable, Footer, Header
 
+from astiop.bounded import escape_controls
 from astiop.screens.base import ConsoleScreen
 from astiop.screens.modals import ConfirmModal, FormModal
 from astiop.store import Location, LocationError
@@ -45,7 +46,7 @@ class LocationsScreen(ConsoleScreen):
                 f"{loc.x:.2f}",
                 f"{loc.y:.2f}",
                 f"{math.degrees(loc.theta):.1f}",
-                Text(loc.description),  # stored text is data, never markup
+                Text(escape_controls(loc.description)),  # data: never markup, never raw
             )
 
     def selected(self) -> Location | None:

@@ -14,6 +14,7 @@ from textual.binding import Binding
 from textual.containers import Horizontal, VerticalScroll
 from textual.widgets import DataTable, Footer, Header, Input, Select, Static
 
+from astiop.bounded import escape_controls
 from astiop.screens.base import ConsoleScreen
 
 KINDS = [
@@ -140,7 +141,11 @@ class LogsScreen(ConsoleScreen):
             valid = "-" if r["valid"] is None else ("yes" if r["valid"] else "NO")
             # stored text is data, never markup: "[/scan]" prints as typed
             table.add_row(
-                _when(r["t"]), r["kind"], Text(r["model"]), valid, Text(r["summary"][:80])
+                _when(r["t"]),
+                r["kind"],
+                Text(escape_controls(r["model"])),
+                valid,
+                Text(escape_controls(r["summary"][:80])),
             )
         self.sub_title = f"{len(self.shown)} of {len(self.rows)} rows"
         if self.shown:
