@@ -19,7 +19,7 @@ from textual.worker import Worker, WorkerState
 from astiop.agent.specs import LLMEndpoint, open_endpoint
 from astiop.config import Settings
 from astiop.robot.factory import make_robot_graph, make_sim_graph
-from astiop.robot.graph import RobotGraph
+from astiop.robot.gateway import RobotGateway
 from astiop.robot.render import sent_text
 from astiop.robot.state import RobotState, TopicStat
 from astiop.robot.validation import Checked
@@ -38,7 +38,7 @@ from astiop.store import Store
 class Services:
     settings: Settings
     store: Store
-    graph: RobotGraph
+    gateway: RobotGateway
     endpoint: LLMEndpoint
 
 
@@ -54,7 +54,7 @@ class StateSampler(threading.Thread):
         self.halt = threading.Event()
 
     def run(self) -> None:
-        graph, store = self.app.services.graph, self.app.services.store
+        graph, store = self.app.services.gateway, self.app.services.store
         seq, n, failing = self.seq, 0, False
         while not self.halt.wait(self.period):
             try:
@@ -109,15 +109,15 @@ class AstiopApp(App):
         self.services = services
         self.sample_hz = sample_hz
         self.confirm_timeout_s = confirm_timeout_s
-        self.robot_state: RobotState = services.graph.state()
-        self.recent_events = services.graph.events_since(0)[-50:]  # shown at once, not later
+        self.robot_state: RobotState = services.gateway.state()
+        self.recent_events = services.gateway.events_since(0)[-50:]  # shown at once, not later
         self.topic_stats: list[TopicStat] = []
         self.listeners: list[Any] = []  # screens that take broadcasts
         last = self.recent_events[-1].seq if self.recent_events else 0
         self._sampler = StateSampler(self, sample_hz, last)
 
     def on_mount(self) -> None:
-        graph = self.services.graph
+        graph = self.services.gateway
         self.sub_title = f"robot: {graph.backend.name}  model: {self.services.endpoint.spec.raw}"
         graph.start()
         self.topic_stats = graph.topic_stats()
@@ -134,7 +134,7 @@ class AstiopApp(App):
     def on_unmount(self) -> None:
         self._sampler.halt.set()
         self._sampler.join(2.0)
-        self.services.graph.close()
+        self.services.gateway.close()
         self.services.endpoint.close()
 
     def broadcast(self, message_factory) -> None:
@@ -164,14 +164,14 @@ class AstiopApp(App):
         self.run_worker(self._estop, thread=True, group="estop", exit_on_error=False)
 
     def _estop(self) -> None:
-        failures = self.services.graph.estop()
+        failures = self.services.gateway.estop()
         text = "E-STOP engaged: all motion stopped. ctrl+r releases it."
         if failures:
             text += "\n" + "\n".join(failures)
         self.call_from_thread(self.notify, text, severity="error", title="E-STOP", markup=False)
 
     def action_release_estop(self) -> None:
-        if not self.services.graph.e_stopped:
+        if not self.services.gateway.e_stopped:
             self.notify("The e-stop is not engaged.")
             return
 
@@ -182,7 +182,7 @@ class AstiopApp(App):
         self.push_screen(ConfirmModal("Release the e-stop? The robot may move again."), done)
 
     def _release(self) -> None:
-        self.services.graph.release_estop()
+        self.services.gateway.release_estop()
         self.call_from_thread(self.notify, "E-stop released.")
 
     def confirm_from_thread(self, checked: Checked, timeout_s: float | None = None) -> bool:
@@ -231,7 +231,7 @@ def make_app(
     settings: Settings,
     store: Store,
     *,
-    graph: RobotGraph | None = None,
+    graph: RobotGateway | None = None,
     endpoint: LLMEndpoint | None = None,
     sim: Any = None,
     realtime: bool = True,

@@ -29,7 +29,7 @@ from astiop.agent.specs import open_endpoint  # noqa: E402
 from astiop.agent.turn import Agent  # noqa: E402
 from astiop.bench import stage2  # noqa: E402
 from astiop.bench.suites import RobotCase  # noqa: E402
-from astiop.robot.graph import RobotGraph  # noqa: E402
+from astiop.robot.gateway import RobotGateway  # noqa: E402
 from astiop.robot.safety import SafetyPolicy  # noqa: E402
 from astiop.robot.sim_backend import SimBackend  # noqa: E402
 from astiop.store import Store  # noqa: E402
@@ -57,7 +57,7 @@ async def run_one(
     case: RobotCase, endpoint, mode: str, interpretation: str, store: Store, narrow: bool = True
 ):
     sim = stage2.build_sim(case, store, seed=7)
-    graph = RobotGraph(SimBackend(sim, store), SafetyPolicy())
+    graph = RobotGateway(SimBackend(sim, store), SafetyPolicy())
     agent = Agent(
         graph,
         endpoint,

@@ -7,7 +7,7 @@ import pytest
 
 from astiop.agent.specs import open_endpoint
 from astiop.agent.turn import Agent
-from astiop.robot.graph import RobotGraph
+from astiop.robot.gateway import RobotGateway
 from astiop.robot.safety import SafetyPolicy
 from astiop.robot.sim_backend import SimBackend
 from astiop.sim.simulator import Simulator
@@ -24,7 +24,7 @@ def llm():
 
 
 def make_agent(llm, store, mode="command", backend_cls=SimBackend, confirm=YES):
-    graph = RobotGraph(backend_cls(Simulator(seed=0), store), SafetyPolicy())
+    graph = RobotGateway(backend_cls(Simulator(seed=0), store), SafetyPolicy())
     endpoint = open_endpoint(f"openai:scripted@{llm.url}")
     return Agent(graph, endpoint, store, mode=mode, confirm=confirm, session="test")
 
@@ -143,7 +143,7 @@ async def test_server_down_falls_back_to_rules(store):
     with socket.socket() as sock:
         sock.bind(("127.0.0.1", 0))
         port = sock.getsockname()[1]
-    graph = RobotGraph(SimBackend(Simulator(seed=0), store), SafetyPolicy())
+    graph = RobotGateway(SimBackend(Simulator(seed=0), store), SafetyPolicy())
     endpoint = open_endpoint(f"openai:m@http://127.0.0.1:{port}/v1")
     result = await Agent(graph, endpoint, store, confirm=YES).turn("battery level?")
     assert "rules fallback" in result.error and result.answer.startswith("[rules fallback]")

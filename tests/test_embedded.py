@@ -9,7 +9,7 @@ from astiop.agent.embedded import EmbeddedServer, smollm2_path
 from astiop.agent.llm import OpenAIClient
 from astiop.agent.specs import LLMEndpoint, parse_spec
 from astiop.agent.turn import Agent
-from astiop.robot.graph import RobotGraph
+from astiop.robot.gateway import RobotGateway
 from astiop.robot.safety import SafetyPolicy
 from astiop.robot.sim_backend import SimBackend
 from astiop.sim.simulator import Simulator
@@ -69,7 +69,7 @@ async def test_json_schema_reply_validates(server):
 
 
 def make_agent(endpoint, store):
-    graph = RobotGraph(SimBackend(Simulator(seed=0), store), SafetyPolicy())
+    graph = RobotGateway(SimBackend(Simulator(seed=0), store), SafetyPolicy())
     return Agent(graph, endpoint, store, mode="tool", max_tokens=96, confirm=lambda c: True)
 
 

@@ -93,7 +93,7 @@ def test_what_is_sent_is_rebuilt_from_the_parse():
 def test_a_stamped_cmd_vel_gets_the_same_clamp_and_a_fresh_stamp(store):
     from dataclasses import replace
 
-    from astiop.robot.graph import RobotGraph
+    from astiop.robot.gateway import RobotGateway
     from astiop.robot.render import STAMPED
     from astiop.robot.safety import SafetyPolicy
     from astiop.robot.sim_backend import SimBackend
@@ -101,7 +101,7 @@ def test_a_stamped_cmd_vel_gets_the_same_clamp_and_a_fresh_stamp(store):
 
     backend = SimBackend(Simulator(seed=0), store)
     backend.catalog.topics["/cmd_vel"] = replace(backend.catalog.topics["/cmd_vel"], type=STAMPED)
-    graph = RobotGraph(backend, SafetyPolicy(max_linear=0.8))
+    graph = RobotGateway(backend, SafetyPolicy(max_linear=0.8))
     review = graph.review(
         f"ros2 topic pub --once /cmd_vel {STAMPED} '{{twist: {{linear: {{x: 3.0}}}}}}'"
     )
@@ -131,12 +131,12 @@ def test_types_are_as_each_distro_defines_them():
 def test_the_astibot_reports_its_lead_acid_battery_where_the_distro_can_say_so(
     monkeypatch, distro, technology
 ):
-    from astiop.robot.graph import RobotGraph
+    from astiop.robot.gateway import RobotGateway
     from astiop.robot.safety import SafetyPolicy
     from astiop.robot.sim_backend import SimBackend
     from astiop.sim.simulator import Simulator
 
     monkeypatch.setenv("ROS_DISTRO", distro)
-    graph = RobotGraph(SimBackend(Simulator(seed=0), None), SafetyPolicy())
+    graph = RobotGateway(SimBackend(Simulator(seed=0), None), SafetyPolicy())
     r = graph.run("ros2 topic echo /battery_status --once")
     assert r.values["power_supply_technology"] == technology

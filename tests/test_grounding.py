@@ -6,7 +6,7 @@ import pytest
 
 from astiop.agent import grounding
 from astiop.agent.llm import OpenAIClient, repeating
-from astiop.robot.graph import RobotGraph
+from astiop.robot.gateway import RobotGateway
 from astiop.robot.safety import SafetyPolicy
 from astiop.robot.sim_backend import SimBackend
 from astiop.sim.simulator import Simulator
@@ -22,7 +22,7 @@ def results():
     sim = Simulator(seed=3, start=(8.0, 8.75, 0.0), battery_soc=0.62)
     sim.add_obstacle("person", 11.0, 8.75)
     sim.step(0.5)
-    graph = RobotGraph(SimBackend(sim, None), SafetyPolicy())
+    graph = RobotGateway(SimBackend(sim, None), SafetyPolicy())
     topics = ["/robot_pose", "/battery_status", "/robot_status", "/obstacles", "/conveyor/status"]
     out = {t: graph.run(READ.format(t)) for t in topics}
     assert all(ex.executed and not ex.error for ex in out.values())

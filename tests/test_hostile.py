@@ -15,7 +15,7 @@ import pytest
 from astiop.agent.specs import SpecError, parse_spec
 from astiop.config import ConfigError, load_settings
 from astiop.robot.catalog import astibot_catalog
-from astiop.robot.graph import RobotGraph
+from astiop.robot.gateway import RobotGateway
 from astiop.robot.safety import SafetyPolicy
 from astiop.robot.sim_backend import SimBackend
 from astiop.robot.validation import validate
@@ -96,7 +96,7 @@ def test_a_hostile_command_is_refused_with_a_short_reason(text, why):
 
 
 def test_a_goal_heading_of_1e308_is_read_without_overflow():
-    graph = RobotGraph(SimBackend(Simulator(seed=0), None), SafetyPolicy())
+    graph = RobotGateway(SimBackend(Simulator(seed=0), None), SafetyPolicy())
     goal = (
         "ros2 action send_goal /navigate_to_pose nav2_msgs/action/NavigateToPose "
         '"{pose: {header: {frame_id: map}, pose: {position: {x: 5.0, y: 5.0}, '
@@ -311,7 +311,7 @@ def test_named_goals_are_fenced_like_coordinates(tmp_path, store):
     from astiop.robot.factory import make_safety
 
     policy = make_safety(load({}, env={}, path=tmp_path / "n.toml"), store)
-    graph = RobotGraph(SimBackend(Simulator(seed=0), store), policy)
+    graph = RobotGateway(SimBackend(Simulator(seed=0), store), policy)
     r = graph.run(
         'ros2 service call /goto_position astiop_msgs/srv/GotoPosition "{name: edge}"',
         confirm=lambda c: True,

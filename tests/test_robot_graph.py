@@ -8,8 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from astiop.robot.catalog import astibot_catalog
+from astiop.robot.gateway import RobotGateway
 from astiop.robot.grammar import CommandSyntaxError, parse
-from astiop.robot.graph import RobotGraph
 from astiop.robot.interfaces import interface_show
 from astiop.robot.safety import SafetyPolicy
 from astiop.robot.sim_backend import SimBackend
@@ -133,7 +133,7 @@ class RecordingBackend(SimBackend):
 @pytest.fixture
 def graph(store):
     backend = RecordingBackend(Simulator(seed=0), store)
-    return RobotGraph(backend, SafetyPolicy())
+    return RobotGateway(backend, SafetyPolicy())
 
 
 @pytest.mark.parametrize("command,why", INVALID)
@@ -149,7 +149,7 @@ def test_parser_never_crashes(text):
         parse(text)
 
 
-_SHARED = RobotGraph(RecordingBackend(Simulator(seed=0, lidar_enabled=False)), SafetyPolicy())
+_SHARED = RobotGateway(RecordingBackend(Simulator(seed=0, lidar_enabled=False)), SafetyPolicy())
 _pieces = st.sampled_from(
     [
         "ros2",

@@ -9,7 +9,7 @@ import time
 
 import pytest
 
-from astiop.robot.graph import RobotGraph
+from astiop.robot.gateway import RobotGateway
 from astiop.robot.safety import SafetyPolicy
 from astiop.store import Store
 from tests.emulator import (
@@ -49,10 +49,10 @@ def robot(monkeypatch):
         yield folder
 
 
-def gateway(store: Store | None = None, *, stream: bool = True) -> RobotGraph:
+def gateway(store: Store | None = None, *, stream: bool = True) -> RobotGateway:
     from astiop.robot.ros2_backend import Ros2Backend
 
-    graph = RobotGraph(Ros2Backend("ros2", 10.0, stream=stream), SafetyPolicy(), store=store)
+    graph = RobotGateway(Ros2Backend("ros2", 10.0, stream=stream), SafetyPolicy(), store=store)
     graph.start()
     return graph
 
@@ -226,7 +226,7 @@ def test_a_service_nobody_serves_is_reported_within_its_bound(monkeypatch):
 
         backend = Ros2Backend("ros2", 10.0, stream=False)
         backend.catalog.services["/dock"] = astibot_catalog().services["/dock"]  # listed earlier
-        graph = RobotGraph(backend, SafetyPolicy())
+        graph = RobotGateway(backend, SafetyPolicy())
         t0 = time.monotonic()
         r = graph.run("ros2 service call /dock std_srvs/srv/Trigger", confirm=YES, timeout=2.0)
         assert "service /dock is not available" in r.error

@@ -58,7 +58,7 @@ async def test_ros2_dashboard_and_estop_during_a_confirmation(tmp_path, monkeypa
             await pilot.pause()
             await pilot.press("y")  # too late: the E-STOP answered "no"
             await app.workers.wait_for_complete()
-            assert app.services.graph.e_stopped
+            assert app.services.gateway.e_stopped
         calls = ros2_calls(robot)
         assert not any(c[:3] == ["service", "call", "/goto_position"] for c in calls)
         assert ARMED_ESTOP in calls
@@ -69,7 +69,7 @@ async def test_ros2_teleop_moves_the_robot(tmp_path, monkeypatch):
         on_path(monkeypatch, robot)
         app = ros2_console(tmp_path)
         async with app.run_test(size=SIZE) as pilot:
-            graph = app.services.graph
+            graph = app.services.gateway
             graph.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=lambda _c: True)
 
             def idle() -> bool:

@@ -16,4 +16,4 @@ def console(tmp_path, model: str = "rules", sim: Simulator | None = None, **kwar
 
 def sim_of(app) -> Simulator:
     """The simulator behind the console (tests only: the UI never reaches it)."""
-    return app.services.graph.backend.sim
+    return app.services.gateway.backend.sim

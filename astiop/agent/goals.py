@@ -11,7 +11,7 @@ import math
 import re
 import time
 
-from astiop.robot.graph import RobotGraph
+from astiop.robot.gateway import RobotGateway
 from astiop.robot.output import Execution
 
 NAVIGATING = ("/goto_position", "/dock", "/undock", "send_goal")
@@ -49,7 +49,7 @@ def target_of(ex: Execution, places: dict[str, tuple[float, float]]) -> tuple[fl
     return (float(xy[1]), float(xy[2])) if xy else None
 
 
-def outcome_at(graph: RobotGraph, target: tuple[float, float] | None, name: str = "") -> str:
+def outcome_at(graph: RobotGateway, target: tuple[float, float] | None, name: str = "") -> str:
     """How a goal that reported no outcome ended, from the robot's reported state and pose
     (for a dock or undock, from its reported docked flag)."""
     state = graph.state()
@@ -64,7 +64,7 @@ def outcome_at(graph: RobotGraph, target: tuple[float, float] | None, name: str 
     return "ended"
 
 
-def started_text(graph: RobotGraph, ex: Execution) -> str:
+def started_text(graph: RobotGateway, ex: Execution) -> str:
     """'goal accepted: shipping, 11.4 m to go', the distance along the robot's own /plan."""
     deadline = time.monotonic() + 1.0
     while True:
@@ -77,7 +77,7 @@ def started_text(graph: RobotGraph, ex: Execution) -> str:
 
 
 async def follow(
-    graph: RobotGraph,
+    graph: RobotGateway,
     started_line: str,
     timeout_s: float,
     target: tuple[float, float] | None = None,

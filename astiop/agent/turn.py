@@ -36,7 +36,7 @@ from astiop.agent.tools import (
     tool_grammar,
     tool_schema,
 )
-from astiop.robot.graph import Confirm, RobotGraph
+from astiop.robot.gateway import Confirm, RobotGateway
 from astiop.robot.output import Execution
 from astiop.store import Store
 from astiop.warehouse import WarehouseMap
@@ -49,7 +49,7 @@ DEADLINE_S = 120.0  # no reply streams longer than this, whatever the server doe
 class Agent:
     def __init__(
         self,
-        graph: RobotGraph,
+        graph: RobotGateway,
         endpoint: LLMEndpoint,
         store: Store | None = None,
         *,

@@ -18,7 +18,7 @@ from astiop.agent.turn import Agent
 from astiop.bench import stage1, stage2, suites
 from astiop.config import Settings
 from astiop.robot.factory import make_safety
-from astiop.robot.graph import RobotGraph
+from astiop.robot.gateway import RobotGateway
 from astiop.robot.sim_backend import SimBackend
 from astiop.store import Store
 
@@ -191,7 +191,7 @@ async def _run_case(store, settings, config, endpoint: LLMEndpoint, system, case
 
 async def _robot_case(store, settings, config, endpoint, case, mode):
     sim = stage2.build_sim(case, store, config.seed)
-    graph = RobotGraph(SimBackend(sim, store), make_safety(settings, store))
+    graph = RobotGateway(SimBackend(sim, store), make_safety(settings, store))
     agent = Agent(
         graph,
         endpoint,

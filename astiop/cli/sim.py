@@ -22,7 +22,7 @@ def bench(
     as_json: bool = typer.Option(False, "--json", help="Print the figures as JSON."),
 ) -> None:
     """Run a seeded mission (undock, three stations, dock) as fast as possible; print figures."""
-    from astiop.sim.bench import MISSION, run_mission
+    from astiop.sim.mission import MISSION, run_mission
 
     def progress(step: str, leg: dict) -> None:
         if not as_json:

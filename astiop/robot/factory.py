@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from astiop.config import Settings
-from astiop.robot.graph import RobotGraph
+from astiop.robot.gateway import RobotGateway
 from astiop.robot.safety import SafetyPolicy
 from astiop.sim.simulator import Simulator
 from astiop.store import Store
@@ -32,22 +32,22 @@ def make_sim_graph(
     realtime: bool = False,
     sim: Simulator | None = None,
     who: str = "astiop",
-) -> RobotGraph:
+) -> RobotGateway:
     from astiop.robot.sim_backend import SimBackend
 
     sim = sim or Simulator(seed=settings.sim.seed, v_max=settings.robot.max_linear_speed)
     backend = SimBackend(sim, store, realtime=realtime, speed=settings.sim.speed)
-    return RobotGraph(backend, make_safety(settings, store), store=store, who=who)
+    return RobotGateway(backend, make_safety(settings, store), store=store, who=who)
 
 
 def make_robot_graph(
     settings: Settings, store: Store | None, *, realtime: bool = False, who: str = "astiop"
-) -> RobotGraph:
+) -> RobotGateway:
     if settings.robot.backend == "ros2":
         from astiop.robot.ros2_backend import Ros2Backend
 
         backend = Ros2Backend(settings.robot.ros2_executable, settings.robot.ros2_timeout_s)
-        return RobotGraph(
+        return RobotGateway(
             backend,
             make_safety(settings, store),
             settings.robot.ros2_timeout_s,

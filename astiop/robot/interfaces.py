@@ -128,10 +128,6 @@ def _parts(type_name: str, distro: str) -> tuple[MessageType, ...]:
     return tuple(_parse_block(name + sfx, blk) for sfx, blk in zip(suffixes[len(blocks)], blocks))
 
 
-def get_message(type_name: str) -> MessageType:
-    return get_parts(type_name)[0]
-
-
 # -- `ros2 interface show` --------------------------------------------------------------
 def interface_show(type_name: str, distro: str | None = None) -> str:
     name = normalize_type(type_name)

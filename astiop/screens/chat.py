@@ -60,7 +60,7 @@ class ChatScreen(ConsoleScreen):
     def _make_agent(self, endpoint, mode: str) -> Agent:
         services = self.app.services
         return Agent(
-            services.graph,
+            services.gateway,
             endpoint,
             services.store,
             mode=mode,
@@ -104,7 +104,7 @@ class ChatScreen(ConsoleScreen):
             endpoint,
             self.agent.mode if self.agent.mode != "rules" else self.app.services.settings.llm.mode,
         )
-        self.app.sub_title = f"robot: {self.app.services.graph.backend.name}  model: {spec}"
+        self.app.sub_title = f"robot: {self.app.services.gateway.backend.name}  model: {spec}"
         self.run_worker(old.close, thread=True, group="model")
         self.notify(f"model: {endpoint.spec.raw}", markup=False)
 

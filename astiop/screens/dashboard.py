@@ -20,7 +20,7 @@ from astiop.robot.state import RobotState, TopicStat
 from astiop.screens.base import ConsoleScreen
 from astiop.screens.messages import RobotStateSampled, TurnFinished
 from astiop.widgets.gauges import BatteryGauge
-from astiop.widgets.warehouse_map import WarehouseMapView
+from astiop.widgets.map_view import WarehouseMapView
 
 STATE_COLOURS = {
     "idle": "green",
@@ -78,7 +78,7 @@ class DashboardScreen(ConsoleScreen):
         yield Header(show_clock=False)
         with Vertical(id="dash-grid"):
             with Vertical(id="dash-left"):
-                yield WarehouseMapView(self.app.services.graph.map_geometry(), id="map-panel")
+                yield WarehouseMapView(self.app.services.gateway.map_geometry(), id="map-panel")
                 yield DataTable(id="events", cursor_type="none", zebra_stripes=True)
             with VerticalScroll(id="dash-right"):
                 yield Static(id="robot", classes="panel")
@@ -93,7 +93,7 @@ class DashboardScreen(ConsoleScreen):
         self.last_turn = None
         self.query_one("#topics", DataTable).add_columns("topic", "type", "Hz", "age")
         self.query_one("#events", DataTable).add_columns("t", "kind", "message")
-        cat = self.app.services.graph.catalog
+        cat = self.app.services.gateway.catalog
         text = Text("services & actions\n", style="bold")
         for s in cat.services.values():
             text.append(s.name + "  ").append(s.type + "\n", style="dim")
@@ -170,7 +170,7 @@ class DashboardScreen(ConsoleScreen):
 
     def show_state(self, st: RobotState) -> None:
         view = self.query_one(WarehouseMapView)
-        view.set_geometry(self.app.services.graph.map_geometry())
+        view.set_geometry(self.app.services.gateway.map_geometry())
         view.show(st)
         text = robot_text(st)
         if text.plain != getattr(self, "_robot_text", None):

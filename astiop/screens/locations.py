@@ -131,7 +131,7 @@ class LocationsScreen(ConsoleScreen):
         self.run_worker(lambda: self._goto(cmd), thread=True, group="goto", exit_on_error=False)
 
     def _goto(self, cmd: str) -> None:
-        graph = self.app.services.graph
+        graph = self.app.services.gateway
         result = graph.run(cmd, confirm=self.app.confirm_from_thread)
         values = result.values or {}
         if result.executed and values.get("success"):

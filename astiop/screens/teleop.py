@@ -17,7 +17,7 @@ from astiop.robot.state import RobotState, wheel_speeds
 from astiop.screens.base import ConsoleScreen
 from astiop.screens.messages import RobotStateSampled
 from astiop.widgets.gauges import WheelBars
-from astiop.widgets.warehouse_map import WarehouseMapView
+from astiop.widgets.map_view import WarehouseMapView
 
 STEPS = (0.1, 0.2, 0.4, 0.8)
 
@@ -43,7 +43,7 @@ class TeleopScreen(ConsoleScreen):
     def compose(self) -> ComposeResult:
         yield Header(show_clock=False)
         with Vertical(id="teleop-grid"):
-            yield WarehouseMapView(self.app.services.graph.map_geometry())
+            yield WarehouseMapView(self.app.services.gateway.map_geometry())
             with Vertical():
                 yield Static(id="teleop-help", classes="panel")
                 yield WheelBars(id="wheels", classes="panel")
@@ -82,7 +82,7 @@ class TeleopScreen(ConsoleScreen):
         )
 
     def _drive(self, vx: float, vy: float, wz: float) -> None:
-        result = self.app.services.graph.drive(vx, vy, wz)
+        result = self.app.services.gateway.drive(vx, vy, wz)
         if not result.executed or result.error:
             why = result.reason or result.error
             self.app.call_from_thread(self.notify, why, severity="warning", markup=False)
@@ -93,7 +93,7 @@ class TeleopScreen(ConsoleScreen):
         self.run_worker(self._halt, thread=True, group="teleop", exit_on_error=False)
 
     def _halt(self) -> None:
-        result = self.app.services.graph.run("ros2 service call /stop std_srvs/srv/Trigger")
+        result = self.app.services.gateway.run("ros2 service call /stop std_srvs/srv/Trigger")
         if result.error:
             self.app.call_from_thread(self.notify, result.error, severity="error", markup=False)
 

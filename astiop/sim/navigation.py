@@ -11,7 +11,7 @@ import numpy as np
 
 from astiop.sim.controller import ControllerGains, arrived, goto_pose_command, tracking_error
 from astiop.sim.geometry import path_length, segments_hit_boxes, wrap_angle
-from astiop.sim.navigator import Goal, GoalResult, Leg
+from astiop.sim.goal import Goal, GoalResult, Leg
 from astiop.sim.planner import PlanningError
 
 ROBOT_LENGTH, ROBOT_WIDTH = 1.0, 0.735

@@ -13,10 +13,8 @@ class SimRunner:
         self.sim = sim
         self.speed = speed
         self.period_s = period_s
-        self.paused = False
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
-        self.overruns = 0
 
     def start(self) -> SimRunner:
         if self._thread is None:
@@ -39,10 +37,7 @@ class SimRunner:
         while not self._stop.is_set():
             now = time.perf_counter()
             elapsed, last = now - last, now
-            if not self.paused:
-                # never try to catch up more than a quarter second after a stall
-                self.sim.step(min(elapsed, 0.25) * self.speed)
+            # never try to catch up more than a quarter second after a stall
+            self.sim.step(min(elapsed, 0.25) * self.speed)
             spent = time.perf_counter() - now
-            if spent > self.period_s:
-                self.overruns += 1
             self._stop.wait(max(0.0, self.period_s - spent))

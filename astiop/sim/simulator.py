@@ -21,9 +21,9 @@ from astiop.sim.battery import Battery
 from astiop.sim.controller import ControllerGains, tracking_error
 from astiop.sim.conveyor import Conveyor
 from astiop.sim.geometry import wrap_angle
+from astiop.sim.goal import Goal, GoalResult
 from astiop.sim.kinematics import ASTIBOT, MecanumParams, achievable_velocity, inverse_kinematics
 from astiop.sim.navigation import INFLATION, ROBOT_LENGTH, ROBOT_WIDTH, GoalError, NavigationMixin
-from astiop.sim.navigator import Goal, GoalResult
 from astiop.sim.perception import DetectedObstacle, detect
 from astiop.sim.planner import Planner
 from astiop.sim.state import Event, SimState

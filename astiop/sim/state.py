@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from astiop.sim.navigator import GoalResult
+from astiop.sim.goal import GoalResult
 from astiop.sim.perception import DetectedObstacle
 from astiop.sim.world import Obstacle
 

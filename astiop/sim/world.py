@@ -41,10 +41,6 @@ class Obstacle:
             return circle_polygon(self.x, self.y, length / 2)
         return oriented_box(self.x, self.y, self.theta, length, width)
 
-    def aabb(self) -> tuple[float, float, float, float]:
-        pts = self.outline()
-        return (*pts.min(axis=0), *pts.max(axis=0))
-
 
 class World:
     def __init__(self, warehouse: WarehouseMap):
@@ -71,10 +67,6 @@ class World:
         self._obstacle_bodies: dict[int, tuple[pymunk.Body, pymunk.Shape]] = {}
         self._ids = itertools.count(1)
         self._edges_cache: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
-
-    @property
-    def n_static_edges(self) -> int:
-        return len(self._static_a)
 
     def add_obstacle(self, kind: str, x: float, y: float, theta: float = 0.0) -> Obstacle:
         if kind not in OBSTACLE_SIZES:
@@ -105,10 +97,6 @@ class World:
         self.space.remove(body, shape)
         self._edges_cache = None
         return self.obstacles.pop(obstacle_id)
-
-    def clear_obstacles(self) -> None:
-        for oid in list(self.obstacles):
-            self.remove_obstacle(oid)
 
     def edges(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """All edges the lidar sees, with an owner per edge: -1 fixed geometry, else obstacle id."""

@@ -24,7 +24,7 @@ Confirm = Callable[[Checked], bool]
 ESTOP_REASON = "the E-STOP is engaged: no motion command runs until the operator releases it"
 
 
-class RobotGraph:
+class RobotGateway:
     def __init__(
         self,
         backend: RobotBackend,
