@@ -9,10 +9,12 @@ from __future__ import annotations
 
 import contextlib
 import threading
+from collections.abc import Iterable
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
-from textual.app import App
+from textual.app import App, SystemCommand
 from textual.binding import Binding
 from textual.worker import Worker, WorkerState
 
@@ -156,6 +158,81 @@ class AstiopApp(App):
 
     def on_turn_finished(self, msg: TurnFinished) -> None:
         self.broadcast(lambda: TurnFinished(msg.result, msg.model))
+
+    # -- the command palette ---------------------------------------------------------------
+    def get_system_commands(self, screen) -> Iterable[SystemCommand]:
+        """The console's own commands beside Textual's (ctrl+p)."""
+        yield from super().get_system_commands(screen)
+        yield SystemCommand("E-STOP", "Stop all motion now (ctrl+e)", self.action_estop)
+        yield SystemCommand(
+            "Release the E-STOP",
+            "Let the robot move again, after a y/n (ctrl+r)",
+            self.action_release_estop,
+        )
+        llm = self.services.settings.llm
+        for spec in dict.fromkeys([llm.model, "rules", "embedded", *llm.endpoints]):
+            yield SystemCommand(
+                f"Model: {spec}",
+                "Answer in Chat with this model",
+                partial(self._in_chat, "model", spec),
+            )
+        for mode in ("tool", "command"):
+            yield SystemCommand(
+                f"Reply mode: {mode}",
+                "How the model writes its plan",
+                partial(self._in_chat, "mode", mode),
+            )
+        for loc in self.services.store.list_locations():
+            yield SystemCommand(
+                f"Go to {loc.name}",
+                f"Drive to ({loc.x:.1f}, {loc.y:.1f}) after a y/n",
+                partial(self.goto_location, loc.name),
+            )
+        for fmt in ("csv", "json"):
+            yield SystemCommand(
+                f"Export logs as {fmt.upper()}",
+                "Interactions and events, to a file",
+                partial(self._export_logs, fmt),
+            )
+
+    def _in_chat(self, what: str, value: str) -> None:
+        self.switch_mode("chat")
+
+        def apply() -> None:
+            chat = self.screen
+            if not isinstance(chat, ChatScreen):
+                return
+            if what == "model":
+                chat.switch_model(value)
+            else:
+                chat.switch_reply_mode(value)
+
+        self.call_after_refresh(apply)
+
+    def _export_logs(self, fmt: str) -> None:
+        self.switch_mode("logs")
+
+        def export() -> None:
+            if isinstance(self.screen, LogsScreen):
+                self.screen.action_export(fmt)
+
+        self.call_after_refresh(export)
+
+    def goto_location(self, name: str) -> None:
+        """Drive to a named location: the same y/n as every actuation, off the UI thread."""
+        cmd = (
+            f"ros2 service call /goto_position astiop_msgs/srv/GotoPosition \"{{name: '{name}'}}\""
+        )
+        self.run_worker(lambda: self._goto(cmd), thread=True, group="goto", exit_on_error=False)
+
+    def _goto(self, cmd: str) -> None:
+        result = self.services.gateway.run(cmd, confirm=self.confirm_from_thread, source="console")
+        values = result.values or {}
+        if result.executed and values.get("success"):
+            self.call_from_thread(self.notify, values["message"], markup=False)
+        else:
+            why = result.reason or result.error or values.get("message", "refused")
+            self.call_from_thread(self.notify, why, severity="error", markup=False)
 
     # -- safety -------------------------------------------------------------------------
     def action_estop(self) -> None:

@@ -84,3 +84,19 @@ def test_config_path_and_show(tmp_path, monkeypatch):
     monkeypatch.setenv("ASTIOP_CONFIG", str(cfg))
     assert astiop("config", "path").stdout.strip() == str(cfg)
     assert "seed = 42" in astiop("config", "show").stdout
+
+
+def test_doctor_on_a_fresh_install_and_with_a_broken_model(tmp_path):
+    db = str(tmp_path / "d.db")
+    out = astiop("--db", db, "doctor")
+    assert out.returncode == 0 and out.stdout.rstrip().endswith("ready"), out.stdout
+    for check in ("python", "packages", "settings", "database", "model (selected)", "robot"):
+        assert f"  {check}" in out.stdout
+    from astiop.store import SCHEMA_VERSION
+
+    assert f"schema {SCHEMA_VERSION}/{SCHEMA_VERSION}, quick_check ok" in out.stdout
+    broken = astiop("--db", db, "--model", "openai:x@http://127.0.0.1:9/v1", "doctor", "--json")
+    report = json.loads(broken.stdout)
+    assert broken.returncode == 1 and not report["ok"]
+    failed = [c for c in report["checks"] if c["status"] == "FAIL"]
+    assert [c["check"] for c in failed] == ["model (selected)"]

@@ -224,3 +224,36 @@ async def test_a_refused_plan_and_a_replaced_answer_are_shown_as_such(tmp_path):
             assert sim_of(app).docked()
     finally:
         llm.close()
+
+
+async def test_the_command_palette_offers_the_consoles_own_commands(tmp_path):
+    app = console(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+        titles = [c.title for c in app.get_system_commands(app.screen)]
+        for wanted in (
+            "E-STOP",
+            "Release the E-STOP",
+            "Model: rules",
+            "Reply mode: command",
+            "Go to shipping",
+            "Export logs as CSV",
+        ):
+            assert wanted in titles
+        command = next(
+            c for c in app.get_system_commands(app.screen) if c.title == "Model: embedded"
+        )
+        command.callback()
+        await pilot.pause()
+        await pilot.pause()
+        assert type(app.screen).__name__ == "ChatScreen"
+        assert app.services.endpoint.spec.raw == "embedded"
+        go = next(c for c in app.get_system_commands(app.screen) if c.title == "Go to shipping")
+        go.callback()
+        for _ in range(50):
+            await pilot.pause(0.05)
+            if type(app.screen).__name__ == "ConfirmModal":
+                break
+        assert type(app.screen).__name__ == "ConfirmModal" and sim_of(app).goal is None
+        await pilot.press("n")
+        await app.workers.wait_for_complete()
+        assert sim_of(app).goal is None

@@ -8,7 +8,7 @@ from pathlib import Path
 import typer
 
 from astiop import __version__
-from astiop.cli import agent, bench, config_cmd, emulate, locations, robot, sim
+from astiop.cli import agent, bench, config_cmd, doctor, emulate, locations, robot, sim
 from astiop.cli.common import CliState
 
 app = typer.Typer(
@@ -25,6 +25,7 @@ app.command("exec")(robot.exec_command)
 app.command("chat")(agent.chat)
 app.command("models")(agent.models)
 app.command("emulate-ros2")(emulate.emulate_ros2)
+app.command("doctor")(doctor.doctor)
 
 
 def _version(value: bool) -> None:

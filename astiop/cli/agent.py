@@ -113,43 +113,13 @@ def chat(
 
 def models(ctx: typer.Context, as_json: bool = typer.Option(False, "--json")) -> None:
     """List the configured model endpoints, whether each answers, and what it serves."""
-    from astiop.agent.embedded import EmbeddedModelError, smollm2_path
-    from astiop.agent.llm import LLMError
-    from astiop.agent.specs import SpecError, open_endpoint
+    from astiop.agent.probe import probe
 
     settings = state(ctx).settings
     specs = list(dict.fromkeys([settings.llm.model, "rules", "embedded", *settings.llm.endpoints]))
-    rows = []
-
-    async def probe(spec: str) -> dict:
-        row = {"spec": spec, "answers": False, "serves": [], "detail": ""}
-        try:
-            ep = open_endpoint(spec)
-        except SpecError as exc:
-            row["detail"] = str(exc)
-            return row
-        if ep.is_rules:
-            row.update(answers=True, detail="rule-based baseline, no LLM")
-        elif ep.local:
-            try:
-                path = smollm2_path() if ep.spec.kind == "embedded" else ep.spec.path
-                row.update(
-                    answers=True, serves=[path.stem], detail=f"started on demand from {path}"
-                )
-            except EmbeddedModelError as exc:
-                row["detail"] = str(exc)
-        else:
-            try:
-                found = await ep.client().list_models()
-                row.update(answers=True, serves=[m.name for m in found])
-                if ep.spec.name and ep.spec.name not in row["serves"]:
-                    row["detail"] = f"{ep.spec.name} is not among the served models"
-            except LLMError as exc:
-                row["detail"] = str(exc)
-        return row
 
     async def run_all():
-        return await asyncio.gather(*(probe(s) for s in specs))
+        return [r.as_json() for r in await asyncio.gather(*(probe(s) for s in specs))]
 
     rows = asyncio.run(run_all())
     if as_json:

@@ -80,19 +80,21 @@ class ChatScreen(ConsoleScreen):
         if not text:
             return
         if text.startswith("/model"):
-            self._switch_model(text.removeprefix("/model").strip())
+            self.switch_model(text.removeprefix("/model").strip())
         elif text.startswith("/mode"):
-            mode = text.removeprefix("/mode").strip()
-            if mode not in ("command", "tool"):
-                self.notify("/mode takes 'command' or 'tool'", severity="error", markup=False)
-                return
-            self.agent = self._make_agent(self.agent.endpoint, mode)
-            self.notify(f"reply mode: {mode}")
+            self.switch_reply_mode(text.removeprefix("/mode").strip())
         else:
             self._log(Static(Text(f"you: {escape_controls(text)}"), classes="user-msg"))
             self.run_turn(text)
 
-    def _switch_model(self, spec: str) -> None:
+    def switch_reply_mode(self, mode: str) -> None:
+        if mode not in ("command", "tool"):
+            self.notify("/mode takes 'command' or 'tool'", severity="error", markup=False)
+            return
+        self.agent = self._make_agent(self.agent.endpoint, mode)
+        self.notify(f"reply mode: {mode}")
+
+    def switch_model(self, spec: str) -> None:
         try:
             endpoint = open_endpoint(spec or "rules")
         except SpecError as exc:

