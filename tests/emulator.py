@@ -29,7 +29,13 @@ ARMED_ESTOP = [
 
 
 @contextlib.contextmanager
-def emulated_robot(*, latency_ms: int = 30, distro: str = "jazzy", missing: tuple[str, ...] = ()):
+def emulated_robot(
+    *,
+    latency_ms: int = 30,
+    distro: str = "jazzy",
+    missing: tuple[str, ...] = (),
+    speed: float = 1.0,
+):
     folder = Path(tempfile.mkdtemp(prefix="emu-", dir="/tmp"))  # short: a Unix socket path
     argv = [
         sys.executable,
@@ -42,6 +48,8 @@ def emulated_robot(*, latency_ms: int = 30, distro: str = "jazzy", missing: tupl
         distro,
         "--latency-ms",
         str(latency_ms),
+        "--speed",
+        str(speed),
     ]
     for name in missing:
         argv += ["--missing", name]

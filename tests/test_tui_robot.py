@@ -65,7 +65,7 @@ async def test_ros2_dashboard_and_estop_during_a_confirmation(tmp_path, monkeypa
 
 
 async def test_ros2_teleop_moves_the_robot(tmp_path, monkeypatch):
-    with emulated_robot() as robot:
+    with emulated_robot(speed=4.0) as robot:
         on_path(monkeypatch, robot)
         app = ros2_console(tmp_path)
         async with app.run_test(size=SIZE) as pilot:

@@ -21,6 +21,9 @@ def emulate_ros2(
     missing: list[str] = typer.Option(
         [], "--missing", help="A topic, service or action the robot lacks (repeatable)."
     ),
+    speed: float = typer.Option(
+        1.0, "--speed", min=0.1, max=20.0, help="Real-time factor of the robot (tests: > 1)."
+    ),
 ) -> None:
     """Run an emulated robot until Ctrl-C; put DIR on PATH and use `astiop --robot ros2`."""
     from astiop.robot.emulator.robot import EmulatedRobot, write_client
@@ -34,7 +37,7 @@ def emulate_ros2(
     try:
         exe = write_client(folder, distro=distro, latency_ms=latency_ms, missing=tuple(missing))
         os.environ["ROS_DISTRO"] = distro  # as a sourced ROS 2 sets it, for the robot's types
-        robot = EmulatedRobot(folder, seed=seed, distro=distro, missing=tuple(missing))
+        robot = EmulatedRobot(folder, seed=seed, distro=distro, missing=tuple(missing), speed=speed)
     except OSError as exc:
         fail(f"cannot set up {folder}: {exc.strerror or exc}")
     typer.echo(

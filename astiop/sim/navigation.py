@@ -170,8 +170,8 @@ class NavigationMixin:
             if g.blocked_since is None:
                 g.blocked_since = self.t
                 self._event("nav", f"path to {g.name} blocked; waiting", "warning")
-            elif self.t - g.blocked_since > BLOCKED_GIVE_UP_S:
-                self._finish("aborted", f"path blocked for {BLOCKED_GIVE_UP_S:.0f} s")
+            elif self.t - g.blocked_since > self.blocked_give_up_s:
+                self._finish("aborted", f"path blocked for {self.blocked_give_up_s:.0f} s")
             return
         if g.blocked_since is not None:
             self._event("nav", f"path to {g.name} clear again")

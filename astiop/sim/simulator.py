@@ -23,7 +23,14 @@ from astiop.sim.conveyor import Conveyor
 from astiop.sim.geometry import wrap_angle
 from astiop.sim.goal import Goal, GoalResult
 from astiop.sim.kinematics import ASTIBOT, MecanumParams, achievable_velocity, inverse_kinematics
-from astiop.sim.navigation import INFLATION, ROBOT_LENGTH, ROBOT_WIDTH, GoalError, NavigationMixin
+from astiop.sim.navigation import (
+    BLOCKED_GIVE_UP_S,
+    INFLATION,
+    ROBOT_LENGTH,
+    ROBOT_WIDTH,
+    GoalError,
+    NavigationMixin,
+)
 from astiop.sim.perception import DetectedObstacle, detect
 from astiop.sim.planner import Planner
 from astiop.sim.state import Event, SimState
@@ -54,8 +61,10 @@ class Simulator(NavigationMixin):
         lidar_enabled: bool = True,
         v_max: float = 0.8,
         w_max: float = 0.8,
+        blocked_give_up_s: float = BLOCKED_GIVE_UP_S,
     ):
         self.map = warehouse or default_map()
+        self.blocked_give_up_s = blocked_give_up_s  # a blocked goal is aborted after this
         self.params = params
         self.rng = np.random.default_rng(seed)
         self.seed = seed

@@ -91,13 +91,21 @@ class Call:
 
 
 class EmulatedRobot:
-    def __init__(self, folder: Path, *, seed: int, distro: str, missing: tuple[str, ...] = ()):
+    def __init__(
+        self,
+        folder: Path,
+        *,
+        seed: int,
+        distro: str,
+        missing: tuple[str, ...] = (),
+        speed: float = 1.0,
+    ):
         self.folder = folder
         self.distro = distro
         self.missing = set(missing)
         self.sim = Simulator(seed=seed)
         self.store = Store(folder / "robot.db")  # the robot's own named locations
-        self.backend = SimBackend(self.sim, self.store, realtime=True)
+        self.backend = SimBackend(self.sim, self.store, realtime=True, speed=speed)
         self.catalog = astibot_catalog()
         for node in self.catalog.nodes:  # every ROS 2 node declares it
             self.backend.params.setdefault((node, "use_sim_time"), False)
