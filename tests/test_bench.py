@@ -3,8 +3,6 @@
 import asyncio
 import json
 import math
-import subprocess
-import sys
 
 import pytest
 
@@ -14,6 +12,7 @@ from astiop.bench.report import load_report, to_csv, to_markdown
 from astiop.bench.stage2 import build_sim, check_answer, score_case
 from astiop.config import load_settings
 from astiop.robot.output import Execution
+from tests.cli_runner import run_cli
 
 
 # -- Eq. 1-2 and 9-10 against hand-computed values ---------------------------------------
@@ -183,12 +182,7 @@ def test_cli_bench_run_json_and_bad_input(tmp_path):
     db = str(tmp_path / "b.db")
 
     def astiop(*args):
-        return subprocess.run(
-            [sys.executable, "-m", "astiop", "--db", db, *args],
-            capture_output=True,
-            text=True,
-            timeout=300,
-        )
+        return run_cli("--db", db, *args)
 
     out = astiop("bench", "run", "--stage", "2", "--model", "rules", "--limit", "4", "--json")
     data = json.loads(out.stdout)

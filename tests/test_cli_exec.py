@@ -1,16 +1,10 @@
 import json
-import subprocess
-import sys
+
+from tests.cli_runner import run_cli
 
 
 def astiop(*args):
-    return subprocess.run(
-        [sys.executable, "-m", "astiop", *args],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        stdin=subprocess.DEVNULL,
-    )
+    return run_cli(*args)
 
 
 def test_exec_json_read(tmp_path):

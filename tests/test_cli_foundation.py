@@ -1,17 +1,21 @@
-"""The CLI as an operator uses it: real processes, a temporary database."""
+"""The CLI as an operator uses it, in process (one test runs the executable), a temporary
+database."""
 
 import json
 import subprocess
 import sys
 
+from tests.cli_runner import run_cli
 
-def astiop(*args, env_db=None, check=False):
-    cmd = [sys.executable, "-m", "astiop", *args]
-    return subprocess.run(cmd, capture_output=True, text=True, check=check, timeout=60)
+
+def astiop(*args):
+    return run_cli(*args)
 
 
 def test_version_and_help():
-    out = astiop("--version")
+    out = subprocess.run(  # the installed command, end to end
+        [sys.executable, "-m", "astiop", "--version"], capture_output=True, text=True, timeout=60
+    )
     assert out.returncode == 0 and out.stdout.startswith("astiop ")
     out = astiop("--help")
     for sub in ("config", "locations"):

@@ -1,16 +1,13 @@
 import json
-import subprocess
-import sys
 import time
 
 from astiop.sim.runner import SimRunner
 from astiop.sim.simulator import Simulator
+from tests.cli_runner import run_cli
 
 
 def astiop(*args):
-    return subprocess.run(
-        [sys.executable, "-m", "astiop", *args], capture_output=True, text=True, timeout=120
-    )
+    return run_cli(*args)
 
 
 def test_sim_goto_json(tmp_path):

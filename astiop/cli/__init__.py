@@ -64,13 +64,13 @@ def main(
         run_console(ctx.obj)
 
 
-def run() -> None:
+def run(argv: list[str] | None = None) -> None:
     """The `astiop` executable: the app, with one line (never a traceback) for any failure."""
     from astiop.cli.errors import guarded, usage
 
     def main() -> None:
         try:
-            code = app(prog_name="astiop", standalone_mode=False)
+            code = app(args=argv, prog_name="astiop", standalone_mode=False)
         except Exception as exc:  # typer vendors click: its errors are known by class name
             kinds = {cls.__name__ for cls in type(exc).__mro__}
             if "UsageError" in kinds:  # typer would draw a box: one line instead
