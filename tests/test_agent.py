@@ -189,3 +189,26 @@ async def test_a_repaired_plan_that_passes_the_gate_runs(llm, store):
         "/undock std_srvs/srv/Trigger"
     )
     assert result.commands[0].executed
+
+
+async def test_each_command_is_validated_once_and_again_after_the_robot_changes(llm, store):
+    llm.replies = [
+        '{"commands": ["ros2 param set /astibot_base max_linear_speed 0.3", '
+        '"ros2 topic pub -t 5 -r 10 /cmd_vel geometry_msgs/msg/Twist \\"{linear: {x: 0.8}}\\""]}',
+        "Set and moved.",
+    ]
+    agent = make_agent(llm, store)
+    reviewed: list[str] = []
+    real = agent.graph.review
+
+    def counting(text):
+        reviewed.append(text)
+        return real(text)
+
+    agent.graph.review = counting
+    result = await agent.turn("set the max speed to 0.3 then move forward")
+    assert not result.refused and all(c.executed for c in result.commands)
+    # the speed change ran, so the move was reviewed again, under the new limit
+    assert reviewed.count(result.commands[0].command) == 1
+    assert reviewed.count(result.commands[1].command) == 2
+    assert any("0.3" in n for n in result.commands[1].notes), result.commands[1].notes

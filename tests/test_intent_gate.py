@@ -58,6 +58,7 @@ INTENTS = [
     ("Don't move the robot", "none"),
     ("Tell me a joke", "read"),
     ("Sing a song", "unknown"),
+    ("Set the max speed to 0.5", "configure"),
 ]
 
 
@@ -157,6 +158,12 @@ GATE = [
     ),
     ("Load the conveyor", [f"ros2 service call /conveyor/unload {TRIGGER}"], "load the conveyor"),
     ("Drive to the loading bay", [f"{GOTO} \"{{name: 'shipping'}}\""], "does not know"),
+    ("Where is it?", ["ros2 param set /astibot_base max_linear_speed 1.4"], "question"),
+    (
+        "Set the max speed to 0.5",
+        ["ros2 param set /astibot_base max_angular_speed 0.5"],
+        "max_linear_speed",
+    ),
     ("Start charging", [f"{GOTO} \"{{name: 'charging_dock'}}\""], "asks to dock"),  # not docking
 ]
 

@@ -66,6 +66,8 @@ def action_of(checked: Checked) -> Action:
     if cmd.key == ("action", "send_goal"):
         p = msg.get("pose", {}).get("pose", {}).get("position", {})
         return Action("navigate", xy=(float(p.get("x", 0.0)), float(p.get("y", 0.0))))
+    if cmd.key == ("param", "set"):
+        return Action("configure", place=str(cmd.args.get("param", "")))
     if checked.kind == "actuate":
         return Action("configure")
     return Action("read")
@@ -95,6 +97,8 @@ def _permits(intent: Intent, action: Action, places: dict[str, tuple[float, floa
             return False
         vx, vy, wz = action.twist
         return _sign_matches(m.vx, vx) and _sign_matches(m.vy, vy) and _sign_matches(m.wz, wz)
+    if action.kind == intent.kind == "configure":
+        return action.place in (None, intent.place)
     if action.kind == intent.kind == "save":
         return intent.place is None or (action.place or "").lower() == intent.place.lower()
     return action.kind == intent.kind
@@ -158,6 +162,8 @@ def _describe(intent: Intent) -> str:
         return f"move (vx {m.vx:g}, vy {m.vy:g}, wz {m.wz:g})"
     if intent.kind == "save":
         return f"save this spot as {intent.place}" if intent.place else "save this spot"
+    if intent.kind == "configure":
+        return f"set {intent.place}"
     return {"load": "load the conveyor", "unload": "unload the conveyor"}.get(
         intent.kind, intent.kind
     )

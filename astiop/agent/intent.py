@@ -11,7 +11,9 @@ import re
 from dataclasses import dataclass, replace
 
 # kinds that make the robot do something; "read" and "list" only look
-ACTUATING = frozenset({"stop", "navigate", "dock", "undock", "load", "unload", "save", "motion"})
+ACTUATING = frozenset(
+    {"stop", "navigate", "dock", "undock", "load", "unload", "save", "motion", "configure"}
+)
 
 _NUM = r"(-?\d+(?:\.\d+)?)"
 _XY = re.compile(
@@ -68,6 +70,9 @@ _SAVE = re.compile(
     r"\b(?:save|remember|mark|store|record|bookmark|name|call)\b.*"
     r"\b(?:spot|place|position|location|pose|point|here|this)\b",
     re.I,
+)
+_CONFIGURE = re.compile(
+    rf"\b(?:set|change|limit|cap|lower|raise)\b.*\b(?:speed|velocity|limit)\b.*?{_NUM}", re.I
 )
 _SAVE_NAME = re.compile(r"\b(?:as|called|named|name it|call it)\s+['\"]?([a-z][\w-]*)", re.I)
 _LIST = re.compile(
@@ -137,6 +142,7 @@ class Motion:
 @dataclass(frozen=True)
 class Intent:
     kind: str  # read | list | stop | navigate | dock | undock | load | unload | save | motion
+    # | configure (place: the parameter, xy[0]: its value)
     # | none (explicitly not asked) | unknown
     clause: str = ""
     topic: str | None = None  # read: what it asks about
@@ -186,6 +192,10 @@ def classify_clause(clause: str, places: list[str]) -> Intent:
         r"\b(?:move|go|drive|dock|undock|load|unload|stop|turn|leave)\b", text, re.I
     ):
         return Intent("none", clause)
+    if m := _CONFIGURE.search(text):
+        angular = bool(re.search(r"\b(?:angular|turn|rotation)", text, re.I))
+        name = "max_angular_speed" if angular else "max_linear_speed"
+        return Intent("configure", clause, place=name, xy=(float(m.group(1)), 0.0))
     if _UNDOCK.search(text):
         return Intent("undock", clause)
     if _STOP.search(text):

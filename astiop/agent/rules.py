@@ -44,6 +44,8 @@ def command_for(intent: Intent) -> str | None:
             "ros2 service call /save_location astiop_msgs/srv/SaveLocation "
             f"\"{{name: '{intent.place}', description: 'saved by the operator'}}\""
         )
+    if kind == "configure" and intent.place and intent.xy:
+        return f"ros2 param set /astibot_base {intent.place} {intent.xy[0]:g}"
     if kind == "motion" and intent.motion is not None:
         m = intent.motion
         times = max(1, round(m.seconds * PUBLISH_HZ))

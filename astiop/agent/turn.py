@@ -24,6 +24,7 @@ from astiop.agent.llm import (
     LLMTimeout,
     LLMUnavailable,
 )
+from astiop.agent.recorder import Recorder
 from astiop.agent.replies import ReplyError, commands_from_reply, steps_from_reply
 from astiop.agent.result import TurnResult
 from astiop.agent.specs import LLMEndpoint
@@ -38,6 +39,7 @@ from astiop.agent.tools import (
 )
 from astiop.robot.gateway import Confirm, RobotGateway
 from astiop.robot.output import Execution
+from astiop.robot.safety import Review
 from astiop.store import Store
 from astiop.warehouse import WarehouseMap
 
@@ -71,6 +73,8 @@ class Agent:
         self.graph = graph
         self.endpoint = endpoint
         self.store = store
+        self.recorder = Recorder(store, session)
+        self._reviews: dict[str, Review] = {}  # this turn's commands, each validated once
         self.mode = "rules" if endpoint.is_rules else mode
         self.max_tokens = max_tokens
         self.confirm = confirm
@@ -102,10 +106,16 @@ class Agent:
     def locations(self) -> list[str]:
         return list(self.places())
 
+    def _review(self, command: str) -> Review:
+        """Validation and safety for one command, once per turn."""
+        if command not in self._reviews:
+            self._reviews[command] = self.graph.review(command)
+        return self._reviews[command]
+
     def gate_reason(self, request: str, commands: list[str]) -> str | None:
         """Why the plan does not do what the request asks; None when it does."""
         places = self.places()
-        actions = [(c, gate.action_of(self.graph.review(c).checked)) for c in commands]
+        actions = [(c, gate.action_of(self._review(c).checked)) for c in commands]
         return gate.check(intent.classify(request, list(places)), actions, places)
 
     # -- the turn ------------------------------------------------------------------------
@@ -113,10 +123,8 @@ class Agent:
         emit = on_event or (lambda kind, data: None)
         t0 = time.perf_counter()
         result = TurnResult(self.model, self.mode, request)
-        if self.store:
-            result.interaction_id = self.store.start_interaction(
-                model=self.model, mode=self.mode, prompt=request, session=self.session
-            )
+        self._reviews = {}
+        await self.recorder.start(result)
         try:
             fallback = False
             try:
@@ -131,7 +139,7 @@ class Agent:
                 commands, fallback = rules.plan(request, self.locations()), True
             refused = self.gate_reason(request, commands)
             if refused:
-                self._refuse(commands, refused, result, emit)
+                await self._refuse(commands, refused, result, emit)
             else:
                 await self._execute(commands, result, emit)
                 result.answer = await self._interpret(request, result, emit, fallback)
@@ -142,44 +150,27 @@ class Agent:
                 result.answer = f"The model could not answer: {exc}"
         except asyncio.CancelledError:
             result.error = "canceled by the operator"
-            self._finish(result, t0, status="canceled")
+            result.total_s = time.perf_counter() - t0
+            self.recorder.finish_now(result, status="canceled")
             raise
         except Exception as exc:  # recorded, then reported by the caller's one handler
             result.error = f"{type(exc).__name__}: {exc}"
-            self._finish(result, t0, status="error")
+            result.total_s = time.perf_counter() - t0
+            self.recorder.finish_now(result, status="error")
             raise
-        self._finish(result, t0)
+        result.total_s = time.perf_counter() - t0
+        await self.recorder.finish(result)
         self.history.append((request, result.answer))
         return result
 
-    def _finish(self, result: TurnResult, t0: float, status: str | None = None) -> None:
-        result.total_s = time.perf_counter() - t0
-        if self.store and result.interaction_id:
-            self.store.update_interaction(
-                result.interaction_id,
-                finished_at=time.time(),
-                answer=result.answer,
-                model_answer=result.model_answer or None,
-                grounding=result.grounding or None,
-                raw_replies=result.raw_replies,
-                ttft_s=result.ttft_s,
-                total_s=result.total_s,
-                llm_s=result.llm_s,
-                prompt_tokens=result.prompt_tokens,
-                completion_tokens=result.completion_tokens,
-                error=result.error or None,
-                status=status or ("error" if result.error else "done"),
-            )
-
-    def _account(self, result: TurnResult, c: Completion) -> None:
+    async def _account(self, result: TurnResult, c: Completion) -> None:
         result.raw_replies.append(c.text)
         result.llm_s += c.total_s
         result.prompt_tokens += c.prompt_tokens or 0
         result.completion_tokens += c.completion_tokens or 0
         if result.ttft_s is None:
             result.ttft_s = c.ttft_s
-        if self.store and result.interaction_id:
-            self.store.update_interaction(result.interaction_id, raw_replies=result.raw_replies)
+        await self.recorder.replies(result)
 
     async def _ask(
         self,
@@ -214,7 +205,7 @@ class Agent:
                 raise
             self._schema_ok = False  # this server does not take a JSON schema
             c = await client.chat(messages, on_token=on_token, **limits)
-        self._account(result, c)
+        await self._account(result, c)
         return c
 
     # -- planning ------------------------------------------------------------------------
@@ -275,7 +266,7 @@ class Agent:
 
     async def _repair_invalid(self, messages, reply, commands, ask, parse, result) -> list[str]:
         for cmd in commands:
-            review = self.graph.review(cmd)
+            review = self._review(cmd)
             if not review.checked.valid:
                 reason = f"the command `{cmd}` was rejected: {review.checked.reason}"
                 try:
@@ -285,43 +276,32 @@ class Agent:
         return commands
 
     # -- execution -----------------------------------------------------------------------
-    def _refuse(self, commands: list[str], reason: str, result: TurnResult, emit) -> None:
+    async def _refuse(self, commands: list[str], reason: str, result: TurnResult, emit) -> None:
         """The gate's refusal: nothing runs, each command is recorded with the reason."""
         result.refused = reason
         for seq, cmd in enumerate(commands):
-            checked = self.graph.review(cmd).checked
+            checked = self._review(cmd).checked
             ex = Execution(
                 cmd, checked.valid, f"refused by the intent gate: {reason}", checked.kind
             )
             result.commands.append(ex)
-            self._record(result, seq, ex)
+            await self.recorder.command(result, seq, ex)
             emit("command", ex)
         result.answer = f"I did not run this plan: {reason}. Nothing was sent to the robot."
         emit("answer_token", result.answer)
 
-    def _record(self, result: TurnResult, seq: int, ex: Execution) -> None:
-        if self.store and result.interaction_id:
-            self.store.add_command(
-                result.interaction_id,
-                seq=seq,
-                command=ex.command,
-                valid=int(ex.valid),
-                reason=ex.reason or ex.error or None,
-                kind=ex.kind,
-                executed=int(ex.executed),
-                output=ex.output,
-                values=ex.values,
-                source="chat",
-            )
-
     async def _execute(self, commands: list[str], result: TurnResult, emit) -> None:
         for seq, cmd in enumerate(commands):
             t0 = time.perf_counter()
-            ex = await asyncio.to_thread(self.graph.run, cmd, self.confirm)
+            ex = await asyncio.to_thread(
+                self.graph.run, cmd, self.confirm, review=self._reviews.get(cmd)
+            )
             result.exec_s += time.perf_counter() - t0
             result.commands.append(ex)
-            self._record(result, seq, ex)
+            await self.recorder.command(result, seq, ex)
             emit("command", ex)
+            if ex.executed and ex.kind == "actuate":
+                self._reviews.clear()  # the robot changed (limits too): review what follows anew
             if not goals.started(ex):
                 continue
             if seq + 1 < len(commands):
@@ -400,10 +380,7 @@ class Agent:
         """Wait for the goal the turn started to end; record and return how it ended."""
         wait = self.nav_wait_s if timeout_s is None else timeout_s
         result.outcome, text = await goals.follow(self.graph, result.started, wait, result.target)
-        if self.store and result.interaction_id:
-            self.store.update_interaction(
-                result.interaction_id, outcome=result.outcome, outcome_at=time.time()
-            )
+        await self.recorder.outcome(result)
         return text
 
 

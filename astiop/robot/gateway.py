@@ -114,11 +114,12 @@ class RobotGateway:
         confirm: Confirm | None = None,
         timeout: float | None = None,
         source: str | None = None,
+        review: Review | None = None,
     ) -> Execution:
         """Run one command. Nothing reaches the backend unless it is valid, safe and confirmed.
         With a `source` (exec, teleop), a valid command is recorded in the store, whether it
         ran or safety, the E-STOP or the operator held it; text that is not a command is not."""
-        result = self._run(text, confirm, timeout)
+        result = self._run(text, confirm, timeout, review)
         if source and result.valid:
             self.record(result, source)
         return result
@@ -141,9 +142,12 @@ class RobotGateway:
                 source=source,
             )
 
-    def _run(self, text: str, confirm: Confirm | None, timeout: float | None) -> Execution:
+    def _run(
+        self, text: str, confirm: Confirm | None, timeout: float | None, review: Review | None
+    ) -> Execution:
         t0 = time.perf_counter()
-        review = self.review(text)
+        if review is None or review.checked.text != text:
+            review = self.review(text)  # else it was reviewed moments ago (held still rechecked)
         checked = review.checked
         result = Execution(
             text.strip(), checked.valid, checked.reason, checked.kind, notes=list(checked.notes)
