@@ -20,7 +20,7 @@ import yaml
 
 from astiop.bounded import has_controls
 from astiop.resources import data_path
-from astiop.warehouse import GEOFENCE_MARGIN, Rect, default_map
+from astiop.warehouse import Rect, default_map, fence_text, inside_fence
 
 SQLITE_HEADER = b"SQLite format 3\x00"
 BUSY_TIMEOUT_MS = 10_000  # how long a write waits for another process's
@@ -352,12 +352,9 @@ class Store:
     def _check_pose(self, x: float, y: float, theta: float) -> None:
         if not all(math.isfinite(v) for v in (x, y, theta)):
             raise LocationError("x, y and theta must be finite numbers")
-        x0, y0, x1, y1 = self.bounds
-        m = GEOFENCE_MARGIN
-        if not (x0 + m <= x <= x1 - m and y0 + m <= y <= y1 - m):
+        if not inside_fence(self.bounds, x, y):
             raise LocationError(
-                f"({x:g}, {y:g}) is outside the geofence "
-                f"(x {x0 + m:g}..{x1 - m:g}, y {y0 + m:g}..{y1 - m:g} m)"
+                f"({x:g}, {y:g}) is outside the geofence ({fence_text(self.bounds)})"
             )
 
     def add_location(

@@ -16,6 +16,17 @@ Rect = tuple[float, float, float, float]  # x_min, y_min, x_max, y_max
 GEOFENCE_MARGIN = 0.5  # m kept clear of the walls: no goal, no named location closer
 
 
+def inside_fence(bounds: Rect, x: float, y: float, margin: float = GEOFENCE_MARGIN) -> bool:
+    """The one geofence test: goals (safety) and named locations (store) both use it."""
+    x0, y0, x1, y1 = bounds
+    return x0 + margin <= x <= x1 - margin and y0 + margin <= y <= y1 - margin
+
+
+def fence_text(bounds: Rect, margin: float = GEOFENCE_MARGIN) -> str:
+    x0, y0, x1, y1 = bounds
+    return f"x {x0 + margin:g}..{x1 - margin:g}, y {y0 + margin:g}..{y1 - margin:g} m"
+
+
 @dataclass(frozen=True)
 class Station:
     name: str

@@ -7,7 +7,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 from astiop.robot.validation import Checked
-from astiop.warehouse import GEOFENCE_MARGIN
+from astiop.warehouse import GEOFENCE_MARGIN, fence_text, inside_fence
 
 # Services that only ever make the robot safer: never held by the e-stop, never confirmed.
 ALWAYS_ALLOWED = {"/stop"}
@@ -32,17 +32,11 @@ class SafetyPolicy:
     locate: Callable[[str], tuple[float, float] | None] | None = None
 
     def inside_geofence(self, x: float, y: float) -> bool:
-        x0, y0, x1, y1 = self.geofence
-        m = self.geofence_margin
-        return x0 + m <= x <= x1 - m and y0 + m <= y <= y1 - m
+        return inside_fence(self.geofence, x, y, self.geofence_margin)
 
     def _fence_reason(self, x: float, y: float) -> str:
-        x0, y0, x1, y1 = self.geofence
-        m = self.geofence_margin
-        return (
-            f"goal ({x:.2f}, {y:.2f}) is outside the geofence "
-            f"(x {x0 + m:g}..{x1 - m:g}, y {y0 + m:g}..{y1 - m:g} m)"
-        )
+        fence = fence_text(self.geofence, self.geofence_margin)
+        return f"goal ({x:.2f}, {y:.2f}) is outside the geofence ({fence})"
 
     def review(self, checked: Checked, e_stopped: bool) -> Review:
         if not checked.valid or checked.kind != "actuate":
