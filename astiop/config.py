@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 import platformdirs
+import tomli_w
 from pydantic import BaseModel, ConfigDict, Field, StrictBool, ValidationError
 
 if sys.version_info >= (3, 11):
@@ -169,30 +170,16 @@ def load_settings(
 
 
 def to_toml(settings: Settings) -> str:
-    """The effective settings as a TOML file an operator can save and edit."""
-
-    def fmt(value: Any) -> str:
-        if isinstance(value, bool):
-            return "true" if value else "false"
-        if isinstance(value, (int, float)):
-            return repr(value)
-        if isinstance(value, list):
-            return "[" + ", ".join(fmt(v) for v in value) + "]"
-        text = str(value).replace("\\", "\\\\").replace('"', '\\"')
-        return f'"{text}"'
-
+    """The effective settings as a TOML file an operator can save and edit (tomli-w); unset
+    keys are listed as comments, since TOML has no null."""
     data = settings.model_dump(mode="json")
-    lines: list[str] = []
-    tables = {k: v for k, v in data.items() if isinstance(v, dict)}
-    for key, value in data.items():
-        if key in tables:
-            continue
-        if value is None:
-            lines.append(f"# {key} is unset")
-        else:
-            lines.append(f"{key} = {fmt(value)}")
-    for table, values in tables.items():
-        lines.append(f"\n[{table}]")
-        for key, value in values.items():
-            lines.append(f"# {key} is unset" if value is None else f"{key} = {fmt(value)}")
-    return "\n".join(lines) + "\n"
+    unset = [k for k, v in data.items() if v is None]
+    unset += [f"{t}.{k}" for t, vs in data.items() if isinstance(vs, dict)
+              for k, v in vs.items() if v is None]  # fmt: skip
+    clean = {
+        k: ({kk: vv for kk, vv in v.items() if vv is not None} if isinstance(v, dict) else v)
+        for k, v in data.items()
+        if v is not None
+    }
+    head = "".join(f"# {key} is unset\n" for key in unset)
+    return head + tomli_w.dumps(clean)
