@@ -44,18 +44,7 @@ class Recorder:
 
     def _command(self, interaction_id: int, seq: int, ex: Execution) -> None:
         assert self.store is not None
-        self.store.add_command(
-            interaction_id,
-            seq=seq,
-            command=ex.command,
-            valid=int(ex.valid),
-            reason=ex.reason or ex.error or None,
-            kind=ex.kind,
-            executed=int(ex.executed),
-            output=ex.output,
-            values=ex.values,
-            source="chat",
-        )
+        self.store.add_command(interaction_id, seq=seq, source="chat", **ex.record())
 
     async def finish(self, result: TurnResult, status: str | None = None) -> None:
         await asyncio.to_thread(self.finish_now, result, status)

@@ -124,23 +124,12 @@ class RobotGateway:
             self.record(result, source)
         return result
 
-    def record(self, ex: Execution, source: str, interaction_id: int | None = None) -> None:
+    def record(self, ex: Execution, source: str) -> None:
         if self.store is None:
             return
         # a read-only database still drives the robot; it cannot keep the record
         with contextlib.suppress(StoreError):
-            self.store.add_command(
-                interaction_id,
-                seq=0,
-                command=ex.command,
-                valid=int(ex.valid),
-                reason=ex.reason or ex.error or None,
-                kind=ex.kind,
-                executed=int(ex.executed),
-                output=ex.output,
-                values=ex.values,
-                source=source,
-            )
+            self.store.add_command(None, seq=0, source=source, **ex.record())
 
     def _run(
         self, text: str, confirm: Confirm | None, timeout: float | None, review: Review | None

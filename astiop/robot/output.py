@@ -28,6 +28,18 @@ class Execution:
     error: str = ""
     duration_s: float = 0.0
 
+    def record(self) -> dict[str, Any]:
+        """The fields a stored command row keeps."""
+        return {
+            "command": self.command,
+            "valid": int(self.valid),
+            "reason": self.reason or self.error or None,
+            "kind": self.kind,
+            "executed": int(self.executed),
+            "output": self.output,
+            "values": self.values,
+        }
+
     def as_json(self) -> dict[str, Any]:
         keys = ("command", "valid", "reason", "kind", "executed", "output", "values")
         data = {k: v for k, v in asdict(self).items() if k in keys}
