@@ -137,7 +137,7 @@ class Agent:
                 # the baseline answers instead, labelled so; the turn still records the error
                 result.error = f"{exc}; answered by the rules fallback"
                 commands, fallback = rules.plan(request, self.locations()), True
-            refused = self.gate_reason(request, commands)
+            refused = await asyncio.to_thread(self.gate_reason, request, commands)
             if refused:
                 await self._refuse(commands, refused, result, emit)
             else:
@@ -243,7 +243,7 @@ class Agent:
             commands = await self._repair(messages, c.text, str(exc), ask, parse, result)
         if commands and not result.repaired:
             commands = await self._repair_invalid(messages, c.text, commands, ask, parse, result)
-        refused = self.gate_reason(request, commands)
+        refused = await asyncio.to_thread(self.gate_reason, request, commands)
         if refused and not result.repaired:
             with contextlib.suppress(LLMProtocolError):  # else the gate refuses the first plan
                 commands = await self._repair(messages, c.text, refused, ask, parse, result)
@@ -266,7 +266,7 @@ class Agent:
 
     async def _repair_invalid(self, messages, reply, commands, ask, parse, result) -> list[str]:
         for cmd in commands:
-            review = self._review(cmd)
+            review = await asyncio.to_thread(self._review, cmd)  # may read the robot's graph
             if not review.checked.valid:
                 reason = f"the command `{cmd}` was rejected: {review.checked.reason}"
                 try:
