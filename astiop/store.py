@@ -486,6 +486,28 @@ class Store:
                 [who, time.time()],
             )
 
+    def newest_interaction_id(self) -> int:
+        return self.db.execute("SELECT max(id) FROM interactions").fetchone()[0] or 0
+
+    def finished_interactions_after(self, interaction_id: int) -> list[dict[str, Any]]:
+        """Turns that ended after `interaction_id`, with their commands (for recording)."""
+        rows = list(
+            self.db.query(
+                "SELECT id, prompt, model, mode, answer, grounding, total_s, status "
+                "FROM interactions WHERE id > ? AND status != 'running' ORDER BY id",
+                [interaction_id],
+            )
+        )
+        for row in rows:
+            row["commands"] = list(
+                self.db.query(
+                    "SELECT command, valid, executed, reason, source FROM commands "
+                    "WHERE interaction_id = ? ORDER BY seq",
+                    [row["id"]],
+                )
+            )
+        return rows
+
     def events(self, limit: int = 500) -> list[dict[str, Any]]:
         return list(self.db.query("SELECT * FROM events ORDER BY id DESC LIMIT ?", [limit]))
 

@@ -26,6 +26,7 @@ KNOWN = (
     "InterfaceError",
     "LLMError",
     "BackendError",
+    "RecordingError",
 )
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from typing import Protocol, Union
 
 from astiop.robot.catalog import Catalog
@@ -40,6 +41,10 @@ class RobotBackend(Protocol):
 
     def state(self) -> RobotState:
         """The latest state; never blocks on the robot."""
+        ...
+
+    def messages(self, names: Iterable[str]) -> dict[str, dict]:
+        """The latest message on each of these topics that has one, as the robot sent it."""
         ...
 
     def events_since(self, seq: int) -> list[RobotEvent]: ...

@@ -84,6 +84,10 @@ class RobotGateway:
     def events_since(self, seq: int) -> list[RobotEvent]:
         return self.backend.events_since(seq)
 
+    def messages(self, names) -> dict[str, dict]:
+        """The latest message per topic, as the robot sent it (for recording)."""
+        return self.backend.messages(names)
+
     def topic_stats(self) -> list[TopicStat]:
         return self.backend.topic_stats()
 

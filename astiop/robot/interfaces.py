@@ -128,6 +128,23 @@ def _parts(type_name: str, distro: str) -> tuple[MessageType, ...]:
     return tuple(_parse_block(name + sfx, blk) for sfx, blk in zip(suffixes[len(blocks)], blocks))
 
 
+def used_types(type_name: str, distro: str | None = None) -> list[str]:
+    """Every type `type_name` uses, directly or not, first use first (for ros2msg schemas)."""
+    root = normalize_type(type_name)
+    seen, queue, order = {root}, [root], []
+    while queue:
+        name = queue.pop(0)
+        package = name.split("/")[0]
+        for part in get_parts(name, distro):
+            for f in part.fields:
+                dep = _resolve(f.type, package)
+                if dep not in PRIMITIVES and dep not in seen:
+                    seen.add(dep)
+                    queue.append(dep)
+                    order.append(dep)
+    return order
+
+
 # -- `ros2 interface show` --------------------------------------------------------------
 def interface_show(type_name: str, distro: str | None = None) -> str:
     name = normalize_type(type_name)

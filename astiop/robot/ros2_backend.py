@@ -286,6 +286,10 @@ class Ros2Backend:
         t = time.monotonic() - self.t0
         return from_messages(t, messages, e_stopped=self._e_stopped, event_seq=seq)
 
+    def messages(self, names) -> dict[str, dict[str, Any]]:
+        with self._lock:
+            return {n: self._latest[n] for n in names if n in self._latest}
+
     def events_since(self, seq: int) -> list[RobotEvent]:
         with self._lock:
             return [e for e in self._events if e.seq > seq]

@@ -185,6 +185,26 @@ class SimBackend:
             return self.last_twist or default_value("geometry_msgs/msg/Twist")
         return builders[name](s)
 
+    def messages(self, names) -> dict[str, dict[str, Any]]:
+        """Every published topic's current message, from one snapshot."""
+        s = self.sim.snapshot()
+        out = {}
+        for name in names:
+            if name not in self.catalog.topics or name == "/cmd_vel":
+                continue
+            if name == "/plan" and self.sim.goal is None:
+                continue
+            published = self._last_publish(name)
+            if published == -math.inf:
+                continue
+            message = self.message(name, s)
+            if "header" in message:  # stamped when the topic last published, as a robot does
+                sec = int(published)
+                stamp = {"sec": sec, "nanosec": int(round((published - sec) * 1e9))}
+                message["header"] = {**message["header"], "stamp": stamp}
+            out[name] = message
+        return out
+
     def _wait_for_message(self, name: str, timeout: float) -> dict[str, Any]:
         spec = self.catalog.topics[name]
         if spec.rate_hz == 0 or name == "/plan":

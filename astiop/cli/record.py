@@ -1,0 +1,106 @@
+"""`astiop record`: the robot's topics, events and the agent's turns into an MCAP file."""
+
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+
+import typer
+
+from astiop.cli.common import fail, print_json, state
+from astiop.robot.output import BackendError
+
+
+def record(
+    ctx: typer.Context,
+    file: Path | None = typer.Argument(
+        None, help="The MCAP file (default: <data dir>/sessions/<timestamp>.mcap)."
+    ),
+    duration: float | None = typer.Option(
+        None, "--duration", help="Seconds to record (default 10; with --goto, until it ends)."
+    ),
+    goto: str | None = typer.Option(
+        None, "--goto", help="Drive to this named location while recording (it is the consent)."
+    ),
+    scan_hz: float | None = typer.Option(None, "--scan-hz", help="Decimate /scan to this rate."),
+    repair: bool = typer.Option(
+        False, "--repair", help="Recover what a cut-off FILE holds into FILE.repaired.mcap."
+    ),
+    as_json: bool = typer.Option(False, "--json"),
+) -> None:
+    """Record a session headless, on the simulator (real time) or the robot."""
+    from astiop.recording import RecordingError, SessionRecorder, default_path, summary
+    from astiop.recording import repair as repair_file
+
+    if repair:
+        if file is None or not file.is_file():
+            fail("--repair needs the FILE of a recording")
+        out = file.with_suffix(".repaired.mcap")
+        try:
+            counts = repair_file(file, out)
+        except (RecordingError, OSError) as exc:
+            fail(str(exc))
+        _report(out, counts, as_json)
+        return
+    for name, value in (("--duration", duration), ("--scan-hz", scan_hz)):
+        if value is not None and not (math.isfinite(value) and 0 < value <= 86400):
+            fail(f"{name} must be a positive number")
+    from astiop.robot.factory import make_robot_graph
+
+    st = state(ctx)
+    path = file or default_path(st.db_path.parent)
+    if goto is not None:
+        st.store.require_location(goto)  # a one-line error before anything starts
+    try:
+        gateway = make_robot_graph(st.settings, st.store, realtime=True, who="astiop record")
+        gateway.start()
+    except BackendError as exc:
+        fail(str(exc))
+    try:
+        recorder = SessionRecorder(path, gateway, st.store, scan_hz=scan_hz).start()
+    except RecordingError as exc:
+        gateway.close()
+        fail(str(exc))
+    t0 = time.monotonic()
+    limit = duration if duration is not None else (600.0 if goto else 10.0)
+    outcome = None
+    try:
+        if goto is not None:
+            cmd = f"ros2 service call /goto_position astiop_msgs/srv/GotoPosition \"{{name: '{goto}'}}\""
+            result = gateway.run(cmd, confirm=lambda _c: True, source="record")
+            if not result.executed or result.error:
+                raise RecordingError(f"--goto {goto}: {result.reason or result.error}")
+            time.sleep(0.5)  # the goal shows in the robot's status
+        while time.monotonic() - t0 < limit:
+            if goto is not None:
+                outcome = gateway.wait_until_idle(min(1.0, limit - (time.monotonic() - t0)))
+                state_word = gateway.state().state_word
+                if outcome is not None or state_word not in ("navigating", "docking", "blocked"):
+                    break
+            else:
+                time.sleep(0.2)
+            if not as_json:
+                typer.echo(f"\r  recording {time.monotonic() - t0:5.1f} s", nl=False, err=True)
+    except KeyboardInterrupt:
+        pass
+    except RecordingError as exc:
+        recorder.stop()
+        gateway.close()
+        fail(str(exc))
+    counts = recorder.stop()
+    gateway.close()
+    if not as_json:
+        typer.echo("", err=True)
+        if goto is not None:
+            typer.echo(f"goal {goto}: {outcome or 'ended'}")
+    _report(path, summary(path) if counts else counts, as_json)
+
+
+def _report(path: Path, counts: dict[str, int], as_json: bool) -> None:
+    if as_json:
+        print_json({"file": str(path), "messages": counts})
+        return
+    typer.echo(f"{path}: {sum(counts.values())} messages")
+    for topic, n in sorted(counts.items()):
+        typer.echo(f"  {topic:<24} {n}")

@@ -1,0 +1,275 @@
+"""Sessions recorded as MCAP, readable by Foxglove and `ros2 bag`.
+
+The robot's state topics are written as ROS 2 messages: `ros2msg` schemas built from astiop's
+interface definitions (the distro's), CDR-encoded by `mcap-ros2-support`. The agent's turns and
+the robot's events go on JSON channels with a JSON schema. Log time is the robot's clock: the
+message header's stamp (sim time on the simulator), else the time it was received.
+
+A chunk is closed and flushed at least every FLUSH_S, so a recording killed at any moment keeps
+everything up to its last chunk; `repair` rewrites what such a file still holds.
+"""
+
+from __future__ import annotations
+
+import json
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+from mcap.reader import make_reader
+from mcap.records import Channel, Message, Schema
+from mcap.stream_reader import StreamReader
+from mcap.writer import Writer
+
+from astiop.robot.definitions import definitions
+from astiop.robot.interfaces import normalize_type, used_types
+
+FLUSH_S = 2.0
+POLL_HZ = 20.0
+TOPICS = (
+    "/robot_pose",
+    "/odom",
+    "/battery_status",
+    "/robot_status",
+    "/scan",
+    "/obstacles",
+    "/plan",
+    "/tf",
+    "/diagnostics",
+    "/conveyor/status",
+)
+SEPARATOR = "=" * 80
+
+
+class RecordingError(Exception):
+    """The recording could not be written or read; one line says why."""
+
+
+def ros2msg(type_name: str, distro: str | None = None) -> str:
+    """The type's definition followed by every type it uses, as rosbag2 writes `ros2msg`
+    schemas: each dependency after a line of '=' and 'MSG: pkg/msg/Name'."""
+    from astiop.robot.grammar import current_distro
+
+    defs = definitions(distro or current_distro())
+    text = [defs[normalize_type(type_name)].strip()]
+    for dep in used_types(type_name, distro):
+        text.append(f"{SEPARATOR}\nMSG: {dep}\n{defs[dep].strip()}")
+    return "\n".join(text) + "\n"
+
+
+def _stamp_ns(message: dict[str, Any], fallback_s: float) -> int:
+    header = message.get("header")
+    if header is None and message.get("transforms"):
+        header = message["transforms"][0].get("header")
+    stamp = (header or {}).get("stamp") or {}
+    if "sec" in stamp:
+        return int(stamp["sec"]) * 1_000_000_000 + int(stamp.get("nanosec", 0))
+    return int(fallback_s * 1e9)
+
+
+JSON_SCHEMAS = {
+    "/astiop/interactions": {
+        "type": "object",
+        "title": "astiop interaction",
+        "properties": {
+            "id": {"type": "integer"},
+            "prompt": {"type": "string"},
+            "model": {"type": "string"},
+            "answer": {"type": ["string", "null"]},
+            "grounding": {"type": ["string", "null"]},
+            "commands": {"type": "array"},
+            "total_s": {"type": ["number", "null"]},
+            "status": {"type": "string"},
+        },
+    },
+    "/astiop/events": {
+        "type": "object",
+        "title": "astiop robot event",
+        "properties": {
+            "kind": {"type": "string"},
+            "severity": {"type": "string"},
+            "message": {"type": "string"},
+        },
+    },
+}
+
+
+class SessionRecorder:
+    """Polls the gateway (never the simulator) and the store while it runs, in its own thread."""
+
+    def __init__(self, path: Path, gateway, store=None, *, scan_hz: float | None = None):
+        from mcap_ros2._dynamic import serialize_dynamic  # the encoder its Writer uses
+
+        self.path = Path(path)
+        self.gateway = gateway
+        self.store = store
+        self.scan_period = 1.0 / scan_hz if scan_hz else 0.0
+        self._serialize = serialize_dynamic
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._file = self.path.open("wb")
+        except OSError as exc:
+            raise RecordingError(f"cannot write {self.path}: {exc.strerror or exc}") from None
+        self._writer = Writer(self._file)
+        self._writer.start(profile="ros2", library="astiop")
+        self._channels: dict[str, tuple[int, Any]] = {}  # topic -> (channel id, encoder)
+        self._last: dict[str, int] = {}  # topic -> last stamp written (ns)
+        self.counts: dict[str, int] = {}
+        self._event_seq = gateway.state().event_seq if gateway else 0
+        self._interaction_id = self._newest_interaction()
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._flushed = time.monotonic()
+        self._lock = threading.Lock()
+
+    # -- the loop -----------------------------------------------------------------------
+    def start(self) -> SessionRecorder:
+        self._thread = threading.Thread(target=self._loop, name="astiop-record", daemon=True)
+        self._thread.start()
+        return self
+
+    def stop(self) -> dict[str, int]:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(5.0)
+        with self._lock:
+            self.poll()
+            self._writer.finish()
+            self._file.close()
+        return dict(self.counts)
+
+    def _loop(self) -> None:
+        while not self._stop.wait(1.0 / POLL_HZ):
+            with self._lock:
+                self.poll()
+
+    def poll(self) -> None:
+        """Write what is new since the last poll; close a chunk every FLUSH_S."""
+        now = time.time()
+        types = {n: s.type for n, s in self.gateway.catalog.topics.items()}
+        for topic, message in self.gateway.messages([t for t in TOPICS if t in types]).items():
+            stamp = _stamp_ns(message, now)
+            last = self._last.get(topic)
+            if last is not None and stamp <= last:
+                continue  # nothing new on this topic
+            if topic == "/scan" and last is not None and stamp - last < self.scan_period * 1e9:
+                continue
+            self._ros2(topic, types[topic], message, stamp)
+            self._last[topic] = stamp
+        for ev in self.gateway.events_since(self._event_seq):
+            self._event_seq = max(self._event_seq, ev.seq)
+            data = {"kind": ev.kind, "severity": ev.severity, "message": ev.message}
+            self._json("/astiop/events", data, int(ev.t * 1e9) if ev.t else int(now * 1e9))
+        for turn in self._new_interactions():
+            self._json("/astiop/interactions", turn, int(now * 1e9))
+        if time.monotonic() - self._flushed >= FLUSH_S:
+            self._writer.flush()  # closes the open chunk: a kill from here on loses nothing
+            self._file.flush()
+            self._flushed = time.monotonic()
+
+    # -- writing ------------------------------------------------------------------------
+    def _channel(self, topic: str, type_name: str) -> tuple[int, Any]:
+        if topic not in self._channels:
+            text = ros2msg(type_name)
+            schema_id = self._writer.register_schema(type_name, "ros2msg", text.encode())
+            channel_id = self._writer.register_channel(topic, "cdr", schema_id)
+            encoder = self._serialize(type_name, text)[type_name]
+            self._channels[topic] = (channel_id, encoder)
+        return self._channels[topic]
+
+    def _ros2(self, topic: str, type_name: str, message: dict, stamp: int) -> None:
+        channel_id, encode = self._channel(topic, type_name)
+        data = encode(_finite_floats(message))
+        self._writer.add_message(channel_id, stamp, data, stamp)
+        self.counts[topic] = self.counts.get(topic, 0) + 1
+
+    def _json(self, topic: str, data: dict, t_ns: int) -> None:
+        if topic not in self._channels:
+            schema = json.dumps(JSON_SCHEMAS[topic]).encode()
+            schema_id = self._writer.register_schema(topic.split("/")[-1], "jsonschema", schema)
+            self._channels[topic] = (self._writer.register_channel(topic, "json", schema_id), None)
+        channel_id = self._channels[topic][0]
+        payload = json.dumps(data, default=str).encode()
+        self._writer.add_message(channel_id, t_ns, payload, t_ns)
+        self.counts[topic] = self.counts.get(topic, 0) + 1
+
+    # -- the agent's turns ----------------------------------------------------------------
+    def _newest_interaction(self) -> int:
+        return self.store.newest_interaction_id() if self.store is not None else 0
+
+    def _new_interactions(self) -> list[dict]:
+        if self.store is None:
+            return []
+        turns = []
+        for it in self.store.finished_interactions_after(self._interaction_id):
+            self._interaction_id = max(self._interaction_id, it["id"])
+            turns.append(it)
+        return turns
+
+
+def _finite_floats(value: Any) -> Any:
+    """CDR carries inf and nan; YAML-read messages may hold them as strings ('.inf')."""
+    if isinstance(value, dict):
+        return {k: _finite_floats(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_finite_floats(v) for v in value]
+    if isinstance(value, str) and value in (".inf", "-.inf", ".nan", "inf", "-inf", "nan"):
+        return float(value.replace(".", ""))
+    return value
+
+
+def summary(path: Path) -> dict[str, int]:
+    """Message count per topic, from the file's own summary."""
+    try:
+        with Path(path).open("rb") as fh:
+            info = make_reader(fh).get_summary()
+    except Exception as exc:  # the mcap reader raises its own kinds
+        raise RecordingError(f"{path}: not a readable MCAP file ({exc})") from None
+    if info is None or info.statistics is None:
+        raise RecordingError(f"{path}: the file has no summary (try --repair)")
+    return {
+        info.channels[cid].topic: count
+        for cid, count in info.statistics.channel_message_counts.items()
+    }
+
+
+def repair(path: Path, out: Path) -> dict[str, int]:
+    """Copy every whole record of a cut-off recording into a new, finished file."""
+    schemas: dict[int, int] = {}
+    channels: dict[int, int] = {}
+    counts: dict[str, int] = {}
+    topics: dict[int, str] = {}
+    with Path(path).open("rb") as src, Path(out).open("wb") as dst:
+        writer = Writer(dst)
+        writer.start(profile="ros2", library="astiop repair")
+        try:
+            for record in StreamReader(src, skip_magic=False).records:
+                if isinstance(record, Schema) and record.id not in schemas:
+                    schemas[record.id] = writer.register_schema(
+                        record.name, record.encoding, record.data
+                    )
+                elif isinstance(record, Channel) and record.id not in channels:
+                    channels[record.id] = writer.register_channel(
+                        record.topic, record.message_encoding, schemas.get(record.schema_id, 0)
+                    )
+                    topics[record.id] = record.topic
+                elif isinstance(record, Message) and record.channel_id in channels:
+                    writer.add_message(
+                        channels[record.channel_id],
+                        record.log_time,
+                        record.data,
+                        record.publish_time,
+                    )
+                    topic = topics[record.channel_id]
+                    counts[topic] = counts.get(topic, 0) + 1
+        except Exception:  # the cut: everything before it is kept
+            pass
+        writer.finish()
+    if not counts:
+        raise RecordingError(f"{path}: no whole message could be recovered")
+    return counts
+
+
+def default_path(data_dir: Path) -> Path:
+    return data_dir / "sessions" / (time.strftime("%Y%m%d-%H%M%S") + ".mcap")
