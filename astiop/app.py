@@ -12,6 +12,7 @@ import threading
 from collections.abc import Iterable
 from dataclasses import dataclass
 from functools import partial
+from pathlib import Path
 from typing import Any
 
 from textual.app import App, SystemCommand
@@ -20,6 +21,7 @@ from textual.worker import Worker, WorkerState
 
 from astiop.agent.specs import LLMEndpoint, open_endpoint
 from astiop.config import Settings
+from astiop.recording import RecordingError, SessionRecorder, default_path
 from astiop.robot.factory import make_robot_graph, make_sim_graph
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.render import sent_text
@@ -105,10 +107,17 @@ class AstiopApp(App):
     ]
 
     def __init__(
-        self, services: Services, *, sample_hz: float = 10.0, confirm_timeout_s: float = 120.0
+        self,
+        services: Services,
+        *,
+        sample_hz: float = 10.0,
+        confirm_timeout_s: float = 120.0,
+        record: Path | None = None,
     ):
         super().__init__()
         self.services = services
+        self.record_path = record
+        self.recorder: SessionRecorder | None = None
         self.sample_hz = sample_hz
         self.confirm_timeout_s = confirm_timeout_s
         self.robot_state: RobotState = services.gateway.state()
@@ -125,6 +134,8 @@ class AstiopApp(App):
         self.topic_stats = graph.topic_stats()
         self.switch_mode("dashboard")
         self._sampler.start()
+        if self.record_path is not None:
+            self.start_recording(self.record_path)
         if not self.services.settings.robot.confirm_actuation:
             self.notify(
                 "robot.confirm_actuation is false: actuating commands run without asking",
@@ -136,6 +147,8 @@ class AstiopApp(App):
     def on_unmount(self) -> None:
         self._sampler.halt.set()
         self._sampler.join(2.0)
+        if self.recorder is not None:
+            self.recorder.stop()
         self.services.gateway.close()
         self.services.endpoint.close()
 
@@ -188,12 +201,48 @@ class AstiopApp(App):
                 f"Drive to ({loc.x:.1f}, {loc.y:.1f}) after a y/n",
                 partial(self.goto_location, loc.name),
             )
+        if self.recorder is None:
+            yield SystemCommand(
+                "Start recording",
+                "The session as MCAP, under the data dir's sessions/",
+                self.start_recording,
+            )
+        else:
+            yield SystemCommand(
+                "Stop recording", f"Close {self.recorder.path}", self.stop_recording
+            )
         for fmt in ("csv", "json"):
             yield SystemCommand(
                 f"Export logs as {fmt.upper()}",
                 "Interactions and events, to a file",
                 partial(self._export_logs, fmt),
             )
+
+    # -- recording --------------------------------------------------------------------------
+    def start_recording(self, path: Path | None = None) -> None:
+        if self.recorder is not None:
+            return
+        store = self.services.store
+        path = path or default_path(store.path.parent)
+        try:
+            self.recorder = SessionRecorder(path, self.services.gateway, store).start()
+        except RecordingError as exc:
+            self.notify(str(exc), severity="error", title="recording", markup=False)
+            return
+        self.sub_title = f"{self.sub_title}  ● REC"
+        self.notify(f"recording to {path}", title="recording", markup=False)
+
+    def stop_recording(self) -> None:
+        if self.recorder is None:
+            return
+        recorder, self.recorder = self.recorder, None
+        counts = recorder.stop()
+        self.sub_title = self.sub_title.replace("  ● REC", "")
+        self.notify(
+            f"{recorder.path}: {sum(counts.values())} messages",
+            title="recording saved",
+            markup=False,
+        )
 
     def _in_chat(self, what: str, value: str) -> None:
         self.switch_mode("chat")
@@ -314,6 +363,7 @@ def make_app(
     realtime: bool = True,
     sample_hz: float = 10.0,
     confirm_timeout_s: float = 120.0,
+    record: Path | None = None,
 ) -> AstiopApp:
     """Build the console from its services; the CLI and the tests both come through here.
 
@@ -334,4 +384,5 @@ def make_app(
         Services(settings, store, graph, endpoint),
         sample_hz=sample_hz,
         confirm_timeout_s=confirm_timeout_s,
+        record=record,
     )

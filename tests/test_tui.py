@@ -257,3 +257,20 @@ async def test_the_command_palette_offers_the_consoles_own_commands(tmp_path):
         await pilot.press("n")
         await app.workers.wait_for_complete()
         assert sim_of(app).goal is None
+
+
+async def test_the_console_records_the_session_and_stops_from_the_palette(tmp_path):
+    from astiop.recording import summary
+
+    path = tmp_path / "console.mcap"
+    app = console(tmp_path, record=path)
+    async with app.run_test(size=SIZE) as pilot:
+        assert app.recorder is not None and "REC" in app.sub_title
+        sim_of(app).step(2.0)  # the robot's clock moves on: new messages to record
+        await pilot.pause(0.3)
+        stop = next(c for c in app.get_system_commands(app.screen) if c.title == "Stop recording")
+        stop.callback()
+        assert app.recorder is None
+        assert "Start recording" in [c.title for c in app.get_system_commands(app.screen)]
+    counts = summary(path)
+    assert counts.get("/robot_pose", 0) >= 1 and counts.get("/battery_status", 0) >= 1

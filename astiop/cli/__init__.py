@@ -47,6 +47,13 @@ def main(
         help="LLM spec: embedded, rules, ollama:NAME, openai:NAME@URL, dmr:NAME, gguf:PATH.",
     ),
     robot: str | None = typer.Option(None, "--robot", help="Robot backend: sim (default) or ros2."),
+    record: str | None = typer.Option(
+        None,
+        "--record",
+        is_flag=False,
+        flag_value="",
+        help="Console: record the session as MCAP, to FILE or <data dir>/sessions/<time>.mcap.",
+    ),
     version: bool = typer.Option(
         False, "--version", callback=_version, is_eager=True, help="Print the version and exit."
     ),
@@ -62,7 +69,7 @@ def main(
     if ctx.invoked_subcommand is None:
         from astiop.cli.console import run_console
 
-        run_console(ctx.obj)
+        run_console(ctx.obj, record)
 
 
 def run(argv: list[str] | None = None) -> None:
