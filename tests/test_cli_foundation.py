@@ -104,3 +104,13 @@ def test_doctor_on_a_fresh_install_and_with_a_broken_model(tmp_path):
     assert broken.returncode == 1 and not report["ok"]
     failed = [c for c in report["checks"] if c["status"] == "FAIL"]
     assert [c["check"] for c in failed] == ["model (selected)"]
+
+
+def test_record_takes_an_optional_file(monkeypatch):
+    import astiop.cli.console as console_module
+
+    seen = []
+    monkeypatch.setattr(console_module, "run_console", lambda st, record: seen.append(record))
+    for args in (("--record",), ("--record", "x.mcap"), ("--model", "rules", "--record"), ()):
+        assert astiop(*args).returncode == 0
+    assert seen == ["", "x.mcap", "", None]  # "": the default file under the data dir

@@ -50,8 +50,7 @@ def main(
     record: str | None = typer.Option(
         None,
         "--record",
-        is_flag=False,
-        flag_value="",
+        metavar="[FILE]",
         help="Console: record the session as MCAP, to FILE or <data dir>/sessions/<time>.mcap.",
     ),
     version: bool = typer.Option(
@@ -76,9 +75,14 @@ def run(argv: list[str] | None = None) -> None:
     """The `astiop` executable: the app, with one line (never a traceback) for any failure."""
     from astiop.cli.errors import guarded, usage
 
+    args = list(sys.argv[1:] if argv is None else argv)
+    for i, token in enumerate(args):  # `--record` with no FILE: the default file
+        if token == "--record" and (i + 1 == len(args) or args[i + 1].startswith("-")):
+            args[i] = "--record="
+
     def main() -> None:
         try:
-            code = app(args=argv, prog_name="astiop", standalone_mode=False)
+            code = app(args=args, prog_name="astiop", standalone_mode=False)
         except Exception as exc:  # typer vendors click: its errors are known by class name
             kinds = {cls.__name__ for cls in type(exc).__mro__}
             if "UsageError" in kinds:  # typer would draw a box: one line instead
