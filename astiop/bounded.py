@@ -28,6 +28,11 @@ def preview(text: str, limit: int = 60) -> str:
     return repr(shown + ("…" if len(text) > limit else ""))
 
 
+def one_line(text: object, limit: int = 300) -> str:
+    """Any message as one line: whitespace (newlines included) collapsed, length capped."""
+    return " ".join(str(text).split())[:limit]
+
+
 def escape_controls(text: str) -> str:
     """Control characters (terminal escapes, NUL, bell) shown escaped, never sent raw."""
     return _CONTROL.sub(lambda m: m.group().encode("unicode_escape").decode("ascii"), text)

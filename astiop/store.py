@@ -18,7 +18,7 @@ from typing import Any
 import sqlite_utils
 import yaml
 
-from astiop.bounded import has_controls
+from astiop.bounded import has_controls, one_line
 from astiop.resources import data_path
 from astiop.warehouse import Rect, default_map, fence_text, inside_fence
 
@@ -252,11 +252,11 @@ class Store:
             rows = self.db.conn.execute("PRAGMA quick_check(1)").fetchall()
         except sqlite3.DatabaseError as exc:
             self.close()
-            why = " ".join(str(exc).split())[:160]
+            why = one_line(exc, 160)
             raise StoreError(f"{self.path} is damaged ({why}); it was left untouched") from None
         if rows != [("ok",)]:
             self.close()
-            why = " ".join(str(rows[0][0]).split())[:160]
+            why = one_line(rows[0][0], 160)
             raise StoreError(f"{self.path} is damaged ({why}); it was left untouched")
 
     @contextmanager

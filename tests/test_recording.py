@@ -11,11 +11,10 @@ import time
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
-from astiop.recording import summary
+from astiop.recording import TOPICS, summary
 from tests.cli_runner import run_cli
 
-ROS_TOPICS = ("/robot_pose", "/odom", "/battery_status", "/robot_status", "/scan",
-              "/obstacles", "/plan", "/tf", "/diagnostics", "/conveyor/status")  # fmt: skip
+ROS_TOPICS = TOPICS
 
 
 def decoded(path, topics=ROS_TOPICS):

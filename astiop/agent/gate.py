@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from astiop.agent.intent import Intent
+from astiop.agent.intent import SERVICE_FOR, Intent
 from astiop.robot.validation import Checked
 
 PLACE_TOLERANCE_M = 0.3
@@ -32,11 +32,7 @@ class Action:
 
 
 _SERVICE_KINDS = {
-    "/stop": "stop",
-    "/dock": "dock",
-    "/undock": "undock",
-    "/conveyor/load": "load",
-    "/conveyor/unload": "unload",
+    **{service: kind for kind, service in SERVICE_FOR.items()},
     "/save_location": "save",
     "/list_locations": "list",
 }

@@ -10,6 +10,14 @@ import math
 import re
 from dataclasses import dataclass, replace
 
+# the Trigger service that does each of these kinds (the rules, the tools and the gate use it)
+SERVICE_FOR = {
+    "stop": "/stop",
+    "dock": "/dock",
+    "undock": "/undock",
+    "load": "/conveyor/load",
+    "unload": "/conveyor/unload",
+}
 # kinds that make the robot do something; "read" and "list" only look
 ACTUATING = frozenset(
     {"stop", "navigate", "dock", "undock", "load", "unload", "save", "motion", "configure"}

@@ -16,6 +16,8 @@ from typing import Any
 
 import httpx
 
+from astiop.bounded import one_line
+
 Messages = list[dict[str, str]]
 OnToken = Callable[[str], None]
 
@@ -150,7 +152,7 @@ class ChatClient:
                     detail = (await resp.aread()).decode("utf-8", "replace")[:200]
                     raise LLMHTTPError(
                         resp.status_code,
-                        f"{self.label}: HTTP {resp.status_code}: {_one_line(detail)}",
+                        f"{self.label}: HTTP {resp.status_code}: {one_line(detail)}",
                     )
                 async for piece in self._pieces(resp, state):
                     if piece:
@@ -161,7 +163,7 @@ class ChatClient:
                             break
         except httpx.ConnectError as exc:
             raise _partial(
-                LLMUnavailable(f"{self.label}: cannot connect ({_one_line(str(exc))})"), state
+                LLMUnavailable(f"{self.label}: cannot connect ({one_line(str(exc))})"), state
             ) from None
         except httpx.TimeoutException:
             raise _partial(
@@ -169,7 +171,7 @@ class ChatClient:
             ) from None
         except httpx.HTTPError as exc:
             raise _partial(
-                LLMProtocolError(f"{self.label}: {type(exc).__name__}: {_one_line(str(exc))}"),
+                LLMProtocolError(f"{self.label}: {type(exc).__name__}: {one_line(str(exc))}"),
                 state,
             ) from None
         except LLMError as exc:
@@ -189,7 +191,7 @@ class ChatClient:
             async with httpx.AsyncClient(timeout=httpx.Timeout(5.0), headers=self._headers()) as cl:
                 resp = await cl.get(f"{self.base_url}{path}")
         except httpx.HTTPError as exc:
-            detail = _one_line(str(exc)) or type(exc).__name__
+            detail = one_line(str(exc)) or type(exc).__name__
             raise LLMUnavailable(f"{self.label}: {detail}") from None
         if resp.status_code >= 400:
             raise LLMHTTPError(resp.status_code, f"{self.label}: HTTP {resp.status_code}")
@@ -215,7 +217,7 @@ class ChatClient:
         if not isinstance(chunk, dict):
             raise LLMProtocolError(f"{self.label}: unexpected stream item: {text[:80]!r}")
         if "error" in chunk:
-            raise LLMHTTPError(500, f"{self.label}: {_one_line(str(chunk['error']))}")
+            raise LLMHTTPError(500, f"{self.label}: {one_line(str(chunk['error']))}")
         return chunk
 
 
@@ -236,10 +238,6 @@ def repeating(text: str) -> bool:
         if all(words[len(words) - (k + 1) * n : len(words) - k * n] == tail for k in range(times)):
             return True
     return False
-
-
-def _one_line(text: str) -> str:
-    return " ".join(text.split())[:200]
 
 
 class _StreamState:

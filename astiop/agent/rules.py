@@ -8,7 +8,7 @@ an actuation.
 from __future__ import annotations
 
 from astiop.agent.grounding import factual_answer
-from astiop.agent.intent import Intent, classify
+from astiop.agent.intent import SERVICE_FOR, Intent, classify
 from astiop.robot.output import Execution
 
 GOTO = "ros2 service call /goto_position astiop_msgs/srv/GotoPosition"
@@ -17,14 +17,6 @@ TWIST = "geometry_msgs/msg/Twist"
 PUBLISH_HZ = 10
 UNKNOWN = "[rules] I don't know how to do that"
 
-_SERVICES = {
-    "stop": "/stop",
-    "dock": "/dock",
-    "undock": "/undock",
-    "load": "/conveyor/load",
-    "unload": "/conveyor/unload",
-}
-
 
 def command_for(intent: Intent) -> str | None:
     kind = intent.kind
@@ -32,8 +24,8 @@ def command_for(intent: Intent) -> str | None:
         return f"ros2 topic echo {intent.topic} --once" if intent.topic else None
     if kind == "list":
         return "ros2 service call /list_locations astiop_msgs/srv/ListLocations"
-    if kind in _SERVICES:
-        return f"ros2 service call {_SERVICES[kind]} {TRIGGER}"
+    if kind in SERVICE_FOR:
+        return f"ros2 service call {SERVICE_FOR[kind]} {TRIGGER}"
     if kind == "navigate" and intent.xy is not None:
         x, y = intent.xy
         return f'{GOTO} "{{x: {x:.3f}, y: {y:.3f}, theta: {intent.theta or 0.0:.4f}}}"'

@@ -10,7 +10,7 @@ import math
 import re
 from dataclasses import dataclass
 
-from astiop.agent.intent import Intent, Motion
+from astiop.agent.intent import SERVICE_FOR, Intent, Motion
 from astiop.agent.rules import command_for
 from astiop.robot.catalog import Catalog
 
@@ -50,13 +50,7 @@ SERVICE_TOOLS = {
     "/conveyor/load": "load",
     "/conveyor/unload": "unload",
 }
-SERVICE_KINDS = {
-    "/stop": "stop",
-    "/dock": "dock",
-    "/undock": "undock",
-    "/conveyor/load": "load",
-    "/conveyor/unload": "unload",
-}
+SERVICE_KINDS = {service: kind for kind, service in SERVICE_FOR.items()}
 COORDINATES = "drive_xy"
 SAVE = "save_here"
 # short bounded moves, rendered like the rules render them (always inside the safety clamp)

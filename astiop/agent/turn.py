@@ -83,6 +83,7 @@ class Agent:
         self.history: list[tuple[str, str]] = []
         self.fallback = fallback  # the rules answer when the model is unreachable
         self._places = places
+        self._turn_places: dict[str, tuple[float, float]] | None = None
         self.interpretation = interpretation
         self.interpret_tokens = interpret_tokens
         self.narrow_tools = narrow_tools
@@ -93,15 +94,19 @@ class Agent:
         return self.endpoint.spec.raw
 
     def places(self) -> dict[str, tuple[float, float]]:
-        """The named locations and their x, y: what a request may name."""
+        """The named locations and their x, y: what a request may name. Read once per turn
+        (planning, the gate and the goal's target all ask)."""
         if self._places is not None:
             return self._places
-        if self.store is not None:
-            return {loc.name: (loc.x, loc.y) for loc in self.store.list_locations()}
-        geometry = self.graph.map_geometry()
-        if isinstance(geometry, WarehouseMap):
-            return {s.name: s.pose[:2] for s in geometry.stations}
-        return {}
+        if self._turn_places is None:
+            if self.store is not None:
+                found = {loc.name: (loc.x, loc.y) for loc in self.store.list_locations()}
+            else:
+                geometry = self.graph.map_geometry()
+                stations = geometry.stations if isinstance(geometry, WarehouseMap) else ()
+                found = {s.name: s.pose[:2] for s in stations}
+            self._turn_places = found
+        return self._turn_places
 
     def locations(self) -> list[str]:
         return list(self.places())
@@ -123,7 +128,7 @@ class Agent:
         emit = on_event or (lambda kind, data: None)
         t0 = time.perf_counter()
         result = TurnResult(self.model, self.mode, request)
-        self._reviews = {}
+        self._reviews, self._turn_places = {}, None  # this turn reads them afresh
         await self.recorder.start(result)
         try:
             fallback = False

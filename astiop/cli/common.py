@@ -9,6 +9,7 @@ from typing import Any, NoReturn
 
 import typer
 
+from astiop.bounded import one_line
 from astiop.config import ConfigError, Settings, default_db_path, load_settings
 from astiop.store import Store, StoreError
 
@@ -16,7 +17,7 @@ USER_ERROR = 2
 
 
 def fail(message: str, code: int = USER_ERROR) -> NoReturn:
-    typer.echo(f"astiop: {' '.join(message.split())}", err=True)  # always one line
+    typer.echo(f"astiop: {one_line(message, 1000)}", err=True)
     raise typer.Exit(code)
 
 

@@ -13,6 +13,8 @@ import traceback
 from collections.abc import Callable
 from pathlib import Path
 
+from astiop.bounded import one_line
+
 # failures whose message already says what was wrong with the input or the file
 KNOWN = (
     "ConfigError",
@@ -28,10 +30,6 @@ KNOWN = (
     "BackendError",
     "RecordingError",
 )
-
-
-def _one_line(text: str) -> str:
-    return " ".join(str(text).split())[:300]
 
 
 def log_path() -> Path:
@@ -52,7 +50,7 @@ def report(exc: BaseException) -> int:
     """Print the one line for `exc` and return the exit code."""
     names = {cls.__name__ for cls in type(exc).__mro__}
     if names & set(KNOWN):
-        print(f"astiop: {_one_line(exc)}", file=sys.stderr)
+        print(f"astiop: {one_line(exc)}", file=sys.stderr)
         return 2
     if isinstance(exc, RecursionError):
         print("astiop: the input is nested too deeply to read", file=sys.stderr)
@@ -65,7 +63,7 @@ def report(exc: BaseException) -> int:
     except OSError:
         path = Path("(the log could not be written)")
     print(
-        f"astiop: internal error: {type(exc).__name__}: {_one_line(exc)} (traceback in {path})",
+        f"astiop: internal error: {type(exc).__name__}: {one_line(exc)} (traceback in {path})",
         file=sys.stderr,
     )
     return 1
@@ -74,7 +72,7 @@ def report(exc: BaseException) -> int:
 def usage(exc) -> int:
     """A usage error (unknown option, bad value) in one line, with where to look."""
     where = f" (see: {exc.ctx.command_path} --help)" if getattr(exc, "ctx", None) else ""
-    print(f"astiop: {_one_line(exc.format_message())}{where}", file=sys.stderr)
+    print(f"astiop: {one_line(exc.format_message())}{where}", file=sys.stderr)
     return 2
 
 
