@@ -356,3 +356,16 @@ def test_echo_text_is_what_ros2_prints_with_the_same_options(robot):
         assert "location: 2x ..." in ours
     finally:
         graph.close()
+
+
+def test_display_options_shape_the_text_but_the_values_stay_whole(robot):
+    graph = gateway(stream=False)
+    try:
+        status = graph.run("ros2 topic echo /robot_status --once --no-str")
+        assert status.values["state"] in ("idle", "charging") and "<string length" in status.output
+        scan = graph.run("ros2 topic echo /scan --once --no-arr -l 5")
+        assert len(scan.values["ranges"]) == 360 and "<sequence type" in scan.output
+        sent = [c for c in ros2_calls(robot) if c[:3] == ["topic", "echo", "/scan"]]
+        assert sent and "--no-arr" not in sent[-1] and "-l" not in sent[-1]
+    finally:
+        graph.close()

@@ -85,6 +85,24 @@ def parse_response(text: str) -> dict[str, Any]:
     return values
 
 
+_DISPLAY_FLAGS = {"--no-arr", "--no-str", "-f", "--full-length"}
+_DISPLAY_VALUED = ("-l", "--truncate-length")
+
+
+def _without_display_options(argv: list[str]) -> list[str]:
+    out, skip = [], False
+    for token in argv:
+        if skip:
+            skip = False
+        elif token in _DISPLAY_VALUED:
+            skip = True
+        elif token in _DISPLAY_FLAGS or token.startswith(("--truncate-length=", "-l")):
+            continue
+        else:
+            out.append(token)
+    return out
+
+
 _PARAM_LINE = re.compile(r"^  (?P<name>\S+)(?: \(type: (?P<type>[^)]+)\))?\s*$")
 
 
@@ -439,9 +457,12 @@ class Ros2Backend:
         return run.out, None
 
     def _echo(self, checked: Checked, argv: list[str], timeout: float):
+        # the robot is asked for whole values; the operator's display options (-l, --no-arr,
+        # --no-str) shape only the text, made here from those values by echo_text
+        argv = _without_display_options(argv)
         if "--once" not in argv:
             argv.append("--once")
-        argv.append("--full-length")  # values from every item; the text is truncated below
+        argv.append("--full-length")
         run = self._run(argv, timeout, until=lambda out: "\n---" in out)
         doc = parse_document(run.out.split("\n---", 1)[0].splitlines(keepends=True))
         if doc is None:
