@@ -104,6 +104,14 @@ class AstiopApp(App):
         Binding("f6", "switch_mode('bench')", "Bench"),
         Binding("ctrl+r", "release_estop", "Release e-stop", priority=True),
         Binding("ctrl+q", "quit", "Quit", priority=True),
+        # a replay's clock; focused inputs and tables keep these keys
+        Binding("space", "replay_toggle", "Pause/play", show=False),
+        Binding("left", "replay_step(-1)", "Back 1 s", show=False),
+        Binding("right", "replay_step(1)", "On 1 s", show=False),
+        Binding("shift+left", "replay_step(-10)", "Back 10 s", show=False),
+        Binding("shift+right", "replay_step(10)", "On 10 s", show=False),
+        Binding("left_square_bracket", "replay_speed(0)", "Slower", show=False),
+        Binding("right_square_bracket", "replay_speed(1)", "Faster", show=False),
     ]
 
     def __init__(
@@ -129,7 +137,7 @@ class AstiopApp(App):
 
     def on_mount(self) -> None:
         graph = self.services.gateway
-        self.sub_title = f"robot: {graph.backend.name}  model: {self.services.endpoint.spec.raw}"
+        self.refresh_subtitle()
         graph.start()
         self.topic_stats = graph.topic_stats()
         self.switch_mode("dashboard")
@@ -171,6 +179,27 @@ class AstiopApp(App):
 
     def on_turn_finished(self, msg: TurnFinished) -> None:
         self.broadcast(lambda: TurnFinished(msg.result, msg.model))
+
+    def refresh_subtitle(self) -> None:
+        backend = self.services.gateway.backend
+        robot = getattr(backend, "label", backend.name)
+        rec = "  ● REC" if self.recorder is not None else ""
+        self.sub_title = f"robot: {robot}  model: {self.services.endpoint.spec.raw}{rec}"
+
+    # -- a replay's clock --------------------------------------------------------------------
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        if action.startswith("replay_"):
+            return self.services.gateway.playback is not None
+        return True
+
+    def action_replay_toggle(self) -> None:
+        self.services.gateway.playback.toggle()
+
+    def action_replay_step(self, seconds: int) -> None:
+        self.services.gateway.playback.step(seconds)
+
+    def action_replay_speed(self, up: int) -> None:
+        self.services.gateway.playback.faster(bool(up))
 
     # -- the command palette ---------------------------------------------------------------
     def get_system_commands(self, screen) -> Iterable[SystemCommand]:
@@ -229,7 +258,7 @@ class AstiopApp(App):
         except RecordingError as exc:
             self.notify(str(exc), severity="error", title="recording", markup=False)
             return
-        self.sub_title = f"{self.sub_title}  ● REC"
+        self.refresh_subtitle()
         self.notify(f"recording to {path}", title="recording", markup=False)
 
     def stop_recording(self) -> None:
@@ -237,7 +266,7 @@ class AstiopApp(App):
             return
         recorder, self.recorder = self.recorder, None
         counts = recorder.stop()
-        self.sub_title = self.sub_title.replace("  ● REC", "")
+        self.refresh_subtitle()
         self.notify(
             f"{recorder.path}: {sum(counts.values())} messages",
             title="recording saved",

@@ -330,6 +330,14 @@ class Store:
         rows = self.db.query("SELECT * FROM locations ORDER BY name COLLATE NOCASE")
         return [_location(r) for r in rows]
 
+    def copy_locations_from(self, other: Store) -> None:
+        """This store's named locations become another's (a replay's or a bench run's own)."""
+        rows = list(other.db.query("SELECT * FROM locations"))
+        with self._tx():
+            self.db.execute("DELETE FROM locations")
+            if rows:
+                self.db["locations"].insert_all(rows)
+
     def get_location(self, name: str) -> Location | None:
         rows = list(self.db.query("SELECT * FROM locations WHERE name = ? COLLATE NOCASE", [name]))
         return _location(rows[0]) if rows else None
@@ -507,6 +515,22 @@ class Store:
                 )
             )
         return rows
+
+    def add_recorded_interaction(self, turn: dict[str, Any], started_at: float) -> int:
+        """A turn read back from a recording (replay), with its commands."""
+        keys = ("prompt", "model", "mode", "answer", "grounding", "total_s", "status")
+        with self._tx():
+            row = {k: turn.get(k) for k in keys}
+            row.update(session="replay", started_at=started_at, prompt=str(row["prompt"] or ""))
+            row.update(model=str(row["model"] or ""), mode=str(row["mode"] or ""))
+            interaction_id = int(self.db["interactions"].insert(row).last_pk)
+            for seq, cmd in enumerate(turn.get("commands") or []):
+                keep = ("command", "valid", "executed", "reason", "source")
+                self.db["commands"].insert(
+                    {"interaction_id": interaction_id, "created_at": started_at, "seq": seq}
+                    | {k: cmd.get(k) for k in keep}
+                )
+        return interaction_id
 
     def events(self, limit: int = 500) -> list[dict[str, Any]]:
         return list(self.db.query("SELECT * FROM events ORDER BY id DESC LIMIT ?", [limit]))

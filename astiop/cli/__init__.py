@@ -8,7 +8,18 @@ from pathlib import Path
 import typer
 
 from astiop import __version__
-from astiop.cli import agent, bench, config_cmd, doctor, emulate, locations, record, robot, sim
+from astiop.cli import (
+    agent,
+    bench,
+    config_cmd,
+    console,
+    doctor,
+    emulate,
+    locations,
+    record,
+    robot,
+    sim,
+)
 from astiop.cli.common import CliState
 
 app = typer.Typer(
@@ -27,6 +38,7 @@ app.command("models")(agent.models)
 app.command("emulate-ros2")(emulate.emulate_ros2)
 app.command("doctor")(doctor.doctor)
 app.command("record")(record.record)
+app.command("replay")(console.replay)
 
 
 def _version(value: bool) -> None:

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import typer
+
 from astiop.cli.common import CliState
 
 
@@ -22,3 +24,43 @@ def run_console(st: CliState, record: str | None = None) -> None:
     except (SpecError, BackendError) as exc:
         fail(str(exc))
     app.run()
+
+
+def replay(
+    ctx: typer.Context,
+    file: Path = typer.Argument(..., help="An MCAP recording made by astiop (record, --record)."),
+    speed: float = typer.Option(1.0, "--speed", help="Recorded seconds per second: 0.25 to 16."),
+    paused: bool = typer.Option(False, "--paused", help="Open paused at the start."),
+) -> None:
+    """Open the console on a recording: dashboard, map and logs replay it; nothing is sent.
+
+    Keys: space pauses, ←/→ step a second (shift: ten), [ and ] change the speed.
+    """
+    import tempfile
+
+    from astiop.agent.specs import SpecError
+    from astiop.app import make_app
+    from astiop.cli.common import fail, state
+    from astiop.recording import RecordingError
+    from astiop.robot.gateway import RobotGateway
+    from astiop.robot.output import BackendError
+    from astiop.robot.replay_backend import SPEEDS, open_replay
+    from astiop.store import Store
+
+    if not (SPEEDS[0] <= speed <= SPEEDS[-1]):
+        fail(f"--speed must be between {SPEEDS[0]:g} and {SPEEDS[-1]:g}")
+    if not file.is_file():
+        fail(f"{file}: no such recording")
+    st = state(ctx)
+    with tempfile.TemporaryDirectory(prefix="astiop-replay-") as tmp:
+        # the replay's own store: what it shows and records never reaches the operator's
+        store = Store(Path(tmp) / "replay.db")
+        store.copy_locations_from(st.store)
+        try:
+            backend = open_replay(file, store=store, speed=speed, paused=paused)
+            gateway = RobotGateway(backend, store=store, who="replay")
+            app = make_app(st.settings, store, graph=gateway)
+        except (RecordingError, SpecError, BackendError) as exc:
+            fail(str(exc))
+        app.run()
+        store.close()

@@ -20,8 +20,10 @@ def record(
     duration: float | None = typer.Option(
         None, "--duration", help="Seconds to record (default 10; with --goto, until it ends)."
     ),
-    goto: str | None = typer.Option(
-        None, "--goto", help="Drive to this named location while recording (it is the consent)."
+    goto: list[str] = typer.Option(
+        [],
+        "--goto",
+        help="Drive to this named location while recording (it is the consent); repeat for a tour.",
     ),
     scan_hz: float | None = typer.Option(None, "--scan-hz", help="Decimate /scan to this rate."),
     repair: bool = typer.Option(
@@ -50,8 +52,8 @@ def record(
 
     st = state(ctx)
     path = file or default_path(st.db_path.parent)
-    if goto is not None:
-        st.store.require_location(goto)  # a one-line error before anything starts
+    for name in goto:
+        st.store.require_location(name)  # a one-line error before anything starts
     try:
         gateway = make_robot_graph(st.settings, st.store, realtime=True, who="astiop record")
         gateway.start()
@@ -63,25 +65,21 @@ def record(
         gateway.close()
         fail(str(exc))
     t0 = time.monotonic()
-    limit = duration if duration is not None else (600.0 if goto else 10.0)
-    outcome = None
+    limit = duration if duration is not None else (600.0 * len(goto) if goto else 10.0)
+    outcomes: list[str] = []
+
+    def progress() -> None:
+        if not as_json:
+            typer.echo(f"\r  recording {time.monotonic() - t0:5.1f} s", nl=False, err=True)
+
     try:
-        if goto is not None:
-            cmd = f"ros2 service call /goto_position astiop_msgs/srv/GotoPosition \"{{name: '{goto}'}}\""
-            result = gateway.run(cmd, confirm=lambda _c: True, source="record")
-            if not result.executed or result.error:
-                raise RecordingError(f"--goto {goto}: {result.reason or result.error}")
-            time.sleep(0.5)  # the goal shows in the robot's status
-        while time.monotonic() - t0 < limit:
-            if goto is not None:
-                outcome = gateway.wait_until_idle(min(1.0, limit - (time.monotonic() - t0)))
-                state_word = gateway.state().state_word
-                if outcome is not None or state_word not in ("navigating", "docking", "blocked"):
-                    break
-            else:
-                time.sleep(0.2)
-            if not as_json:
-                typer.echo(f"\r  recording {time.monotonic() - t0:5.1f} s", nl=False, err=True)
+        for name in goto:
+            if time.monotonic() - t0 >= limit:
+                break
+            outcomes.append(f"goal {name}: {_drive_to(gateway, name, t0 + limit, progress)}")
+        while not goto and time.monotonic() - t0 < limit:
+            time.sleep(0.2)
+            progress()
     except KeyboardInterrupt:
         pass
     except RecordingError as exc:
@@ -92,9 +90,28 @@ def record(
     gateway.close()
     if not as_json:
         typer.echo("", err=True)
-        if goto is not None:
-            typer.echo(f"goal {goto}: {outcome or 'ended'}")
+        for line in outcomes:
+            typer.echo(line)
     _report(path, summary(path) if counts else counts, as_json)
+
+
+def _drive_to(gateway, name: str, deadline: float, progress) -> str:
+    """Start a goal to a named location and wait (until the deadline) for how it ended."""
+    from astiop.recording import RecordingError
+
+    cmd = f"ros2 service call /goto_position astiop_msgs/srv/GotoPosition \"{{name: '{name}'}}\""
+    result = gateway.run(cmd, confirm=lambda _c: True, source="record")
+    if not result.executed or result.error:
+        raise RecordingError(f"--goto {name}: {result.reason or result.error}")
+    time.sleep(0.5)  # the goal shows in the robot's status
+    while time.monotonic() < deadline:
+        outcome = gateway.wait_until_idle(min(1.0, deadline - time.monotonic()))
+        progress()
+        if outcome is not None:
+            return outcome
+        if gateway.state().state_word not in ("navigating", "docking", "blocked"):
+            return "ended"
+    return "still going when the recording ended"
 
 
 def _report(path: Path, counts: dict[str, int], as_json: bool) -> None:

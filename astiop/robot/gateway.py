@@ -98,6 +98,15 @@ class RobotGateway:
         """Block until the robot has no active goal; how the goal ended, when known."""
         return self.backend.wait_until_idle(timeout_s)
 
+    @property
+    def read_only_reason(self) -> str:
+        return getattr(self.backend, "read_only", f"the {self.backend.name} robot is read-only")
+
+    @property
+    def playback(self):
+        """The replay's clock (pause, step, speed), or None on a live robot."""
+        return getattr(self.backend, "playback", None)
+
     # -- commands --------------------------------------------------------------------------
     def review(self, text: str) -> Review:
         checked = validate(text, self.catalog)
@@ -145,11 +154,11 @@ class RobotGateway:
         result = Execution(
             text.strip(), checked.valid, checked.reason, checked.kind, notes=list(checked.notes)
         )
+        if "commands" not in self.backend.capabilities:
+            result.reason = self.read_only_reason
+            return result
         if not review.allowed:
             result.reason = review.reason
-            return result
-        if "commands" not in self.backend.capabilities:
-            result.reason = f"the {self.backend.name} robot is read-only"
             return result
         if review.needs_confirmation:
             if confirm is None:
@@ -189,10 +198,10 @@ class RobotGateway:
         text = f'ros2 topic pub --once /cmd_vel {type_} "{values}"'
         review = self.review(text)
         result = Execution(text, review.checked.valid, review.reason, "actuate")
-        if not review.allowed:
-            return result
         if "teleop" not in self.backend.capabilities:
-            result.reason = f"the {self.backend.name} robot cannot be driven"
+            result.reason = self.read_only_reason
+            return result
+        if not review.allowed:
             return result
         if self._held(review.checked):
             result.reason = ESTOP_REASON

@@ -16,8 +16,6 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import replace
 from typing import Any
 
-import numpy as np
-
 from astiop.robot import ros2_process
 from astiop.robot.catalog import (
     ActionSpec,
@@ -40,7 +38,14 @@ from astiop.robot.render import (
 )
 from astiop.robot.ros2_motion import STDIN_DISTROS, ArmedStop, TeleopPublisher
 from astiop.robot.ros2_streams import TopicStream, parse_document
-from astiop.robot.state import OccupancyGrid, RobotEvent, RobotState, TopicStat, from_messages
+from astiop.robot.state import (
+    OccupancyGrid,
+    RobotEvent,
+    RobotState,
+    TopicStat,
+    from_messages,
+    grid_from_message,
+)
 from astiop.robot.validation import Checked
 
 _LISTED = re.compile(r"^(?P<name>/\S*)\s+\[(?P<type>[^\]]+)\]\s*$")
@@ -338,13 +343,7 @@ class Ros2Backend:
             self._event("map", "warning", "no /map received: the map view follows the scan")
             return
         try:
-            info = doc["info"]
-            w, h = int(info["width"]), int(info["height"])
-            cells = np.asarray(doc["data"], dtype=np.int8).reshape(h, w)
-            origin = info["origin"]["position"]
-            self._map = OccupancyGrid(
-                float(info["resolution"]), float(origin["x"]), float(origin["y"]), w, h, cells
-            )
+            self._map = grid_from_message(doc)
         except (KeyError, TypeError, ValueError) as exc:
             self._event("map", "warning", f"/map could not be read: {exc}")
 

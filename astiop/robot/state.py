@@ -115,6 +115,17 @@ class OccupancyGrid:
         )
 
 
+def grid_from_message(msg: dict[str, Any]) -> OccupancyGrid:
+    """nav_msgs/OccupancyGrid as read; KeyError, TypeError or ValueError when malformed."""
+    info = msg["info"]
+    w, h = int(info["width"]), int(info["height"])
+    cells = np.asarray(msg["data"], dtype=np.int8).reshape(h, w)
+    origin = info["origin"]["position"]
+    return OccupancyGrid(
+        float(info["resolution"]), float(origin["x"]), float(origin["y"]), w, h, cells
+    )
+
+
 @dataclass(frozen=True)
 class RobotState:
     t: float  # the robot's clock: sim time, or receive time on a real robot

@@ -9,6 +9,11 @@ from textual.worker import Worker
 class ConsoleScreen(Screen):
     def on_mount(self) -> None:
         self.app.listeners.append(self)
+        playback = self.app.services.gateway.playback
+        if playback is not None:  # a replay: where it is, on every screen
+            from astiop.widgets.replay_bar import ReplayBar
+
+            self.mount(ReplayBar(playback))
 
     def on_unmount(self) -> None:
         if self in self.app.listeners:

@@ -106,7 +106,7 @@ class ChatScreen(ConsoleScreen):
             endpoint,
             self.agent.mode if self.agent.mode != "rules" else self.app.services.settings.llm.mode,
         )
-        self.app.sub_title = f"robot: {self.app.services.gateway.backend.name}  model: {spec}"
+        self.app.refresh_subtitle()
         self.run_worker(old.close, thread=True, group="model")
         self.notify(f"model: {endpoint.spec.raw}", markup=False)
 

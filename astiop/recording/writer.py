@@ -58,6 +58,19 @@ def ros2msg(type_name: str, distro: str | None = None) -> str:
     return "\n".join(text) + "\n"
 
 
+def session_metadata(gateway) -> dict[str, str]:
+    """Which robot, and the two clocks at the start: the robot's and the wall's, so a sim-time
+    recording can be placed in wall time (export)."""
+    from astiop.robot.grammar import current_distro
+
+    return {
+        "backend": gateway.backend.name,
+        "distro": current_distro(),
+        "robot_t0": repr(gateway.state().t),
+        "wall_t0": repr(time.time()),
+    }
+
+
 def _stamp_ns(message: dict[str, Any], fallback_s: float) -> int:
     header = message.get("header")
     if header is None and message.get("transforms"):
@@ -98,13 +111,22 @@ JSON_SCHEMAS = {
 class SessionRecorder:
     """Polls the gateway (never the simulator) and the store while it runs, in its own thread."""
 
-    def __init__(self, path: Path, gateway, store=None, *, scan_hz: float | None = None):
+    def __init__(
+        self,
+        path: Path,
+        gateway,
+        store=None,
+        *,
+        scan_hz: float | None = None,
+        flush_s: float = FLUSH_S,
+    ):
         from mcap_ros2._dynamic import serialize_dynamic  # the encoder its Writer uses
 
         self.path = Path(path)
         self.gateway = gateway
         self.store = store
         self.scan_period = 1.0 / scan_hz if scan_hz else 0.0
+        self.flush_s = flush_s
         self._serialize = serialize_dynamic
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
@@ -113,6 +135,7 @@ class SessionRecorder:
             raise RecordingError(f"cannot write {self.path}: {exc.strerror or exc}") from None
         self._writer = Writer(self._file)
         self._writer.start(profile="ros2", library="astiop")
+        self._writer.add_metadata("astiop", session_metadata(gateway))
         self._channels: dict[str, tuple[int, Any]] = {}  # topic -> (channel id, encoder)
         self._last: dict[str, int] = {}  # topic -> last stamp written (ns)
         self.counts: dict[str, int] = {}
@@ -145,11 +168,11 @@ class SessionRecorder:
                 self.poll()
 
     def poll(self) -> None:
-        """Write what is new since the last poll; close a chunk every FLUSH_S."""
-        now = time.time()
+        """Write what is new since the last poll; close a chunk every flush_s."""
+        robot_now = self.gateway.state().t  # the clock the topics are logged on
         types = {n: s.type for n, s in self.gateway.catalog.topics.items()}
         for topic, message in self.gateway.messages([t for t in TOPICS if t in types]).items():
-            stamp = _stamp_ns(message, now)
+            stamp = _stamp_ns(message, robot_now)
             last = self._last.get(topic)
             if last is not None and stamp <= last:
                 continue  # nothing new on this topic
@@ -160,10 +183,10 @@ class SessionRecorder:
         for ev in self.gateway.events_since(self._event_seq):
             self._event_seq = max(self._event_seq, ev.seq)
             data = {"kind": ev.kind, "severity": ev.severity, "message": ev.message}
-            self._json("/astiop/events", data, int(ev.t * 1e9) if ev.t else int(now * 1e9))
+            self._json("/astiop/events", data, int((ev.t or robot_now) * 1e9))
         for turn in self._new_interactions():
-            self._json("/astiop/interactions", turn, int(now * 1e9))
-        if time.monotonic() - self._flushed >= FLUSH_S:
+            self._json("/astiop/interactions", turn, int(robot_now * 1e9))
+        if time.monotonic() - self._flushed >= self.flush_s:
             self._writer.flush()  # closes the open chunk: a kill from here on loses nothing
             self._file.flush()
             self._flushed = time.monotonic()

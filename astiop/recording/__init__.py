@@ -1,0 +1,23 @@
+"""Sessions as MCAP: written while the robot runs (`writer`), read back for replay and export."""
+
+from astiop.recording.writer import (
+    FLUSH_S,
+    TOPICS,
+    RecordingError,
+    SessionRecorder,
+    default_path,
+    repair,
+    ros2msg,
+    summary,
+)
+
+__all__ = [
+    "FLUSH_S",
+    "TOPICS",
+    "RecordingError",
+    "SessionRecorder",
+    "default_path",
+    "repair",
+    "ros2msg",
+    "summary",
+]

@@ -1,0 +1,170 @@
+"""A recording replayed: the state it shows is the recorded one, its clock obeys the keys, and
+nothing is ever sent to a robot."""
+
+import pytest
+from mcap.reader import make_reader
+from mcap_ros2.decoder import DecoderFactory
+from textual.widgets import Input
+
+from astiop.app import make_app
+from astiop.config import load_settings
+from astiop.recording import SessionRecorder
+from astiop.recording.reader import Recording
+from astiop.robot.factory import make_sim_graph
+from astiop.robot.gateway import RobotGateway
+from astiop.robot.replay_backend import READ_ONLY, open_replay
+from astiop.sim.simulator import Simulator
+from astiop.store import Store
+from tests.cli_runner import run_cli
+
+GOTO = "ros2 service call /goto_position astiop_msgs/srv/GotoPosition \"{name: '%s'}\""
+
+
+@pytest.fixture(scope="module")
+def trip(tmp_path_factory):
+    """A seeded drive to inspection_zone_a, recorded poll by poll at 10 Hz of sim time, with
+    one agent turn finished half-way."""
+    tmp = tmp_path_factory.mktemp("trip")
+    settings = load_settings({}, env={}, path=tmp / "none.toml")
+    store = Store(tmp / "rec.db")
+    sim = Simulator(seed=0)
+    gateway = make_sim_graph(settings, store, sim=sim)
+    recorder = SessionRecorder(tmp / "trip.mcap", gateway, store, flush_s=0.0)  # chunk a poll
+    assert gateway.run(GOTO % "inspection_zone_a", confirm=lambda _c: True).executed
+    arrived = 0
+    for i in range(400):
+        sim.step(0.1)
+        recorder.poll()
+        if i == 50:
+            turn = store.start_interaction(model="rules", mode="rules", prompt="where is it?")
+            store.update_interaction(turn, status="done", answer="x 5.0, y 3.5")
+        arrived += sim.goal is None
+        if arrived > 20:  # 2 s more: the status after arrival is recorded too
+            break
+    recorder.stop()
+    store.close()
+    return tmp / "trip.mcap"
+
+
+def independent(path, topic):
+    """(log time ns, message) as mcap-ros2-support reads them."""
+    with open(path, "rb") as fh:
+        reader = make_reader(fh, decoder_factories=[DecoderFactory()])
+        return [(m.log_time, msg) for _s, _c, m, msg in reader.iter_decoded_messages([topic])]
+
+
+def test_the_replayed_pose_is_the_recorded_one_wherever_the_cursor_is(trip):
+    backend = open_replay(trip, paused=True)
+    poses = independent(trip, "/robot_pose")
+    assert len(poses) > 100
+    for t_ns, msg in poses[:: len(poses) // 7]:
+        backend.playback.seek((t_ns - backend.playback.start_ns) / 1e9)
+        pose = backend.state().pose
+        assert (pose.x, pose.y) == pytest.approx((msg.x, msg.y), abs=1e-9)
+    backend.playback.seek(1e9)  # past the end: the last message, and the clock stops there
+    last = poses[-1][1]
+    assert backend.state().pose.x == pytest.approx(last.x)
+    assert backend.state().state_word == "idle"  # it arrived
+    battery = independent(trip, "/battery_status")[-1][1]
+    assert backend.state().battery.percentage == pytest.approx(battery.percentage)
+
+
+def test_the_clock_pauses_steps_and_changes_speed(trip):
+    backend = open_replay(trip, paused=True)
+    pb = backend.playback
+    assert pb.position_s == 0.0 and not pb.playing
+    pb.step(1)
+    pb.step(1)
+    assert pb.position_s == pytest.approx(2.0)
+    pb.step(-5)
+    assert pb.position_s == 0.0  # never before the start
+    assert [pb.faster(True), pb.faster(True), pb.faster(False), pb.faster(False)] == [2, 4, 2, 1]
+    for _ in range(10):
+        pb.faster(False)
+    assert pb.speed == 0.25
+    pb.step(10_000)
+    assert pb.position_s == pytest.approx(pb.duration_s) and not pb.playing
+    assert pb.toggle() and pb.position_s < 1.0  # play again from the start
+
+
+def test_events_and_turns_come_as_the_cursor_reaches_them(trip, tmp_path):
+    store = Store(tmp_path / "replay.db")
+    backend = open_replay(trip, store=store, paused=True)
+    assert backend.events_since(0) == []  # the goal is accepted 0.1 s in
+    backend.state()
+    assert store.interactions() == []
+    backend.playback.step(10)
+    events = backend.events_since(0)
+    assert events and "accepted" in events[0].message
+    backend.state()
+    turns = store.interactions()
+    assert [t["prompt"] for t in turns] == ["where is it?"] and turns[0]["session"] == "replay"
+
+
+def test_a_replay_refuses_every_command_and_teleop(trip, tmp_path):
+    store = Store(tmp_path / "replay.db")
+    gateway = RobotGateway(open_replay(trip, store=store), store=store, who="replay")
+    asked = []
+    for cmd in (GOTO % "shipping", "ros2 topic echo /robot_pose --once", "ros2 node list"):
+        result = gateway.run(cmd, confirm=lambda c: asked.append(c) or True)
+        assert not result.executed and result.reason == READ_ONLY
+    assert asked == []  # refused before anyone is asked
+    drive = gateway.drive(0.2, 0.0, 0.0)
+    assert not drive.executed and drive.reason == READ_ONLY
+
+
+def test_a_recording_cut_off_mid_way_replays_up_to_the_cut(trip, tmp_path):
+    data = trip.read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[: len(data) * 2 // 3])
+    whole, part = Recording(trip), Recording(cut)
+    assert part.cut and not whole.cut
+    assert 0 < part.counts()["/robot_pose"] < whole.counts()["/robot_pose"]
+    backend = open_replay(cut)
+    assert "cut off" in backend.events_since(0)[0].message
+
+
+def test_replay_refuses_bad_input_in_one_line(tmp_path):
+    notes = tmp_path / "notes.txt"
+    notes.write_text("not a recording\n")
+    for args, says in (
+        (("replay", str(tmp_path / "none.mcap")), "no such recording"),
+        (("replay", str(notes)), "not an MCAP recording"),
+        (("replay", "--speed", "100", str(notes)), "--speed"),
+    ):
+        out = run_cli("--db", str(tmp_path / "r.db"), *args)
+        assert out.returncode == 2 and says in out.stderr, out.stderr
+        assert len(out.stderr.strip().splitlines()) == 1
+
+
+async def test_the_replay_console_shows_the_recording_and_refuses_commands(trip, tmp_path):
+    settings = load_settings({"llm": {"model": "rules"}}, env={}, path=tmp_path / "none.toml")
+    store = Store(tmp_path / "replay.db")
+    gateway = RobotGateway(open_replay(trip, store=store, paused=True), store=store)
+    app = make_app(settings, store, graph=gateway, sample_hz=20)
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.pause(0.3)
+        bar = app.screen.query_one("#replay-bar")
+        assert "⏸" in str(bar.render()) and "00:00.0" in str(bar.render())
+        assert "replay of trip.mcap" in app.sub_title
+        await pilot.press("right", "right", "right")
+        await pilot.pause(0.4)
+        assert "00:03.0" in str(bar.render())
+        x_at_3 = app.robot_state.pose.x
+        await pilot.press("shift+right")
+        await pilot.pause(0.4)
+        assert app.robot_state.pose.x > x_at_3 + 1.0  # the recorded robot moved on
+        await pilot.press("right_square_bracket", "space")
+        await pilot.pause(0.3)
+        assert gateway.playback.playing and gateway.playback.speed == 2.0
+        assert "▶ 2×" in str(app.screen.query_one("#replay-bar").render())
+        await pilot.press("f2")
+        await pilot.pause()
+        app.screen.query_one(Input).value = "send the robot to shipping"
+        await pilot.press("enter")
+        await app.workers.wait_for_complete()
+        await pilot.pause()
+        text = " ".join(str(w.render()) for w in app.screen.query(".answer"))
+        assert "replay is read-only" in text
+        assert app.screen.query_one("#replay-bar") is not None
+    assert store.commands_for(store.interactions()[0]["id"])[0]["executed"] == 0
