@@ -114,7 +114,9 @@ class ReplayBackend:
         self._turns_shown = 0
         self._events: list[RobotEvent] = []
         if recording.cut:
-            cut = f"the recording was cut off at {recording.duration_s:.1f} s: replaying up to there"
+            cut = (
+                f"the recording was cut off at {recording.duration_s:.1f} s: replaying up to there"
+            )
             self._events.append(RobotEvent(1, recording.start_ns / 1e9, "replay", "warning", cut))
         ch = recording.channels.get("/astiop/events")
         for i, t_ns in enumerate(ch.times if ch else ()):
