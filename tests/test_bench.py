@@ -12,6 +12,7 @@ from astiop.bench.report import load_report, to_csv, to_markdown
 from astiop.bench.stage2 import build_sim, check_answer, score_case
 from astiop.config import load_settings
 from astiop.robot.output import Execution
+from astiop.store import Store
 from tests.cli_runner import run_cli
 
 
@@ -176,6 +177,34 @@ def test_suites_meet_the_brief():
     ]:
         assert levels.count(level) >= least
     assert len(suites.stage2()) >= 30
+
+
+def test_stage2_runs_in_its_own_world_and_records_each_case(tmp_path):
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    operator = Store(tmp_path / "operator.db")
+    operator.remove_location("shipping")  # pos04 starts there: the run must not need this table
+    operator.rename_location("inspection_zone_a", "zone_a")
+    before = operator.list_locations()
+    out = run_cli(
+        "--db", str(tmp_path / "operator.db"), "bench", "run", "--stage", "2", "--model", "rules",
+        "--limit", "12", "--record", str(tmp_path / "cases"), "--json",
+    )  # fmt: skip
+    assert out.returncode == 0, out.stderr
+    result = json.loads(out.stdout)["results"][0]
+    assert result["cases"] == 12 and result["errors"] == 0
+    assert operator.list_locations() == before  # the operator's table, untouched
+    files = sorted((tmp_path / "cases").glob("*.mcap"))
+    assert len(files) == 12 and files[0].name.startswith("run1-rules-rules-")
+    with open(tmp_path / "cases" / "run1-rules-rules-pos04.mcap", "rb") as fh:
+        reader = make_reader(fh, decoder_factories=[DecoderFactory()])
+        poses = [msg for *_rest, msg in reader.iter_decoded_messages(["/robot_pose"])]
+    assert len(poses) >= 50  # 5 s at 10 Hz of sim time
+    assert (round(poses[-1].x, 1), round(poses[-1].y, 1)) == (37.6, 4.0)  # at shipping
+    refused = run_cli("--db", str(tmp_path / "operator.db"), "bench", "run", "--stage", "1",
+                      "--model", "rules", "--record", str(tmp_path / "x"))  # fmt: skip
+    assert refused.returncode == 2 and "stage 2" in refused.stderr
 
 
 def test_cli_bench_run_json_and_bad_input(tmp_path):

@@ -8,42 +8,17 @@ from textual.widgets import Input
 
 from astiop.app import make_app
 from astiop.config import load_settings
-from astiop.recording import SessionRecorder
 from astiop.recording.reader import Recording
-from astiop.robot.factory import make_sim_graph
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.replay_backend import READ_ONLY, open_replay
-from astiop.sim.simulator import Simulator
 from astiop.store import Store
 from tests.cli_runner import run_cli
-
-GOTO = "ros2 service call /goto_position astiop_msgs/srv/GotoPosition \"{name: '%s'}\""
+from tests.recordings import GOTO, record_trip
 
 
 @pytest.fixture(scope="module")
 def trip(tmp_path_factory):
-    """A seeded drive to inspection_zone_a, recorded poll by poll at 10 Hz of sim time, with
-    one agent turn finished half-way."""
-    tmp = tmp_path_factory.mktemp("trip")
-    settings = load_settings({}, env={}, path=tmp / "none.toml")
-    store = Store(tmp / "rec.db")
-    sim = Simulator(seed=0)
-    gateway = make_sim_graph(settings, store, sim=sim)
-    recorder = SessionRecorder(tmp / "trip.mcap", gateway, store, flush_s=0.0)  # chunk a poll
-    assert gateway.run(GOTO % "inspection_zone_a", confirm=lambda _c: True).executed
-    arrived = 0
-    for i in range(400):
-        sim.step(0.1)
-        recorder.poll()
-        if i == 50:
-            turn = store.start_interaction(model="rules", mode="rules", prompt="where is it?")
-            store.update_interaction(turn, status="done", answer="x 5.0, y 3.5")
-        arrived += sim.goal is None
-        if arrived > 20:  # 2 s more: the status after arrival is recorded too
-            break
-    recorder.stop()
-    store.close()
-    return tmp / "trip.mcap"
+    return record_trip(tmp_path_factory.mktemp("trip"))
 
 
 def independent(path, topic):

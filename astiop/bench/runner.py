@@ -8,15 +8,19 @@ from __future__ import annotations
 
 import asyncio
 import json
+import re
+import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
+from pathlib import Path
 
 from astiop.agent.llm import LLMError, LLMTimeout
 from astiop.agent.specs import LLMEndpoint, open_endpoint, parse_spec
 from astiop.agent.turn import Agent
 from astiop.bench import stage1, stage2, suites
 from astiop.config import Settings
+from astiop.recording import FLUSH_S, SessionRecorder
 from astiop.robot.factory import make_safety
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.sim_backend import SimBackend
@@ -34,6 +38,7 @@ class RunConfig:
     max_tokens: int = 384
     concurrency: int = 1
     interpretation: str = "grounded"  # or raw: the model's words, as the paper scores them
+    record_dir: str | None = None  # stage 2: each case's simulator run as MCAP here
 
 
 @dataclass(frozen=True)
@@ -122,15 +127,21 @@ async def run(
     ]
     finished = 0
     status = "interrupted"
-    try:
-        finished = await _run_todo(store, settings, config, run_id, system, todo, on_progress)
-        status = "done"
-    finally:
-        store.end_bench_run(run_id, status)
+    with tempfile.TemporaryDirectory(prefix="astiop-bench-") as tmp:
+        # the cases' world: named locations seeded from data/, never the operator's tables
+        world = Store(Path(tmp) / "world.db")
+        try:
+            finished = await _run_todo(
+                store, world, settings, config, run_id, system, todo, on_progress
+            )
+            status = "done"
+        finally:
+            world.close()
+            store.end_bench_run(run_id, status)
     return finished
 
 
-async def _run_todo(store, settings, config, run_id, system, todo, on_progress) -> int:
+async def _run_todo(store, world, settings, config, run_id, system, todo, on_progress) -> int:
     total, finished, t0 = len(todo), 0, time.perf_counter()
     models = list(dict.fromkeys(m for m, _, _ in todo))
     for model in models:
@@ -149,7 +160,7 @@ async def _run_todo(store, settings, config, run_id, system, todo, on_progress) 
                     nonlocal finished
                     async with sem:
                         outcome, metrics, response = await _run_case(
-                            store, settings, config, endpoint, system, case, mode
+                            world, settings, config, endpoint, system, case, mode, (run_id, model)
                         )
                     await asyncio.to_thread(
                         _save, store, run_id, model, mode, case, outcome, metrics, response
@@ -174,14 +185,14 @@ async def _run_todo(store, settings, config, run_id, system, todo, on_progress) 
     return finished
 
 
-async def _run_case(store, settings, config, endpoint: LLMEndpoint, system, case, mode):
+async def _run_case(world, settings, config, endpoint: LLMEndpoint, system, case, mode, who):
     try:
         if config.stage == 1:
             return await asyncio.wait_for(
                 stage1.run_case(endpoint, system, case, config.max_tokens), config.timeout_s
             )
         return await asyncio.wait_for(
-            _robot_case(store, settings, config, endpoint, case, mode), config.timeout_s
+            _robot_case(world, settings, config, endpoint, case, mode, who), config.timeout_s
         )
     except (asyncio.TimeoutError, LLMTimeout):
         return "timeout", {"total_s": config.timeout_s}, ""
@@ -189,9 +200,31 @@ async def _run_case(store, settings, config, endpoint: LLMEndpoint, system, case
         return "error", {"total_s": 0.0}, str(exc)
 
 
-async def _robot_case(store, settings, config, endpoint, case, mode):
+async def _robot_case(store, settings, config, endpoint, case, mode, who):
+    """One request against a seeded simulator; `store` is the run's own world (locations)."""
     sim = stage2.build_sim(case, store, config.seed)
     graph = RobotGateway(SimBackend(sim, store), make_safety(settings, store))
+    recorder = _case_recorder(config, graph, sim, case, mode, who)
+    try:
+        return await _drive_case(store, config, endpoint, case, mode, sim, graph)
+    finally:
+        if recorder is not None:
+            sim.after_step.remove(recorder.poll)
+            await asyncio.to_thread(recorder.stop)
+
+
+def _case_recorder(config, graph, sim, case, mode, who):
+    """A recorder polled after every simulator step, when the run records (--record DIR)."""
+    if not config.record_dir:
+        return None
+    run_id, model = who
+    name = re.sub(r"[^A-Za-z0-9_.-]+", "_", f"run{run_id}-{model}-{mode}-{case.id}")
+    recorder = SessionRecorder(Path(config.record_dir) / f"{name}.mcap", graph, flush_s=FLUSH_S)
+    sim.after_step.append(recorder.poll)
+    return recorder
+
+
+async def _drive_case(store, config, endpoint, case, mode, sim, graph):
     agent = Agent(
         graph,
         endpoint,
@@ -207,7 +240,7 @@ async def _robot_case(store, settings, config, endpoint, case, mode):
     truth = sim.snapshot()
     if sim.goal is not None:
         await asyncio.to_thread(sim.run_goal, 600.0)
-    await asyncio.to_thread(sim.step, 5.0)  # let a conveyor transfer finish
+    await asyncio.to_thread(sim.run_until, lambda: False, 5.0)  # a conveyor transfer ends
     score = stage2.score_case(case, turn, truth, sim, store)
     metrics = {
         "command": score.command,

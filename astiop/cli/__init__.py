@@ -15,6 +15,7 @@ from astiop.cli import (
     console,
     doctor,
     emulate,
+    export,
     locations,
     record,
     robot,
@@ -32,6 +33,7 @@ app.add_typer(config_cmd.app, name="config")
 app.add_typer(locations.app, name="locations")
 app.add_typer(sim.app, name="sim")
 app.add_typer(bench.app, name="bench")
+app.add_typer(export.app, name="export")
 app.command("exec")(robot.exec_command)
 app.command("chat")(agent.chat)
 app.command("models")(agent.models)

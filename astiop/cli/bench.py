@@ -6,6 +6,7 @@ import asyncio
 import math
 import sys
 import time
+from pathlib import Path
 
 import typer
 
@@ -42,6 +43,9 @@ def run_bench(
         help="Stage 2 answers: grounded (checked against the results) or raw (as the paper).",
     ),
     resume: int = typer.Option(None, help="Finish an interrupted run by its id."),
+    record: Path | None = typer.Option(
+        None, "--record", help="Stage 2: record each case's simulator run as MCAP in this folder."
+    ),
     as_json: bool = typer.Option(False, "--json"),
 ) -> None:
     """Run a benchmark; each case's result is stored as it finishes."""
@@ -77,6 +81,13 @@ def run_bench(
                 fail("--max-tokens must be within 1..32768")
             for spec in models:
                 parse_spec(spec)
+            if record is not None and stage != 2:
+                fail("--record is for stage 2: only its cases drive the robot")
+            if record is not None:
+                try:
+                    record.mkdir(parents=True, exist_ok=True)
+                except OSError as exc:
+                    fail(f"--record {record}: {exc.strerror or exc}")
             modes = ["command", "tool"] if mode == "both" else [mode]
             config = runner.RunConfig(
                 stage,
@@ -88,6 +99,7 @@ def run_bench(
                 max_tokens,
                 concurrency,
                 interpretation,
+                str(record.resolve()) if record is not None else None,
             )
             run_id = runner.create_run(store, config)
     except (runner.BenchError, SpecError) as exc:

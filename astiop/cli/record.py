@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
 import time
 from pathlib import Path
@@ -67,8 +68,14 @@ def record(
     t0 = time.monotonic()
     limit = duration if duration is not None else (600.0 * len(goto) if goto else 10.0)
     outcomes: list[str] = []
+    seq = gateway.state().event_seq
 
     def progress() -> None:
+        nonlocal seq
+        for ev in gateway.events_since(seq):  # the store keeps every event, as the console does
+            seq = max(seq, ev.seq)
+            with contextlib.suppress(Exception):  # the record must never stop the recording
+                st.store.add_event(ev.kind, ev.message, severity=ev.severity, sim_t=ev.t)
         if not as_json:
             typer.echo(f"\r  recording {time.monotonic() - t0:5.1f} s", nl=False, err=True)
 
@@ -86,6 +93,7 @@ def record(
         recorder.stop()
         gateway.close()
         fail(str(exc))
+    progress()
     counts = recorder.stop()
     gateway.close()
     if not as_json:

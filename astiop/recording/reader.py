@@ -39,6 +39,8 @@ class Channel:
     topic: str
     encoding: str  # cdr | json
     type: str  # the schema's name: pkg/msg/Name, or the JSON schema's title
+    schema_encoding: str = ""  # ros2msg | jsonschema
+    schema_data: bytes = b""
     times: list[int] = field(default_factory=list)  # log time, ns, ascending
     data: list[bytes] = field(default_factory=list)
     decode: Any = None
@@ -82,9 +84,10 @@ class Recording:
                         schemas[record.id] = record
                     elif isinstance(record, McapChannel) and record.topic not in self.channels:
                         schema = schemas.get(record.schema_id)
-                        ch = Channel(
-                            record.topic, record.message_encoding, schema.name if schema else ""
-                        )
+                        ch = Channel(record.topic, record.message_encoding, "")
+                        if schema is not None:
+                            ch.type, ch.schema_encoding = schema.name, schema.encoding
+                            ch.schema_data = schema.data
                         if record.message_encoding == "cdr" and schema is not None:
                             ch.decode = factory.decoder_for("cdr", schema)
                         self.channels[record.topic] = ch

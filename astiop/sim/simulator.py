@@ -84,6 +84,7 @@ class Simulator(NavigationMixin):
         self.t = 0.0
         self._tick = 0
         self._carry = 0.0
+        self.after_step: list = []  # called after each step(), outside the lock
         self._v = np.zeros(3)  # body velocity being applied (robot frame)
         self._applied = (0.0, 0.0, 0.0)
         self._target = (0.0, 0.0, 0.0)
@@ -331,6 +332,8 @@ class Simulator(NavigationMixin):
             self._carry -= n * self.dt
             for _ in range(n):
                 self._substep()
+        for observe in self.after_step:  # e.g. a recorder, in fast mode
+            observe()
 
     def run_until(self, predicate, max_sim_s: float, chunk: float = 0.1) -> bool:
         end = self.t + max_sim_s

@@ -1,0 +1,166 @@
+"""SQLite store (WAL, sqlite-utils): one file, one connection per thread, every SQL statement
+of astiop behind a named method (locations, the journal, the benchmark)."""
+
+from __future__ import annotations
+
+import os
+import sqlite3
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+import sqlite_utils
+
+from astiop.bounded import one_line
+from astiop.store.bench import BenchTables
+from astiop.store.journal import JournalTables
+from astiop.store.locations import LocationTables
+from astiop.store.records import Location, LocationError, StoreError
+from astiop.store.schema import (
+    _OUR_TABLES,
+    MIGRATIONS,
+    SCHEMA_VERSION,
+    check_database_file,
+)
+from astiop.warehouse import Rect, default_map
+
+BUSY_TIMEOUT_MS = 10_000  # how long a write waits for another process's
+
+__all__ = ["SCHEMA_VERSION", "Location", "LocationError", "Store", "StoreError"]
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _writable(path: Path) -> bool:
+    """Whether astiop may write: the file (if it exists) and its folder (WAL's side files)."""
+    folder = path.parent
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    if path.exists() and not os.access(path, os.W_OK):
+        return False
+    return os.access(folder, os.W_OK | os.X_OK)
+
+
+class Store(LocationTables, JournalTables, BenchTables):
+    """One connection per thread, all to the same file."""
+
+    def __init__(self, path: Path | str, bounds: Rect | None = None):
+        self.path = Path(path).expanduser()
+        self.bounds = bounds or default_map().bounds  # named locations must lie inside
+        self._local = threading.local()
+        check_database_file(self.path)
+        self.readonly = not _writable(self.path)
+        if self.readonly and not self.path.exists():
+            raise StoreError(f"cannot create {self.path}: its folder is not writable")
+        if not self.readonly:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._check_integrity()
+        self._migrate()
+        if not self.readonly:
+            self._mark_interrupted()
+
+    # -- connections and schema -------------------------------------------------
+    @property
+    def db(self) -> sqlite_utils.Database:
+        db = getattr(self._local, "db", None)
+        if db is None:
+            if self.readonly:  # reads work; any write fails, and _tx says so first
+                conn = sqlite3.connect(f"{self.path.as_uri()}?mode=ro", uri=True, timeout=10)
+            else:
+                conn = sqlite3.connect(self.path, timeout=10)
+            conn.execute(f"PRAGMA busy_timeout={BUSY_TIMEOUT_MS}")  # SQLite retries, bounded
+            db = sqlite_utils.Database(conn)
+            self._local.db = db
+        return db
+
+    def _check_integrity(self) -> None:
+        """PRAGMA quick_check before anything is written: a damaged file is refused whole."""
+        if not self.path.exists() or self.path.stat().st_size == 0:
+            return
+        try:
+            rows = self.db.conn.execute("PRAGMA quick_check(1)").fetchall()
+        except sqlite3.DatabaseError as exc:
+            self.close()
+            why = one_line(exc, 160)
+            raise StoreError(f"{self.path} is damaged ({why}); it was left untouched") from None
+        if rows != [("ok",)]:
+            self.close()
+            why = one_line(rows[0][0], 160)
+            raise StoreError(f"{self.path} is damaged ({why}); it was left untouched")
+
+    @contextmanager
+    def _tx(self) -> Iterator[None]:
+        """One write transaction; a read-only or busy database and a broken write become one
+        StoreError, a duplicate name a LocationError."""
+        if self.readonly:
+            raise StoreError(f"{self.path} is read-only: nothing was written")
+        try:
+            with self.db.conn:
+                yield
+        except sqlite3.IntegrityError as exc:
+            if "UNIQUE" in str(exc) and "locations.name" in str(exc):
+                raise LocationError("a location with that name already exists") from None
+            raise StoreError(f"{self.path}: {exc}") from None
+        except sqlite3.OperationalError as exc:
+            raise StoreError(f"{self.path}: {exc}; nothing was written") from None
+
+    def _mark_interrupted(self) -> None:
+        """Turns left `running` by a process that is gone are marked `interrupted`."""
+        rows = self.db.conn.execute(
+            "SELECT id, pid FROM interactions WHERE status = 'running'"
+        ).fetchall()
+        dead = [i for i, pid in rows if pid is None or not _alive(pid)]
+        if dead:
+            with self._tx():
+                self.db.conn.executemany(
+                    "UPDATE interactions SET status = 'interrupted', "
+                    "error = coalesce(error, 'the astiop process ended during the turn') "
+                    "WHERE id = ?",
+                    [(i,) for i in dead],
+                )
+
+    def _migrate(self) -> None:
+        try:
+            db = self.db
+            version = db.conn.execute("PRAGMA user_version").fetchone()[0]
+            tables = set(db.table_names())
+        except sqlite3.DatabaseError as exc:
+            raise StoreError(f"{self.path} is not a usable SQLite database: {exc}") from None
+        if version > SCHEMA_VERSION:
+            raise StoreError(
+                f"{self.path} has schema version {version}, newer than this astiop "
+                f"understands ({SCHEMA_VERSION}); upgrade astiop. The file was left untouched"
+            )
+        if version == 0 and tables and not tables <= _OUR_TABLES:
+            raise StoreError(f"{self.path} is a SQLite database of another application")
+        if self.readonly:
+            if version < SCHEMA_VERSION:
+                raise StoreError(
+                    f"{self.path} is read-only and needs an upgrade this astiop cannot write"
+                )
+            return
+        try:
+            db.conn.execute("PRAGMA journal_mode=WAL")
+        except sqlite3.DatabaseError as exc:
+            raise StoreError(f"{self.path} cannot be written: {exc}") from None
+        for index in range(version, SCHEMA_VERSION):
+            with db.conn:
+                MIGRATIONS[index](db)
+                db.conn.execute(f"PRAGMA user_version = {index + 1}")
+
+    def close(self) -> None:
+        db = getattr(self._local, "db", None)
+        if db is not None:
+            db.conn.close()
+            self._local.db = None

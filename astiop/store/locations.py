@@ -1,0 +1,97 @@
+"""Named locations: unique names (case ignored), poses inside the geofence."""
+
+from __future__ import annotations
+
+import math
+import re
+import time
+
+from astiop.bounded import has_controls
+from astiop.store.records import Location, LocationError, location_of
+from astiop.warehouse import fence_text, inside_fence
+
+NAME_RE = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
+
+
+class LocationTables:
+    # -- locations ----------------------------------------------------------------
+    def list_locations(self) -> list[Location]:
+        rows = self.db.query("SELECT * FROM locations ORDER BY name COLLATE NOCASE")
+        return [location_of(r) for r in rows]
+
+    def copy_locations_from(self, other: LocationTables) -> None:
+        """This store's named locations become another's (a replay's or a bench run's own)."""
+        rows = list(other.db.query("SELECT * FROM locations"))
+        with self._tx():
+            self.db.execute("DELETE FROM locations")
+            if rows:
+                self.db["locations"].insert_all(rows)
+
+    def get_location(self, name: str) -> Location | None:
+        rows = list(self.db.query("SELECT * FROM locations WHERE name = ? COLLATE NOCASE", [name]))
+        return location_of(rows[0]) if rows else None
+
+    def require_location(self, name: str) -> Location:
+        loc = self.get_location(name)
+        if loc is None:
+            known = ", ".join(loc.name for loc in self.list_locations()) or "none"
+            raise LocationError(f"no location named '{name}' (known: {known})")
+        return loc
+
+    def _check_new_name(self, name: str) -> None:
+        if not NAME_RE.match(name):
+            raise LocationError(
+                f"invalid location name '{name}': use 1-64 letters, digits, '_' or '-'"
+            )
+        if self.get_location(name) is not None:
+            raise LocationError(f"a location named '{name}' already exists (names ignore case)")
+
+    def _check_pose(self, x: float, y: float, theta: float) -> None:
+        if not all(math.isfinite(v) for v in (x, y, theta)):
+            raise LocationError("x, y and theta must be finite numbers")
+        if not inside_fence(self.bounds, x, y):
+            raise LocationError(
+                f"({x:g}, {y:g}) is outside the geofence ({fence_text(self.bounds)})"
+            )
+
+    def add_location(
+        self, name: str, x: float, y: float, theta: float = 0.0, description: str = ""
+    ) -> Location:
+        self._check_new_name(name)
+        self._check_pose(x, y, theta)
+        if has_controls(description) or len(description) > 500:
+            raise LocationError("a description is plain text of at most 500 characters")
+        theta = math.atan2(math.sin(theta), math.cos(theta))
+        now = time.time()
+        with self._tx():
+            self.db["locations"].insert(
+                {
+                    "name": name,
+                    "x": x,
+                    "y": y,
+                    "theta": theta,
+                    "description": description,
+                    "created_at": now,
+                    "updated_at": now,
+                }
+            )
+        return Location(name, x, y, theta, description)
+
+    def rename_location(self, old: str, new: str) -> Location:
+        loc = self.require_location(old)
+        if new.lower() != loc.name.lower():
+            self._check_new_name(new)
+        elif not NAME_RE.match(new):
+            raise LocationError(f"invalid location name '{new}'")
+        with self._tx():
+            self.db.conn.execute(
+                "UPDATE locations SET name = ?, updated_at = ? WHERE name = ? COLLATE NOCASE",
+                [new, time.time(), loc.name],
+            )
+        return Location(new, loc.x, loc.y, loc.theta, loc.description)
+
+    def remove_location(self, name: str) -> Location:
+        loc = self.require_location(name)
+        with self._tx():
+            self.db.conn.execute("DELETE FROM locations WHERE name = ? COLLATE NOCASE", [loc.name])
+        return loc

@@ -1,0 +1,163 @@
+"""The database's schema: its migrations, counted by PRAGMA user_version, and the file checks."""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from pathlib import Path
+
+import sqlite_utils
+import yaml
+
+from astiop.resources import data_path
+from astiop.store.records import StoreError
+
+SQLITE_HEADER = b"SQLite format 3\x00"
+
+
+def _seed_locations(db: sqlite_utils.Database) -> None:
+    seeds = yaml.safe_load(data_path("locations.yaml").read_text(encoding="utf-8"))
+    now = time.time()
+    for s in seeds:
+        db["locations"].insert(
+            {
+                "name": s["name"],
+                "x": float(s["x"]),
+                "y": float(s["y"]),
+                "theta": math.radians(float(s.get("theta_deg", 0.0))),
+                "description": s.get("description", ""),
+                "created_at": now,
+                "updated_at": now,
+            }
+        )
+
+
+_SCHEMA_V1 = """
+CREATE TABLE locations (
+    id INTEGER PRIMARY KEY,
+    name TEXT NOT NULL UNIQUE COLLATE NOCASE,
+    x REAL NOT NULL, y REAL NOT NULL, theta REAL NOT NULL DEFAULT 0,
+    description TEXT NOT NULL DEFAULT '',
+    created_at REAL NOT NULL, updated_at REAL NOT NULL
+);
+CREATE TABLE interactions (
+    id INTEGER PRIMARY KEY,
+    session TEXT, started_at REAL NOT NULL, finished_at REAL,
+    model TEXT NOT NULL, mode TEXT NOT NULL, prompt TEXT NOT NULL,
+    raw_replies TEXT NOT NULL DEFAULT '[]', answer TEXT,
+    ttft_s REAL, total_s REAL, llm_s REAL,
+    prompt_tokens INTEGER, completion_tokens INTEGER,
+    status TEXT NOT NULL DEFAULT 'running', error TEXT
+);
+CREATE TABLE commands (
+    id INTEGER PRIMARY KEY,
+    interaction_id INTEGER REFERENCES interactions(id),
+    seq INTEGER NOT NULL DEFAULT 0, created_at REAL NOT NULL,
+    command TEXT NOT NULL, valid INTEGER NOT NULL, reason TEXT,
+    kind TEXT, executed INTEGER NOT NULL DEFAULT 0,
+    output TEXT, "values" TEXT
+);
+CREATE INDEX commands_interaction ON commands(interaction_id);
+CREATE TABLE events (
+    id INTEGER PRIMARY KEY,
+    t REAL NOT NULL, sim_t REAL, kind TEXT NOT NULL,
+    severity TEXT NOT NULL DEFAULT 'info', message TEXT NOT NULL
+);
+CREATE TABLE bench_runs (
+    id INTEGER PRIMARY KEY,
+    started_at REAL NOT NULL, finished_at REAL,
+    stage INTEGER NOT NULL, models TEXT NOT NULL, modes TEXT NOT NULL,
+    seed INTEGER NOT NULL DEFAULT 0, case_limit INTEGER,
+    status TEXT NOT NULL DEFAULT 'running', config TEXT NOT NULL DEFAULT '{}'
+);
+CREATE TABLE bench_results (
+    id INTEGER PRIMARY KEY,
+    run_id INTEGER NOT NULL REFERENCES bench_runs(id),
+    model TEXT NOT NULL, mode TEXT NOT NULL, case_id TEXT NOT NULL,
+    level TEXT, category TEXT, outcome TEXT NOT NULL,
+    metrics TEXT NOT NULL DEFAULT '{}', response TEXT, created_at REAL NOT NULL,
+    UNIQUE (run_id, model, mode, case_id)
+);
+"""
+
+
+def _migrate_v1(db: sqlite_utils.Database) -> None:
+    db.conn.executescript(_SCHEMA_V1)
+    _seed_locations(db)
+
+
+def _migrate_v2(db: sqlite_utils.Database) -> None:
+    # The E-STOP latch: one row, read by every astiop process on this database.
+    db.conn.executescript(
+        """
+        CREATE TABLE estop (
+            id INTEGER PRIMARY KEY CHECK (id = 1),
+            engaged INTEGER NOT NULL DEFAULT 0,
+            engaged_by TEXT, engaged_at REAL, released_by TEXT, released_at REAL
+        );
+        INSERT INTO estop (id, engaged) VALUES (1, 0);
+        """
+    )
+
+
+def _migrate_v3(db: sqlite_utils.Database) -> None:
+    # Grounded answers: the model's own text and why it was replaced; how a started goal ended.
+    db.conn.executescript(
+        """
+        ALTER TABLE interactions ADD COLUMN model_answer TEXT;
+        ALTER TABLE interactions ADD COLUMN grounding TEXT;
+        ALTER TABLE interactions ADD COLUMN outcome TEXT;
+        ALTER TABLE interactions ADD COLUMN outcome_at REAL;
+        """
+    )
+
+
+def _migrate_v4(db: sqlite_utils.Database) -> None:
+    # Every command astiop runs, with where it came from; the process behind a running turn.
+    db.conn.executescript(
+        """
+        ALTER TABLE commands ADD COLUMN source TEXT;
+        ALTER TABLE interactions ADD COLUMN pid INTEGER;
+        """
+    )
+
+
+# Ordered; the database's PRAGMA user_version counts how many have run.
+MIGRATIONS = [_migrate_v1, _migrate_v2, _migrate_v3, _migrate_v4]
+SCHEMA_VERSION = len(MIGRATIONS)
+_OUR_TABLES = {
+    "locations",
+    "interactions",
+    "commands",
+    "events",
+    "bench_runs",
+    "bench_results",
+    "estop",
+}
+
+
+def check_database_file(path: Path) -> None:
+    """Refuse anything that is not a SQLite file before SQLite touches it."""
+    if path.is_dir():
+        raise StoreError(f"database path {path} is a directory")
+    if path.exists() and not path.is_file():
+        raise StoreError(f"database path {path} is not a regular file")
+    if path.exists():
+        try:  # read, not stat: /proc files say size 0 and still have content
+            with path.open("rb") as fh:
+                header = fh.read(16)
+        except OSError as exc:
+            raise StoreError(f"cannot read {path}: {exc.strerror or exc}") from None
+        if header and header != SQLITE_HEADER:
+            raise StoreError(f"{path} is not a SQLite database; it was left untouched")
+
+
+def _writable(path: Path) -> bool:
+    """Whether astiop may write: the file (if it exists) and its folder (WAL's side files)."""
+    folder = path.parent
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    if path.exists() and not os.access(path, os.W_OK):
+        return False
+    return os.access(folder, os.W_OK | os.X_OK)
