@@ -1,4 +1,5 @@
-"""Settings: a TOML file at the XDG config path, then ASTIOP_* variables, then CLI flags."""
+"""Settings (pydantic-settings): a TOML file at the XDG config path, then ASTIOP_* variables
+(`__` nests: ASTIOP_LLM__THREADS), then CLI flags, each over the one before."""
 
 from __future__ import annotations
 
@@ -6,11 +7,22 @@ import os
 import sys
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import platformdirs
 import tomli_w
-from pydantic import BaseModel, ConfigDict, Field, StrictBool, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+from pydantic._internal._utils import deep_update
+from pydantic_settings import (
+    BaseSettings,
+    EnvSettingsSource,
+    NoDecode,
+    SettingsConfigDict,
+    SettingsError,
+    TomlConfigSettingsSource,
+)
+
+from astiop.bounded import one_line
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -28,6 +40,15 @@ class _Section(BaseModel):
     model_config = ConfigDict(extra="forbid", validate_assignment=True)
 
 
+def _true_or_false(value: Any) -> Any:
+    """A switch is true or false: TOML's booleans, or those words in a variable."""
+    if isinstance(value, str) and value.strip().lower() in ("true", "false"):
+        return value.strip().lower() == "true"
+    if not isinstance(value, bool):
+        raise ValueError("must be true or false")
+    return value
+
+
 class RobotSettings(_Section):
     backend: Literal["sim", "ros2"] = "sim"
     max_linear_speed: float = Field(
@@ -37,8 +58,10 @@ class RobotSettings(_Section):
         1.0, gt=0, le=3.0, allow_inf_nan=False, description="rad/s, clamp on /cmd_vel"
     )
     # a safety switch takes only true or false (not "no", 0 or "off")
-    confirm_actuation: StrictBool = True
+    confirm_actuation: bool = True
     ros2_executable: str = "ros2"
+
+    _switch = field_validator("confirm_actuation", mode="before")(_true_or_false)
     ros2_timeout_s: float = Field(10.0, gt=0, le=3600, allow_inf_nan=False)
 
 
@@ -56,21 +79,46 @@ class LLMSettings(_Section):
     context: int = Field(4096, ge=512)
     max_tokens: int = Field(256, ge=16, le=8192)
     timeout_s: float = Field(120.0, gt=0, le=86400, allow_inf_nan=False)
-    endpoints: list[str] = Field(default_factory=list, description="extra specs for `models`")
+    endpoints: Annotated[list[str], NoDecode] = Field(
+        default_factory=list, description="extra specs for `models`; comma-separated in a variable"
+    )
+
+    @field_validator("endpoints", mode="before")
+    @classmethod
+    def _comma_separated(cls, value: Any) -> Any:
+        if isinstance(value, str):
+            return [v.strip() for v in value.split(",") if v.strip()]
+        return value
 
 
-class Settings(_Section):
+class Settings(BaseSettings):
+    """`Settings()` reads them as astiop does: flags > ASTIOP_* environment > the TOML file."""
+
+    model_config = SettingsConfigDict(
+        env_prefix="ASTIOP_",
+        env_nested_delimiter="__",
+        case_sensitive=False,
+        extra="forbid",
+        validate_assignment=True,
+    )
     db: Path | None = None
     robot: RobotSettings = Field(default_factory=RobotSettings)
     sim: SimSettings = Field(default_factory=SimSettings)
     llm: LLMSettings = Field(default_factory=LLMSettings)
 
+    @classmethod
+    def settings_customise_sources(
+        cls, settings_cls, init_settings, env_settings, dotenv_settings, file_secret_settings
+    ):
+        file = TomlConfigSettingsSource(settings_cls, toml_file=config_path())
+        return (init_settings, _Environment(os.environ), file)
+
 
 # Short names for the variables an operator sets most; any key is ASTIOP_SECTION__KEY.
 _ENV_SHORTCUTS = {
-    "ASTIOP_DB": ("db",),
-    "ASTIOP_MODEL": ("llm", "model"),
-    "ASTIOP_ROBOT": ("robot", "backend"),
+    "ASTIOP_DB": "ASTIOP_DB",
+    "ASTIOP_MODEL": "ASTIOP_LLM__MODEL",
+    "ASTIOP_ROBOT": "ASTIOP_ROBOT__BACKEND",
 }
 
 
@@ -91,49 +139,36 @@ def _describe(err: ValidationError) -> str:
     return f"{key}: {first['msg']}"
 
 
-def _set_nested(data: dict[str, Any], keys: tuple[str, ...], value: Any) -> None:
-    for key in keys[:-1]:
-        data = data.setdefault(key, {})
-        if not isinstance(data, dict):
-            raise ConfigError(f"config: {'.'.join(keys)}: parent is not a table")
-    data[keys[-1]] = value
+class _Environment(EnvSettingsSource):
+    """ASTIOP_* variables read from a given mapping (the process's, unless a test gives one)."""
+
+    def __init__(self, env: Mapping[str, str]):
+        self._given = env
+        super().__init__(Settings)
+
+    def _load_env_vars(self) -> Mapping[str, str | None]:
+        return {_ENV_SHORTCUTS.get(k, k).lower(): v for k, v in self._given.items()}
 
 
-def _env_values(env: Mapping[str, str]) -> dict[str, Any]:
-    values: dict[str, Any] = {}
-    for name, raw in env.items():
+def _unknown_variable(env: Mapping[str, str]) -> str | None:
+    """The first ASTIOP_* variable that names no setting (a typo must not pass unnoticed)."""
+    for name in env:
         if not name.startswith("ASTIOP_") or name == "ASTIOP_CONFIG":
             continue
-        if name in _ENV_SHORTCUTS:
-            keys = _ENV_SHORTCUTS[name]
-        elif "__" in name:
-            keys = tuple(part.lower() for part in name[len("ASTIOP_") :].split("__"))
-        else:
-            continue
-        value: Any = raw
-        if raw.strip().lower() in ("true", "false"):  # a TOML boolean, spelled in a variable
-            value = raw.strip().lower() == "true"
-        if keys[-1] == "endpoints":
-            value = [v.strip() for v in raw.split(",") if v.strip()]
-        _set_nested(values, keys, value)
-    return values
+        model: Any = Settings
+        for part in _ENV_SHORTCUTS.get(name, name)[len("ASTIOP_") :].lower().split("__"):
+            fields = getattr(model, "model_fields", {})
+            if part not in fields:
+                return name
+            model = fields[part].annotation
+    return None
 
 
-def _merge(base: dict[str, Any], extra: Mapping[str, Any]) -> dict[str, Any]:
-    merged = dict(base)
-    for key, value in extra.items():
-        if isinstance(value, Mapping) and isinstance(merged.get(key), dict):
-            merged[key] = _merge(merged[key], value)
-        else:
-            merged[key] = value
-    return merged
-
-
-def read_config_file(path: Path) -> dict[str, Any]:
+def _file_values(path: Path) -> dict[str, Any]:
     if not path.exists():
         return {}
     try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
+        return TomlConfigSettingsSource(Settings, toml_file=path)()
     except RecursionError:
         raise ConfigError(f"{path}: the TOML nests too deeply to read") from None
     except tomllib.TOMLDecodeError as exc:
@@ -142,30 +177,34 @@ def read_config_file(path: Path) -> dict[str, Any]:
         raise ConfigError(f"config error: {path}: cannot read: {exc}") from None
 
 
+def _validated(data: dict[str, Any], source: str) -> Settings:
+    try:
+        return Settings.model_validate(data)  # validates only: reads no source itself
+    except ValidationError as exc:
+        raise ConfigError(f"{source}: {_describe(exc)}") from None
+
+
 def load_settings(
     overrides: Mapping[str, Any] | None = None,
     *,
     env: Mapping[str, str] | None = None,
     path: Path | None = None,
 ) -> Settings:
-    """File, then environment, then `overrides` (nested dict from CLI flags)."""
+    """Flags (`overrides`, nested) over ASTIOP_* variables over the TOML file; an error names
+    the source that brought the bad value."""
     env = os.environ if env is None else env
     path = path or config_path(env)
-    file_data = read_config_file(path)
+    data = _file_values(path)
+    _validated(data, f"config error: {path}")
+    if (name := _unknown_variable(env)) is not None:
+        raise ConfigError(f"config error: {name} names no setting (see: astiop config show)")
     try:
-        Settings.model_validate(file_data)
-    except ValidationError as exc:
-        raise ConfigError(f"config error: {path}: {_describe(exc)}") from None
-    merged = _merge(file_data, _env_values(env))
-    try:
-        settings = Settings.model_validate(merged)
-    except ValidationError as exc:
-        raise ConfigError(f"config error: ASTIOP_* environment: {_describe(exc)}") from None
+        data = deep_update(data, _Environment(env)())
+    except SettingsError as exc:
+        raise ConfigError(f"config error: ASTIOP_* environment: {one_line(exc, 300)}") from None
+    settings = _validated(data, "config error: ASTIOP_* environment")
     if overrides:
-        try:
-            settings = Settings.model_validate(_merge(settings.model_dump(), overrides))
-        except ValidationError as exc:
-            raise ConfigError(f"bad option: {_describe(exc)}") from None
+        settings = _validated(deep_update(settings.model_dump(), dict(overrides)), "bad option")
     return settings
 
 

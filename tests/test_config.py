@@ -47,3 +47,24 @@ def test_toml_round_trip(tmp_path):
     path = tmp_path / "back.toml"
     path.write_text(to_toml(s))
     assert load_settings(env={}, path=path) == s
+
+
+def test_variables_nest_split_lists_and_refuse_typos(tmp_path):
+    none = tmp_path / "none.toml"
+    env = {"ASTIOP_LLM__ENDPOINTS": "ollama:a, openai:b@http://h:1/v1", "ASTIOP_ROBOT": "ros2"}
+    s = load_settings(env=env, path=none)
+    assert s.llm.endpoints == ["ollama:a", "openai:b@http://h:1/v1"] and s.robot.backend == "ros2"
+    for typo in ("ASTIOP_LLM__THREAD", "ASTIOP_SIMULATOR__SEED", "ASTIOP_LLM__MODEL__X"):
+        with pytest.raises(ConfigError, match=typo):
+            load_settings(env={typo: "1"}, path=none)
+
+
+def test_settings_alone_read_flags_over_environment_over_file(tmp_path, monkeypatch):
+    from astiop.config import Settings
+
+    path = tmp_path / "c.toml"
+    path.write_text('[llm]\nmodel = "rules"\nthreads = 2\n')
+    monkeypatch.setenv("ASTIOP_CONFIG", str(path))
+    monkeypatch.setenv("ASTIOP_LLM__THREADS", "3")
+    assert (Settings().llm.model, Settings().llm.threads) == ("rules", 3)
+    assert Settings(llm={"threads": 4}).llm.threads == 4

@@ -12,31 +12,26 @@ import shutil
 import threading
 import time
 from collections import deque
-from concurrent.futures import ThreadPoolExecutor
-from dataclasses import replace
 from typing import Any
 
 from astiop.robot import ros2_process
-from astiop.robot.catalog import (
-    ActionSpec,
-    Catalog,
-    ParamSpec,
-    ServiceSpec,
-    TopicSpec,
-    astibot_catalog,
-)
 from astiop.robot.grammar import current_distro
 from astiop.robot.interfaces import decode_bytes
 from astiop.robot.output import BackendError, echo_text
 from astiop.robot.render import (
-    STAMPED,
     flow_yaml,
     sent_argv,
     stamped_now,
     velocity_message,
     zero_twist,
 )
+from astiop.robot.ros2_graph import GraphReader
 from astiop.robot.ros2_motion import STDIN_DISTROS, ArmedStop, TeleopPublisher
+from astiop.robot.ros2_replies import (
+    FAILED_WITH_STATUS_0,
+    parse_response,
+    without_display_options,
+)
 from astiop.robot.ros2_streams import TopicStream, parse_document
 from astiop.robot.state import (
     OccupancyGrid,
@@ -48,8 +43,6 @@ from astiop.robot.state import (
 )
 from astiop.robot.validation import Checked
 
-_LISTED = re.compile(r"^(?P<name>/\S*)\s+\[(?P<type>[^\]]+)\]\s*$")
-_FIELD = re.compile(r"(\w+)=('(?:[^'\\]|\\.)*'|\"(?:[^\"\\]|\\.)*\"|[^,()]+)")
 # Streamed for the live state, where the robot has them; /odom only when /robot_pose is absent
 # (50 Hz of YAML costs more than it tells).
 STATE_TOPICS = (
@@ -64,66 +57,6 @@ STATE_TOPICS = (
 ARRAYS = {"/scan", "/plan", "/obstacles"}  # echoed in full: ros2 truncates at 128 items
 MOVING = {"navigating", "docking", "blocked"}
 GRAPH_REFRESH_S = 30.0
-# What ros2 prints on stdout, with exit status 0, when nothing was done.
-FAILED_WITH_STATUS_0 = re.compile(
-    r"^(Setting parameter failed.*|Parameter not set.*|Node not found.*|"
-    r"Failed to populate (message )?fields?.*|Goal was rejected.*)$",
-    re.MULTILINE,
-)
-
-
-def parse_response(text: str) -> dict[str, Any]:
-    """Fields of the `response:` line of `ros2 service call`, flat and best effort."""
-    _, _, tail = text.partition("response:")
-    values: dict[str, Any] = {}
-    for key, raw in _FIELD.findall(tail):
-        raw = raw.strip()
-        if raw in ("True", "False"):
-            values[key] = raw == "True"
-        elif raw[:1] in ("'", '"'):
-            values[key] = raw[1:-1]
-        else:
-            try:
-                values[key] = float(raw) if "." in raw else int(raw)
-            except ValueError:
-                values[key] = raw
-    return values
-
-
-_DISPLAY_FLAGS = {"--no-arr", "--no-str", "-f", "--full-length"}
-_DISPLAY_VALUED = ("-l", "--truncate-length")
-
-
-def _without_display_options(argv: list[str]) -> list[str]:
-    out, skip = [], False
-    for token in argv:
-        if skip:
-            skip = False
-        elif token in _DISPLAY_VALUED:
-            skip = True
-        elif token in _DISPLAY_FLAGS or token.startswith(("--truncate-length=", "-l")):
-            continue
-        else:
-            out.append(token)
-    return out
-
-
-_PARAM_LINE = re.compile(r"^  (?P<name>\S+)(?: \(type: (?P<type>[^)]+)\))?\s*$")
-
-
-def _params(known: Catalog, listed: list[tuple[str, str]]) -> dict[tuple[str, str], ParamSpec]:
-    """The robot's parameters: astiop's own entry where it has one (limits, writable), else
-    read-only with the type the robot gave. Before the robot lists any, astiop's table."""
-    if not listed:
-        return dict(known.params)
-    params = {}
-    for key, typ in listed:
-        node, name = key.split(" ", 1)
-        spec = known.params.get((node, name))
-        params[(node, name)] = (
-            replace(spec, type=typ) if spec else ParamSpec(node, name, None, type=typ)
-        )
-    return params
 
 
 class Ros2Backend:
@@ -154,65 +87,18 @@ class Ros2Backend:
         self._armed: ArmedStop | None = None
         self.t0 = time.monotonic()
         self._closed = threading.Event()
-        self.catalog = self.read_catalog()
+        self._graph = GraphReader(self._run, timeout_s)
+        self.catalog = self._graph.read()
         self.refreshed_at = time.monotonic()
 
     # -- the live graph -----------------------------------------------------------------
     def _run(self, argv: list[str], timeout: float, **kw) -> ros2_process.Run:
         return ros2_process.run(self.executable, argv, timeout, **kw)
 
-    def read_catalog(self) -> Catalog:
-        """The live graph (read until two reads agree: discovery takes a moment), described
-        with our catalog where names match."""
-        self._run(["daemon", "start"], self.timeout_s)  # a failure here shows in the lists
-        previous = None
-        for _ in range(3):
-            lists = self._read_lists()
-            if lists == previous:
-                break
-            previous = lists
-        return self._describe(lists)
-
-    def _read_lists(self) -> dict[str, list[tuple[str, str]]]:
-        verbs = ("topic", "service", "action", "node", "param")
-        with ThreadPoolExecutor(len(verbs)) as pool:  # each call pays ros2's start-up
-            return dict(zip(verbs, pool.map(self._listed, verbs)))
-
-    def _listed(self, verb: str) -> list[tuple[str, str]]:
-        if verb == "param":
-            return self._listed_params()
-        if verb == "node":
-            out = self._run(["node", "list"], self.timeout_s)
-            return sorted((n.strip(), "") for n in out.out.splitlines() if n.startswith("/"))
-        out = self._run([verb, "list", "-t"], self.timeout_s)
-        if out.returncode != 0:
-            why = out.err.strip()[:200] or ("timed out" if out.stopped else "failed")
-            raise BackendError(f"ros2 {verb} list: {why}")
-        pairs = []
-        for line in out.out.splitlines():
-            m = _LISTED.match(line.strip())
-            if m:
-                pairs.append((m["name"], m["type"].split(",")[0].strip()))
-        return sorted(pairs)
-
-    def _listed_params(self) -> list[tuple[str, str]]:
-        """("/node name", "double") per parameter: `ros2 param list --param-type` prints
-        "/node:" then "  name (type: double)" (ros2param/verb/list.py, humble and jazzy)."""
-        out = self._run(["param", "list", "--param-type"], self.timeout_s)
-        if out.returncode != 0:
-            return []  # parameters are optional: the rest of the graph still stands
-        pairs, node = [], None
-        for line in out.out.splitlines():
-            if line.startswith("/") and line.rstrip().endswith(":"):
-                node = line.strip()[:-1]
-            elif node and (m := _PARAM_LINE.match(line)):
-                pairs.append((f"{node} {m['name']}", m["type"] or ""))
-        return sorted(pairs)
-
     def refresh(self) -> bool:
         """Read the graph again (a name was missing, or 30 s passed); False if it failed."""
         try:
-            self.catalog = self._describe(self._read_lists())
+            self.catalog = self._graph.describe(self._graph.lists())
         except BackendError:
             return False
         self.refreshed_at = time.monotonic()
@@ -221,26 +107,6 @@ class Ros2Backend:
     def _refresh_loop(self) -> None:
         while not self._closed.wait(GRAPH_REFRESH_S):
             self.refresh()
-
-    def _describe(self, lists: dict[str, list[tuple[str, str]]]) -> Catalog:
-        known = astibot_catalog()
-        nodes = tuple(n for n, _ in lists["node"]) or known.nodes
-        cat = Catalog(nodes=nodes, params=_params(known, lists.get("param", [])))
-        for name, typ in lists["topic"]:
-            spec = known.topics.get(name)
-            if name == "/cmd_vel" and spec and typ == STAMPED:  # Jazzy's diff_drive_controller
-                spec = replace(spec, type=typ)
-            cat.topics[name] = spec if spec and spec.type == typ else TopicSpec(name, typ, 0, "?")
-        for name, typ in lists["service"]:
-            spec = known.services.get(name)
-            # an unknown service is treated as actuating: it needs confirmation
-            cat.services[name] = (
-                spec if spec and spec.type == typ else ServiceSpec(name, typ, "?", True)
-            )
-        for name, typ in lists["action"]:
-            spec = known.actions.get(name)
-            cat.actions[name] = spec if spec and spec.type == typ else ActionSpec(name, typ, "?")
-        return cat
 
     # -- lifecycle ------------------------------------------------------------------------
     def start(self) -> None:
@@ -458,7 +324,7 @@ class Ros2Backend:
     def _echo(self, checked: Checked, argv: list[str], timeout: float):
         # the robot is asked for whole values; the operator's display options (-l, --no-arr,
         # --no-str) shape only the text, made here from those values by echo_text
-        argv = _without_display_options(argv)
+        argv = without_display_options(argv)
         if "--once" not in argv:
             argv.append("--once")
         argv.append("--full-length")
