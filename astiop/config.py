@@ -11,7 +11,7 @@ from typing import Annotated, Any, Literal
 
 import platformdirs
 import tomli_w
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+from pydantic import BaseModel, ConfigDict, Field, StrictBool, ValidationError, field_validator
 from pydantic._internal._utils import deep_update
 from pydantic_settings import (
     BaseSettings,
@@ -40,15 +40,6 @@ class _Section(BaseModel):
     model_config = ConfigDict(extra="forbid", validate_assignment=True)
 
 
-def _true_or_false(value: Any) -> Any:
-    """A switch is true or false: TOML's booleans, or those words in a variable."""
-    if isinstance(value, str) and value.strip().lower() in ("true", "false"):
-        return value.strip().lower() == "true"
-    if not isinstance(value, bool):
-        raise ValueError("must be true or false")
-    return value
-
-
 class RobotSettings(_Section):
     backend: Literal["sim", "ros2"] = "sim"
     max_linear_speed: float = Field(
@@ -58,10 +49,8 @@ class RobotSettings(_Section):
         1.0, gt=0, le=3.0, allow_inf_nan=False, description="rad/s, clamp on /cmd_vel"
     )
     # a safety switch takes only true or false (not "no", 0 or "off")
-    confirm_actuation: bool = True
+    confirm_actuation: StrictBool = True
     ros2_executable: str = "ros2"
-
-    _switch = field_validator("confirm_actuation", mode="before")(_true_or_false)
     ros2_timeout_s: float = Field(10.0, gt=0, le=3600, allow_inf_nan=False)
 
 
@@ -148,6 +137,23 @@ class _Environment(EnvSettingsSource):
 
     def _load_env_vars(self) -> Mapping[str, str | None]:
         return {_ENV_SHORTCUTS.get(k, k).lower(): v for k, v in self._given.items()}
+
+    def __call__(self) -> dict[str, Any]:
+        return _switches(super().__call__(), Settings)
+
+
+def _switches(data: dict[str, Any], model: Any) -> dict[str, Any]:
+    """A switch spelled true or false in a variable is that boolean; any other word is left
+    for validation to refuse (a file's switch must be a TOML boolean)."""
+    for key, value in data.items():
+        field = getattr(model, "model_fields", {}).get(key)
+        if field is None:
+            continue
+        if isinstance(value, dict):
+            _switches(value, field.annotation)
+        elif field.annotation is bool and str(value).strip().lower() in ("true", "false"):
+            data[key] = str(value).strip().lower() == "true"
+    return data
 
 
 def _unknown_variable(env: Mapping[str, str]) -> str | None:

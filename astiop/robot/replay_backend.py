@@ -11,6 +11,7 @@ import time
 from typing import Any
 
 from astiop.recording.reader import Recording
+from astiop.recording.writer import TOPICS
 from astiop.robot.catalog import Catalog, astibot_catalog
 from astiop.robot.output import BackendError
 from astiop.robot.state import (
@@ -25,16 +26,6 @@ from astiop.warehouse import default_map
 
 READ_ONLY = "replay is read-only: nothing is sent to any robot"
 SPEEDS = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0)
-STATE_TOPICS = (
-    "/robot_pose",
-    "/odom",
-    "/battery_status",
-    "/robot_status",
-    "/scan",
-    "/obstacles",
-    "/plan",
-    "/conveyor/status",
-)
 
 
 class Playback:
@@ -162,7 +153,7 @@ class ReplayBackend:
     def state(self) -> RobotState:
         t_ns = self.playback.now_ns()
         self._show_turns(t_ns)
-        messages = self.recording.latest(STATE_TOPICS, t_ns)
+        messages = self.recording.latest(TOPICS, t_ns)
         seq = sum(1 for ev in self._events if ev.t * 1e9 <= t_ns)
         return from_messages(t_ns / 1e9, messages, event_seq=seq)
 

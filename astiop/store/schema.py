@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import os
 import time
 from pathlib import Path
 
@@ -151,13 +150,3 @@ def check_database_file(path: Path) -> None:
             raise StoreError(f"cannot read {path}: {exc.strerror or exc}") from None
         if header and header != SQLITE_HEADER:
             raise StoreError(f"{path} is not a SQLite database; it was left untouched")
-
-
-def _writable(path: Path) -> bool:
-    """Whether astiop may write: the file (if it exists) and its folder (WAL's side files)."""
-    folder = path.parent
-    while not folder.exists() and folder != folder.parent:
-        folder = folder.parent
-    if path.exists() and not os.access(path, os.W_OK):
-        return False
-    return os.access(folder, os.W_OK | os.X_OK)
