@@ -83,7 +83,10 @@ def record(
         for name in goto:
             if time.monotonic() - t0 >= limit:
                 break
-            outcomes.append(f"goal {name}: {_drive_to(gateway, name, t0 + limit, progress)}")
+            loc = st.store.get_location(name)
+            target = (loc.x, loc.y) if loc else None
+            outcome = _drive_to(gateway, name, t0 + limit, progress, target)
+            outcomes.append(f"goal {name}: {outcome}")
         while not goto and time.monotonic() - t0 < limit:
             time.sleep(0.2)
             progress()
@@ -103,8 +106,10 @@ def record(
     _report(path, summary(path) if counts else counts, as_json)
 
 
-def _drive_to(gateway, name: str, deadline: float, progress) -> str:
-    """Start a goal to a named location and wait (until the deadline) for how it ended."""
+def _drive_to(gateway, name: str, deadline: float, progress, target) -> str:
+    """Start a goal to a named location and wait (until the deadline) for how it ended; a
+    robot that reports no outcome is judged by its reported pose (as the agent does)."""
+    from astiop.agent.goals import outcome_at
     from astiop.recording import RecordingError
 
     cmd = f"ros2 service call /goto_position astiop_msgs/srv/GotoPosition \"{{name: '{name}'}}\""
@@ -118,7 +123,7 @@ def _drive_to(gateway, name: str, deadline: float, progress) -> str:
         if outcome is not None:
             return outcome
         if gateway.state().state_word not in ("navigating", "docking", "blocked"):
-            return "ended"
+            return outcome_at(gateway, target, name)
     return "still going when the recording ended"
 
 

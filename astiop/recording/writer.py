@@ -2,8 +2,8 @@
 
 The robot's state topics are written as ROS 2 messages: `ros2msg` schemas built from astiop's
 interface definitions (the distro's), CDR-encoded by `mcap-ros2-support`. The agent's turns and
-the robot's events go on JSON channels with a JSON schema. Log time is the robot's clock: the
-message header's stamp (sim time on the simulator), else the time it was received.
+the robot's events go on JSON channels with a JSON schema. Log time is the robot's clock: when
+the message was published (sim time on the simulator) or received (on the robot).
 
 A chunk is closed and flushed at least every FLUSH_S, so a recording killed at any moment keeps
 everything up to its last chunk; `repair` rewrites what such a file still holds.
@@ -69,16 +69,6 @@ def session_metadata(gateway) -> dict[str, str]:
         "robot_t0": repr(gateway.state().t),
         "wall_t0": repr(time.time()),
     }
-
-
-def _stamp_ns(message: dict[str, Any], fallback_s: float) -> int:
-    header = message.get("header")
-    if header is None and message.get("transforms"):
-        header = message["transforms"][0].get("header")
-    stamp = (header or {}).get("stamp") or {}
-    if "sec" in stamp:
-        return int(stamp["sec"]) * 1_000_000_000 + int(stamp.get("nanosec", 0))
-    return int(fallback_s * 1e9)
 
 
 JSON_SCHEMAS = {
@@ -171,8 +161,10 @@ class SessionRecorder:
         """Write what is new since the last poll; close a chunk every flush_s."""
         robot_now = self.gateway.state().t  # the clock the topics are logged on
         types = {n: s.type for n, s in self.gateway.catalog.topics.items()}
-        for topic, message in self.gateway.messages([t for t in TOPICS if t in types]).items():
-            stamp = _stamp_ns(message, robot_now)
+        names = [t for t in TOPICS if t in types]
+        times = self.gateway.message_times(names)  # published, or received on a robot
+        for topic, message in self.gateway.messages(names).items():
+            stamp = int(times.get(topic, robot_now) * 1e9)
             last = self._last.get(topic)
             if last is not None and stamp <= last:
                 continue  # nothing new on this topic

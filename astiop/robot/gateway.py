@@ -88,6 +88,9 @@ class RobotGateway:
         """The latest message per topic, as the robot sent it (for recording)."""
         return self.backend.messages(names)
 
+    def message_times(self, names) -> dict[str, float]:
+        return self.backend.message_times(names)
+
     def topic_stats(self) -> list[TopicStat]:
         return self.backend.topic_stats()
 

@@ -160,6 +160,15 @@ class ReplayBackend:
     def messages(self, names) -> dict[str, dict[str, Any]]:
         return self.recording.latest(names, self.playback.now_ns())
 
+    def message_times(self, names) -> dict[str, float]:
+        t_ns = self.playback.now_ns()
+        times = {}
+        for name in names:
+            ch = self.recording.channels.get(name)
+            if ch is not None and (i := ch.index_at(t_ns)) >= 0:
+                times[name] = ch.times[i] / 1e9
+        return times
+
     def events_since(self, seq: int) -> list[RobotEvent]:
         t_ns = self.playback.now_ns()
         return [ev for ev in self._events if ev.seq > seq and ev.t * 1e9 <= t_ns]

@@ -77,6 +77,7 @@ class Ros2Backend:
         self._e_stopped = False
         self._lock = threading.Lock()
         self._latest: dict[str, dict[str, Any]] = {}
+        self._received: dict[str, float] = {}  # on the robot clock: s since t0
         self._events: deque[RobotEvent] = deque(maxlen=500)
         self._event_seq = 0
         self._streams: dict[str, TopicStream] = {}
@@ -150,6 +151,7 @@ class Ros2Backend:
             self._status_changed(self._latest.get(name), msg)
         with self._lock:
             self._latest[name] = msg
+            self._received[name] = received - self.t0
 
     def _event(self, kind: str, severity: str, message: str) -> None:
         with self._lock:
@@ -178,6 +180,10 @@ class Ros2Backend:
     def messages(self, names) -> dict[str, dict[str, Any]]:
         with self._lock:
             return {n: self._latest[n] for n in names if n in self._latest}
+
+    def message_times(self, names) -> dict[str, float]:
+        with self._lock:
+            return {name: self._received[name] for name in names if name in self._received}
 
     def events_since(self, seq: int) -> list[RobotEvent]:
         with self._lock:

@@ -184,6 +184,10 @@ class SimBackend(SimVerbs):
             return self.last_twist or default_value("geometry_msgs/msg/Twist")
         return builders[name](s)
 
+    def message_times(self, names) -> dict[str, float]:
+        times = {name: self._last_publish(name) for name in names if name in self.catalog.topics}
+        return {name: t for name, t in times.items() if t > -math.inf}
+
     def messages(self, names) -> dict[str, dict[str, Any]]:
         """Every published topic's current message, from one snapshot."""
         s = self.sim.snapshot()
