@@ -83,6 +83,16 @@ class ScriptedLLM:
                 if server.mode == "http503":
                     self._json(503, {"error": {"message": "loading model"}})
                     return
+                if body.get("stream") is False:  # one JSON reply, as a plain client asks
+                    text = server.next_text(body.get("messages", []))
+                    words = len(text.split())
+                    self._json(200, {
+                        "choices": [{"index": 0, "message": {"role": "assistant", "content": text},
+                                     "finish_reason": "stop"}],
+                        "usage": {"prompt_tokens": 42, "completion_tokens": words,
+                                  "total_tokens": 42 + words},
+                    })  # fmt: skip
+                    return
                 self.send_response(200)
                 self.send_header("Content-Type", "text/event-stream")
                 self.end_headers()

@@ -121,6 +121,18 @@ class LLMEndpoint:
                 raise SpecError("the rules planner has no chat client")
         return self._client
 
+    def completions(self) -> tuple[str, str]:
+        """The OpenAI-compatible `chat/completions` URL and the model name, as a plain HTTP
+        client (the paper's benchmark scripts) reaches this model."""
+        spec = self.spec
+        if spec.kind == "rules":
+            raise SpecError("the rules planner is not a model server")
+        client = self.client()  # starts the embedded server
+        if spec.kind in ("embedded", "gguf"):
+            return f"{self.server.base_url}/chat/completions", self.server.model_name
+        base = spec.url.rstrip("/") + ("/v1" if spec.kind == "ollama" else "")
+        return f"{base}/chat/completions", getattr(client, "model", spec.name)
+
     def close(self) -> None:
         if self.server is not None:
             self.server.stop()

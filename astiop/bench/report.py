@@ -51,12 +51,16 @@ class Report:
     wall_s: float | None
     results: list[ModelResult]
     rows: list[dict[str, Any]]
+    protocol: str = "astiop"
+    suite: str = ""
 
     def as_json(self) -> dict[str, Any]:
         return {
             "run_id": self.run_id,
             "stage": self.stage,
             "status": self.status,
+            "protocol": self.protocol,
+            "suite": self.suite,
             "wall_s": self.wall_s,
             "results": [r.as_json() for r in self.results],
         }
@@ -72,13 +76,21 @@ def load_report(store: Store, run_id: int) -> Report:
     if run is None:
         raise BenchError(f"there is no benchmark run {run_id} (astiop bench list shows them)")
     rows = [dict(r, metrics=json.loads(r["metrics"])) for r in store.bench_results(run_id)]
-    groups: dict[tuple[str, str], list[dict]] = defaultdict(list)
-    for r in rows:
-        groups[(r["model"], r["mode"])].append(r)
-    results = _stage1(groups) if run["stage"] == 1 else _stage2(groups, rows)
-    results.sort(key=lambda r: r.composite, reverse=True)
+    config = json.loads(run["config"] or "{}")
+    results = []
+    for paper in (False, True):  # each protocol is normalised within itself
+        groups: dict[tuple[str, str], list[dict]] = defaultdict(list)
+        for r in rows:
+            if (r["mode"] == "paper") == paper:
+                groups[(r["model"], r["mode"])].append(r)
+        if groups:
+            part = _stage1(groups, paper) if run["stage"] == 1 else _stage2(groups)
+            results += sorted(part, key=lambda r: r.composite, reverse=True)
     wall = run["finished_at"] - run["started_at"] if run["finished_at"] else None
-    return Report(run_id, run["stage"], run["status"], wall, results, rows)
+    rep = Report(run_id, run["stage"], run["status"], wall, results, rows)
+    rep.protocol = config.get("protocol", "astiop")
+    rep.suite = config.get("suite") or f"astiop-stage{run['stage']}"
+    return rep
 
 
 def _breakdown(rows: list[dict], key, value) -> dict[str, float]:
@@ -88,12 +100,17 @@ def _breakdown(rows: list[dict], key, value) -> dict[str, float]:
     return {k: _mean(v) for k, v in sorted(by.items())}
 
 
-def _stage1(groups) -> list[ModelResult]:
-    tps = {
-        g: _mean(r["metrics"]["tps"] for r in rows if r["outcome"] == "ok")
-        for g, rows in groups.items()
-    }
-    speed = scoring.speed_scores(tps)
+def _stage1(groups, paper: bool = False) -> list[ModelResult]:
+    if paper:  # Eq. 2 as the paper's Table 8 reads: every test counts, failures as 0
+        tps = {g: _mean(r["metrics"]["tps"] for r in rows) for g, rows in groups.items()}
+        fastest_case = max((r["metrics"]["tps"] for rs in groups.values() for r in rs), default=0)
+        speed = {g: scoring.paper_speed(v, fastest_case) for g, v in tps.items()}
+    else:
+        tps = {
+            g: _mean(r["metrics"]["tps"] for r in rows if r["outcome"] == "ok")
+            for g, rows in groups.items()
+        }
+        speed = scoring.speed_scores(tps)
     out = []
     for g, rows in groups.items():
         n = len(rows)
@@ -107,6 +124,7 @@ def _stage1(groups) -> list[ModelResult]:
             "speed": speed[g],
             "reliability": rel,
             "tokens_per_s": tps[g],
+            "mean_total_s": _mean(r["metrics"].get("total_s") or 0.0 for r in rows),
         }
         out.append(
             ModelResult(
@@ -117,15 +135,17 @@ def _stage1(groups) -> list[ModelResult]:
                 n,
                 sum(r["outcome"] == "error" for r in rows),
                 sum(r["outcome"] == "timeout" for r in rows),
-                _breakdown(rows, "category", lambda r: r["metrics"]["c"]),
+                _breakdown(rows, "category", lambda r: r["metrics"]["q"]),  # Fig. 9
                 _breakdown(rows, "level", lambda r: r["metrics"]["q"]),
             )
         )
     return out
 
 
-def _stage2(groups, all_rows) -> list[ModelResult]:
-    slowest = max((r["metrics"].get("total_s") or 0.0 for r in all_rows), default=0.0)
+def _stage2(groups) -> list[ModelResult]:
+    slowest = max(
+        (r["metrics"].get("total_s") or 0.0 for rows in groups.values() for r in rows), default=0.0
+    )
     out = []
     for g, rows in groups.items():
         n = len(rows)
@@ -140,6 +160,10 @@ def _stage2(groups, all_rows) -> list[ModelResult]:
             "both_valid": bv,
             "speed": sp,
             "mean_total_s": _mean(r["metrics"].get("total_s") or 0.0 for r in rows),
+            "command_valid_rate": 100.0 * sum(bool(r["metrics"].get("c_valid")) for r in rows) / n,
+            "interpretation_valid_rate": 100.0
+            * sum(bool(r["metrics"].get("i_valid")) for r in rows)
+            / n,
             # actuations a model ran that its case did not ask for; the gate's refusals
             "wrong_actuations": float(sum(r["metrics"].get("wrong_actuations", 0) for r in rows)),
             "refused": float(sum(bool(r["metrics"].get("refused")) for r in rows)),
@@ -166,37 +190,69 @@ def _stage2(groups, all_rows) -> list[ModelResult]:
 
 
 # -- formats ------------------------------------------------------------------------------
-def to_markdown(rep: Report) -> str:
+SIDE_FIGURES = ("tokens_per_s", "mean_total_s", "command_valid_rate", "interpretation_valid_rate")
+TABLE8 = {
+    1: (("quality", "Quality"), ("coverage", "Coverage"), ("speed", "Speed"),
+        ("reliability", "Reliability")),
+    2: (("command", "Command"), ("interpretation", "Interpretation"),
+        ("both_valid", "Both valid"), ("speed", "Speed")),
+}  # fmt: skip
+
+
+def _protocol(r: ModelResult) -> str:
+    return "paper" if r.mode == "paper" else "astiop"
+
+
+def to_markdown(rep: Report, cases: bool = True) -> str:
     lines = [f"# Benchmark run {rep.run_id}: stage {rep.stage} ({rep.status})", ""]
+    lines += [f"Suite: {rep.suite}. Protocol: {rep.protocol}.", ""]
     if rep.wall_s is not None:
         lines += [f"Wall time: {rep.wall_s:.1f} s", ""]
     if not rep.results:
         return "\n".join(lines + ["No results yet."]) + "\n"
-    comp_names = [k for k in rep.results[0].components if k not in ("tokens_per_s", "mean_total_s")]
-    extra = "tokens/s" if rep.stage == 1 else "mean s"
-    lines += [
-        "| rank | model | mode | " + " | ".join(comp_names) + f" | {extra} | composite |"
-        " cases | errors | timeouts |",
-        "|---" * (len(comp_names) + 8) + "|",
-    ]
-    for rank, r in enumerate(rep.results, 1):
-        xs = r.components.get("tokens_per_s", r.components.get("mean_total_s", 0.0))
-        lines.append(
-            f"| {rank} | {r.model} | {r.mode} | "
-            + " | ".join(f"{r.components[k]:.1f}" for k in comp_names)
-            + f" | {xs:.1f} | **{r.composite:.1f}** | {r.cases} | {r.errors} |"
-            f" {r.timeouts} |"
-        )
-    what = "coverage" if rep.stage == 1 else "both-valid rate"
+    for protocol in ("astiop", "paper"):
+        results = [r for r in rep.results if _protocol(r) == protocol]
+        if results:
+            lines += _ranking(rep.stage, protocol, results)
+    what = "quality" if rep.stage == 1 else "both-valid rate"
     lines += ["", f"## By category ({what}, 0-100)", ""]
     lines += _matrix(rep.results, "by_category")
     what = "quality" if rep.stage == 1 else "command score"
     lines += ["", f"## By {'level' if rep.stage == 1 else 'category'} ({what}, 0-100)", ""]
     lines += _matrix(rep.results, "by_level")
-    if rep.stage == 2:
+    if rep.stage == 2 and any(_protocol(r) == "astiop" for r in rep.results):
         lines += ["", "## By case (both-valid over the request and its paraphrases, 0-100)", ""]
-        lines += _matrix(rep.results, "by_case")
+        lines += _matrix([r for r in rep.results if _protocol(r) == "astiop"], "by_case")
+    if cases:
+        lines += ["", "## Every case", ""] + _cases_table(rep)
     return "\n".join(lines) + "\n"
+
+
+def _ranking(stage: int, protocol: str, results: list[ModelResult]) -> list[str]:
+    """Table 8's shape: rank, model, the composite's components, the composite."""
+    cols = TABLE8[stage]
+    eq = "Eq. 1" if stage == 1 else "Eq. 9"
+    title = "the paper's protocol" if protocol == "paper" else "astiop's protocol"
+    extra = "Tokens/s" if stage == 1 else "Mean s"
+    lines = [
+        f"## Ranking, {title} ({eq})",
+        "",
+        "| Rank | Model | Mode | "
+        + " | ".join(name for _, name in cols)
+        + f" | Composite | {extra} | Cases | Errors | Timeouts |",
+        "|---" * (len(cols) + 8) + "|",
+    ]
+    for rank, r in enumerate(results, 1):
+        xs = r.components.get("tokens_per_s" if stage == 1 else "mean_total_s", 0.0)
+        lines.append(
+            f"| {rank} | {r.model} | {r.mode} | "
+            + " | ".join(f"{r.components[k]:.2f}" for k, _ in cols)
+            + f" | **{r.composite:.2f}** | {xs:.2f} | {r.cases} | {r.errors} | {r.timeouts} |"
+        )
+    if stage == 2 and protocol == "astiop":
+        wrong = {r.model: r.components.get("wrong_actuations", 0) for r in results}
+        lines += ["", "Wrong actuations: " + ", ".join(f"{m} {v:.0f}" for m, v in wrong.items())]
+    return lines + [""]
 
 
 def _matrix(results: list[ModelResult], attr: str) -> list[str]:
@@ -208,29 +264,74 @@ def _matrix(results: list[ModelResult], attr: str) -> list[str]:
     return lines
 
 
-def to_csv(rep: Report) -> str:
-    buf = io.StringIO()
-    keys = sorted(
-        {
-            k
-            for r in rep.rows
-            for k, v in r["metrics"].items()
-            if isinstance(v, (int, float, bool, type(None)))
+def _cell(text: Any, width: int = 60) -> str:
+    flat = " ".join(str(text or "").split()).replace("|", "\\|")
+    return flat if len(flat) <= width else flat[: width - 1] + "…"
+
+
+def _cases_table(rep: Report) -> list[str]:
+    if rep.stage == 1:
+        head = "| model | mode | case | category | outcome | quality | coverage | tokens/s | s | response |"
+        fields = ("q", "c", "tps", "total_s")
+    else:
+        head = "| model | mode | case | category | outcome | command | interpretation | both valid | s | response |"
+        fields = ("command", "interpretation", None, "total_s")
+    lines = [head, "|---" * 10 + "|"]
+    for row in rep.rows:
+        m = row["metrics"]
+        values = []
+        for f in fields:
+            if f is None:
+                values.append("yes" if m.get("c_valid") and m.get("i_valid") else "no")
+            else:
+                values.append(f"{float(m.get(f) or 0.0):.2f}")
+        lines.append(
+            f"| {row['model']} | {row['mode']} | {row['case_id']} | {row['category']} | "
+            f"{row['outcome']} | " + " | ".join(values) + f" | {_cell(row['response'])} |"
+        )
+    return lines
+
+
+def case_rows(rep: Report) -> list[dict[str, Any]]:
+    """Every case as one flat record: prompt, response text(s), expectations, every score."""
+    out = []
+    for row in rep.rows:
+        record = {
+            "run_id": rep.run_id,
+            "run_stage": rep.stage,  # "stage" is the paper's own field (how far a case got)
+            "timestamp": row.get("created_at"),
+            "model": row["model"],
+            "mode": row["mode"],
+            "case_id": row["case_id"],
+            "level": row["level"],
+            "category": row["category"],
+            "outcome": row["outcome"],
+            "response": row["response"],
         }
-    )
-    writer = csv.writer(buf)
-    writer.writerow(["model", "mode", "case_id", "level", "category", "outcome", *keys])
-    for r in rep.rows:
+        record.update(row["metrics"])
+        out.append(record)
+    return out
+
+
+def to_json(rep: Report) -> str:
+    return json.dumps({**rep.as_json(), "cases": case_rows(rep)}, indent=2, default=str)
+
+
+def to_jsonl(rep: Report) -> str:
+    return "".join(json.dumps(r, default=str) + "\n" for r in case_rows(rep))
+
+
+def to_csv(rep: Report) -> str:
+    records = case_rows(rep)
+    keys: list[str] = []
+    for r in records:
+        keys += [k for k in r if k not in keys]
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, fieldnames=keys)
+    writer.writeheader()
+    for r in records:
         writer.writerow(
-            [
-                r["model"],
-                r["mode"],
-                r["case_id"],
-                r["level"],
-                r["category"],
-                r["outcome"],
-                *[r["metrics"].get(k) for k in keys],
-            ]
+            {k: json.dumps(v) if isinstance(v, (list, dict)) else v for k, v in r.items()}
         )
     return buf.getvalue()
 

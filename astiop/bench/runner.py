@@ -18,7 +18,8 @@ from pathlib import Path
 from astiop.agent.llm import LLMError, LLMTimeout
 from astiop.agent.specs import LLMEndpoint, open_endpoint, parse_spec
 from astiop.agent.turn import Agent
-from astiop.bench import stage1, stage2, suites
+from astiop.bench import library, paper_protocol, stage1, stage2
+from astiop.bench.suites import SuiteError
 from astiop.config import Settings
 from astiop.recording import FLUSH_S, SessionRecorder
 from astiop.robot.factory import make_safety
@@ -39,6 +40,8 @@ class RunConfig:
     concurrency: int = 1
     interpretation: str = "grounded"  # or raw: the model's words, as the paper scores them
     record_dir: str | None = None  # stage 2: each case's simulator run as MCAP here
+    protocol: str = "astiop"  # astiop | paper | both (stage 1): how cases are run and scored
+    suite: str | None = None  # a suite's name or path; None: the built-in one of the stage
 
 
 @dataclass(frozen=True)
@@ -60,10 +63,56 @@ class BenchError(ValueError):
     pass
 
 
+PROTOCOLS = ("astiop", "paper", "both")
+
+
 def create_run(store: Store, config: RunConfig) -> int:
     if config.stage not in (1, 2):
         raise BenchError("--stage is 1 or 2")
+    suite_of(store, config)  # a one-line error now, not after the first model loads
     return store.create_bench_run(config.stage, asdict(config))
+
+
+def suite_of(store: Store, config: RunConfig) -> library.Suite:
+    """The run's suite, checked against its stage and protocol."""
+    if config.protocol not in PROTOCOLS:
+        raise BenchError(f"--protocol is {', '.join(PROTOCOLS)}")
+    try:
+        suite = library.load_suite(config.suite or f"astiop-stage{config.stage}", store.path.parent)
+    except SuiteError as exc:
+        raise BenchError(str(exc)) from None
+    if suite.stage != config.stage:
+        raise BenchError(
+            f"suite {suite.name} is a stage-{suite.stage} suite, not stage {config.stage}"
+        )
+    if config.stage == 2 and config.protocol == "both":
+        raise BenchError(
+            "--protocol both is for stage 1: stage 2's protocols run different suites "
+            "(astiop's on the simulator, the paper's on mock responses)"
+        )
+    if suite.kind == "mock" and config.protocol != "paper":
+        raise BenchError(
+            f"suite {suite.name} answers fixed mock responses: run it with --protocol paper"
+        )
+    if suite.kind == "robot" and config.protocol != "astiop":
+        raise BenchError(
+            f"the paper's protocol answers mock responses, and suite {suite.name} has none: "
+            "import the paper's stage-2 script (astiop bench import) and use --suite paper-stage2"
+        )
+    if config.protocol != "astiop":
+        for model in config.models:
+            if parse_spec(model).kind == "rules":
+                raise BenchError("the paper's protocol measures a model server; rules has none")
+    return suite
+
+
+def modes_for(config: RunConfig, model: str) -> list[str]:
+    """What each model runs as: its reply modes (astiop), `paper`, or both for stage 1."""
+    if parse_spec(model).kind == "rules":
+        return ["rules"]
+    if config.stage == 1:
+        return {"astiop": ["chat"], "paper": ["paper"], "both": ["chat", "paper"]}[config.protocol]
+    return ["paper"] if config.protocol == "paper" else config.modes
 
 
 def load_config(store: Store, run_id: int) -> RunConfig:
@@ -96,7 +145,9 @@ def _save(
             "level": case.level,
             "category": case.category,
             "outcome": outcome,
-            "metrics": json.dumps(metrics, default=str),
+            "metrics": json.dumps(
+                {"prompt": getattr(case, "prompt", None) or case.request, **metrics}, default=str
+            ),
             "response": response,
         },
     )
@@ -110,18 +161,13 @@ async def run(
     on_progress: Callable[[Progress], None] | None = None,
 ) -> int:
     """Run (or resume) `run_id`; returns how many cases ran now."""
-    system, knowledge = suites.stage1()
-    cases = list(knowledge if config.stage == 1 else suites.stage2())[: config.limit or None]
-    modes = ["chat"] if config.stage == 1 else config.modes
+    suite = suite_of(store, config)
+    cases = list(suite.cases)[: config.limit or None]
     done = _done(store, run_id)
-
-    def modes_of(model: str) -> list[str]:
-        return ["rules"] if parse_spec(model).kind == "rules" else modes
-
     todo = [
         (m, mode, c)
         for m in config.models
-        for mode in modes_of(m)
+        for mode in modes_for(config, m)
         for c in cases
         if (m, mode, c.id) not in done
     ]
@@ -132,7 +178,7 @@ async def run(
         world = Store(Path(tmp) / "world.db")
         try:
             finished = await _run_todo(
-                store, world, settings, config, run_id, system, todo, on_progress
+                store, world, settings, config, run_id, suite, todo, on_progress
             )
             status = "done"
         finally:
@@ -141,7 +187,7 @@ async def run(
     return finished
 
 
-async def _run_todo(store, world, settings, config, run_id, system, todo, on_progress) -> int:
+async def _run_todo(store, world, settings, config, run_id, suite, todo, on_progress) -> int:
     total, finished, t0 = len(todo), 0, time.perf_counter()
     models = list(dict.fromkeys(m for m, _, _ in todo))
     for model in models:
@@ -154,13 +200,14 @@ async def _run_todo(store, world, settings, config, run_id, system, todo, on_pro
         try:
             for mode in dict.fromkeys(md for m, md, _ in todo if m == model):
                 batch = [c for m, md, c in todo if m == model and md == mode]
-                sem = asyncio.Semaphore(1 if endpoint.local else max(1, config.concurrency))
+                one_at_a_time = endpoint.local or mode == "paper"  # the scripts run in turn
+                sem = asyncio.Semaphore(1 if one_at_a_time else max(1, config.concurrency))
 
                 async def one(case, mode=mode, endpoint=endpoint, model=model, sem=sem):
                     nonlocal finished
                     async with sem:
                         outcome, metrics, response = await _run_case(
-                            world, settings, config, endpoint, system, case, mode, (run_id, model)
+                            world, settings, config, endpoint, suite, case, mode, (run_id, model)
                         )
                     await asyncio.to_thread(
                         _save, store, run_id, model, mode, case, outcome, metrics, response
@@ -185,11 +232,16 @@ async def _run_todo(store, world, settings, config, run_id, system, todo, on_pro
     return finished
 
 
-async def _run_case(world, settings, config, endpoint: LLMEndpoint, system, case, mode, who):
+async def _run_case(world, settings, config, endpoint: LLMEndpoint, suite, case, mode, who):
+    if mode == "paper":  # its own timeouts (300 s, 120 s a call), as the scripts set them
+        url, model = await asyncio.to_thread(endpoint.completions)
+        if config.stage == 1:
+            return await paper_protocol.stage1_case(url, model, suite.system, case)
+        return await paper_protocol.stage2_case(url, model, suite, case)
     try:
         if config.stage == 1:
             return await asyncio.wait_for(
-                stage1.run_case(endpoint, system, case, config.max_tokens), config.timeout_s
+                stage1.run_case(endpoint, suite.system, case, config.max_tokens), config.timeout_s
             )
         return await asyncio.wait_for(
             _robot_case(world, settings, config, endpoint, case, mode, who), config.timeout_s

@@ -100,6 +100,15 @@ def speed_scores(tokens_per_s: dict[str, float]) -> dict[str, float]:
     }
 
 
+def paper_speed(mean_tokens_per_s: float, fastest_case: float) -> float:
+    """Eq. 2 as the paper computed Table 8: a model's mean tokens/s (over every test) against
+    the fastest single test of the run, capped at 100. (Against the fastest model's mean, the
+    fastest model would score 100; Table 8 gives SmolLM2, the fastest, 86.04.)"""
+    if fastest_case <= 0:
+        return 0.0
+    return min(100.0 * mean_tokens_per_s / fastest_case, 100.0)
+
+
 def stage1_composite(q: float, c: float, sp: float, r: float) -> float:
     """Eq. 1."""
     return 0.35 * q + 0.3 * c + 0.2 * sp + 0.15 * r

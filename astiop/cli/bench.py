@@ -46,6 +46,15 @@ def run_bench(
     record: Path | None = typer.Option(
         None, "--record", help="Stage 2: record each case's simulator run as MCAP in this folder."
     ),
+    protocol: str = typer.Option(
+        "astiop",
+        "--protocol",
+        help="astiop (checked against the simulator), paper (the paper's scripts exactly), or "
+        "both (stage 1).",
+    ),
+    suite: str | None = typer.Option(
+        None, "--suite", help="A suite's name (astiop bench suites) or a suite file's path."
+    ),
     as_json: bool = typer.Option(False, "--json"),
 ) -> None:
     """Run a benchmark; each case's result is stored as it finishes."""
@@ -89,6 +98,8 @@ def run_bench(
                 except OSError as exc:
                     fail(f"--record {record}: {exc.strerror or exc}")
             modes = ["command", "tool"] if mode == "both" else [mode]
+            if suite is not None and Path(suite).expanduser().is_file():
+                suite = str(Path(suite).expanduser().resolve())  # a resume finds it again
             config = runner.RunConfig(
                 stage,
                 list(dict.fromkeys(models)),
@@ -100,6 +111,8 @@ def run_bench(
                 concurrency,
                 interpretation,
                 str(record.resolve()) if record is not None else None,
+                protocol,
+                suite,
             )
             run_id = runner.create_run(store, config)
     except (runner.BenchError, SpecError) as exc:
@@ -159,7 +172,7 @@ def run_bench(
         return
     from astiop.bench.report import to_markdown
 
-    typer.echo(to_markdown(rep))
+    typer.echo(to_markdown(rep, cases=False))
     typer.echo(
         f"wall time {time.perf_counter() - t0:.1f} s; astiop bench report {run_id}", err=True
     )
@@ -190,21 +203,77 @@ def list_cmd(ctx: typer.Context, as_json: bool = typer.Option(False, "--json")) 
 def report_cmd(
     ctx: typer.Context,
     run_id: int = typer.Argument(..., help="The run's id (astiop bench list)."),
-    fmt: str = typer.Option("md", "--format", "-f", help="md, csv or json."),
+    fmt: str = typer.Option("md", "--format", "-f", help="md, csv, json or jsonl."),
+    figures: Path | None = typer.Option(
+        None,
+        "--figures",
+        help='Also draw the paper\'s figure kinds here (SVG, PNG; needs "astiop[plots]").',
+    ),
 ) -> None:
-    """Print a run's ranking and breakdowns as Markdown, its cases as CSV, or JSON."""
-    from astiop.bench.report import load_report, to_csv, to_markdown
+    """A run's rankings, breakdowns and every case (prompt, response, scores): Markdown, or
+    every case as CSV, JSON (with the rankings) or JSON lines."""
+    from astiop.bench.report import load_report, to_csv, to_json, to_jsonl, to_markdown
     from astiop.bench.runner import BenchError
 
-    if fmt not in ("md", "csv", "json"):
-        fail("--format is md, csv or json")
+    formats = {"md": to_markdown, "csv": to_csv, "json": to_json, "jsonl": to_jsonl}
+    if fmt not in formats:
+        fail("--format is md, csv, json or jsonl")
     try:
         rep = load_report(state(ctx).store, run_id)
     except BenchError as exc:
         fail(str(exc))
-    if fmt == "json":
-        print_json(rep.as_json())
-    elif fmt == "csv":
-        sys.stdout.write(to_csv(rep))
-    else:
-        typer.echo(to_markdown(rep), nl=False)
+    if figures is not None:
+        from astiop.bench.figures import FiguresUnavailable, write_figures
+
+        try:
+            written = write_figures(rep, figures)
+        except FiguresUnavailable as exc:
+            fail(str(exc))
+        except OSError as exc:
+            fail(f"cannot write figures to {figures}: {exc.strerror or exc}")
+        typer.echo(f"{len(written)} figure files in {figures}", err=True)
+    text = formats[fmt](rep)
+    sys.stdout.write(text if text.endswith("\n") else text + "\n")
+
+
+@app.command("import")
+def import_cmd(
+    ctx: typer.Context,
+    paths: list[Path] = typer.Argument(
+        ..., help="The paper's test_ros_agents.py / test_ros_command_agent.py, or suite YAML files."
+    ),
+) -> None:
+    """Import benchmark suites: the paper's two scripts (read with ast, never run) become
+    paper-stage1 and paper-stage2; an astiop suite file is checked and kept by its name."""
+    from astiop.bench.paper_import import import_suite
+    from astiop.bench.suites import SuiteError
+
+    data_dir = state(ctx).db_path.parent
+    for path in paths:
+        try:
+            suite, out = import_suite(path, data_dir)
+        except SuiteError as exc:
+            fail(str(exc))
+        typer.echo(f"{suite.name}: stage {suite.stage}, {len(suite.cases)} cases -> {out}")
+
+
+@app.command("suites")
+def suites_cmd(ctx: typer.Context, as_json: bool = typer.Option(False, "--json")) -> None:
+    """The suites bench run can use: built in and imported."""
+    from astiop.bench.library import all_suites
+
+    found, problems = all_suites(state(ctx).db_path.parent)
+    rows = [
+        {"name": s.name, "stage": s.stage, "kind": s.kind, "cases": len(s.cases),
+         "source": s.source, "path": s.path}
+        for s in found
+    ]  # fmt: skip
+    if as_json:
+        print_json({"suites": rows, "unreadable": problems})
+        return
+    for r in rows:
+        typer.echo(
+            f"{r['name']:<16} stage {r['stage']}  {r['kind']:<9} {r['cases']:>4} cases  {r['source']}"
+        )
+    for why in problems:
+        typer.echo(f"unreadable: {why}", err=True)
