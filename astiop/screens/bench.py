@@ -23,7 +23,7 @@ from textual.widgets import (
 
 from astiop.agent.specs import SpecError, parse_spec
 from astiop.bench import runner
-from astiop.bench.report import Report, list_runs, load_report
+from astiop.bench.report import SIDE_FIGURES, Report, list_runs, load_report
 from astiop.screens.base import ConsoleScreen
 from astiop.widgets.gauges import bar
 
@@ -158,7 +158,7 @@ class BenchScreen(ConsoleScreen):
         if not rep.results:
             bars.update(f"run {run_id}: no results yet")
             return
-        comps = [k for k in rep.results[0].components if k not in ("tokens_per_s", "mean_total_s")]
+        comps = [k for k in rep.results[0].components if k not in SIDE_FIGURES]
         ranking.add_columns("#", "model", "mode", *comps, "composite", "err", "t/o")
         for i, r in enumerate(rep.results, 1):
             ranking.add_row(
