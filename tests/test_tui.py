@@ -182,6 +182,12 @@ async def test_bench_screen_runs_and_ranks(tmp_path):
         await pilot.press("ctrl+b")
         await pilot.pause()
         assert app.screen.query_one("#bench-runs", DataTable).row_count == 1
+        app.screen.query_one("#bench-models", Input).value = "rules"
+        app.screen.query_one("#bench-protocol").value = "paper"  # needs a mock-response suite
+        await pilot.press("ctrl+b")
+        await pilot.pause()
+        assert app.screen.query_one("#bench-runs", DataTable).row_count == 1
+        assert any("mock responses" in n.message for n in app._notifications)
 
 
 async def test_dashboard_says_when_the_model_server_is_down(tmp_path):

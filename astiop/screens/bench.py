@@ -23,7 +23,9 @@ from textual.widgets import (
 
 from astiop.agent.specs import SpecError, parse_spec
 from astiop.bench import runner
+from astiop.bench.library import all_suites, load_suite
 from astiop.bench.report import SIDE_FIGURES, Report, list_runs, load_report
+from astiop.bench.suites import SuiteError
 from astiop.screens.base import ConsoleScreen
 from astiop.widgets.gauges import bar
 
@@ -41,11 +43,18 @@ class BenchScreen(ConsoleScreen):
     def compose(self) -> ComposeResult:
         yield Header(show_clock=False)
         with Horizontal(id="bench-controls"):
+            suites, _ = all_suites(self.app.services.store.path.parent)
             yield Select(
-                [("stage 1 (ROS)", 1), ("stage 2 (robot)", 2)],
-                value=2,
+                [(f"{s.name} ({len(s.cases)})", s.name) for s in suites],
+                value="astiop-stage2",
                 allow_blank=False,
-                id="bench-stage",
+                id="bench-suite",
+            )
+            yield Select(
+                [("astiop", "astiop"), ("paper", "paper"), ("both", "both")],
+                value="astiop",
+                allow_blank=False,
+                id="bench-protocol",
             )
             yield Input(
                 value="rules, embedded", placeholder="models, comma-separated", id="bench-models"
@@ -85,8 +94,9 @@ class BenchScreen(ConsoleScreen):
             self.show_report(self.runs[0]["id"])
         else:
             self.query_one("#bench-bars", Static).update(
-                "No benchmark runs yet: choose the stage, the models (comma-separated specs) "
-                "and the mode, then press ctrl+b. Runs from `astiop bench run` show here too."
+                "No benchmark runs yet: choose the suite, the protocol, the models "
+                "(comma-separated specs) and the mode, then press ctrl+b. Runs from "
+                "`astiop bench run` show here too; `astiop bench import` adds the paper's suites."
             )
 
     def on_data_table_row_highlighted(self, event: DataTable.RowHighlighted) -> None:
@@ -115,12 +125,22 @@ class BenchScreen(ConsoleScreen):
             self.notify("limit is a whole number of cases", severity="error")
             return None
         mode = self.query_one("#bench-mode", Select).value
-        return runner.RunConfig(
-            stage=int(self.query_one("#bench-stage", Select).value),
-            models=models,
-            modes=["command", "tool"] if mode == "both" else [mode],
-            limit=int(limit_text) if limit_text else None,
-        )
+        store = self.app.services.store
+        try:
+            suite = load_suite(self.query_one("#bench-suite", Select).value, store.path.parent)
+            config = runner.RunConfig(
+                stage=suite.stage,
+                models=models,
+                modes=["command", "tool"] if mode == "both" else [mode],
+                limit=int(limit_text) if limit_text else None,
+                protocol=self.query_one("#bench-protocol", Select).value,
+                suite=suite.name,
+            )
+            runner.suite_of(store, config)  # the suite, protocol and models fit together
+        except (SuiteError, runner.BenchError) as exc:
+            self.notify(str(exc), severity="error", markup=False)
+            return None
+        return config
 
     def action_run(self) -> None:
         config = self._config()
