@@ -126,7 +126,8 @@ def _heat(plt, ax, rep: Report, cats, grid, title: str):
 
 def _heatmaps(plt, rep: Report, panels, title: str):
     height = max(2.8, 2.4 + 0.5 * len(rep.results))
-    fig, axes = plt.subplots(1, len(panels), figsize=(5.5 * len(panels), height), squeeze=False)
+    width = max(5.5, 2.5 + 0.45 * len({row["category"] for row in rep.rows}))
+    fig, axes = plt.subplots(1, len(panels), figsize=(width * len(panels), height), squeeze=False)
     image = None
     for ax, (what, value) in zip(axes[0], panels):
         cats, grid = _by_category(rep, value)

@@ -99,7 +99,7 @@ def suite_of(store: Store, config: RunConfig) -> library.Suite:
             f"the paper's protocol answers mock responses, and suite {suite.name} has none: "
             "import the paper's stage-2 script (astiop bench import) and use --suite paper-stage2"
         )
-    if config.protocol != "astiop":
+    if config.protocol == "paper":  # with both, the rules baseline runs astiop's protocol
         for model in config.models:
             if parse_spec(model).kind == "rules":
                 raise BenchError("the paper's protocol measures a model server; rules has none")
