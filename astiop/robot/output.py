@@ -9,6 +9,8 @@ from typing import Any
 import yaml
 
 TRUNCATE = 128
+# libyaml's emitter when PyYAML has it: the same text, several times faster (a /scan at 10 Hz)
+DUMPER = getattr(yaml, "CSafeDumper", yaml.SafeDumper)
 
 
 class BackendError(Exception):
@@ -80,8 +82,9 @@ def echo_yaml(
     no_str: bool = False,
 ) -> str:
     """As `ros2 topic echo` prints one message; `truncate=None` is its --full-length."""
-    body = yaml.safe_dump(
+    body = yaml.dump(
         _prepare(message, no_arr, truncate, no_str),
+        Dumper=DUMPER,
         sort_keys=False,
         default_flow_style=False,
         width=1000,
@@ -98,6 +101,6 @@ def echo_text(message: dict[str, Any], command: Any) -> str:
 
 
 def indent_yaml(message: dict[str, Any], spaces: int = 4) -> str:
-    text = yaml.safe_dump(message, sort_keys=False, default_flow_style=False, width=1000)
+    text = yaml.dump(message, Dumper=DUMPER, sort_keys=False, default_flow_style=False, width=1000)
     pad = " " * spaces
     return "".join(pad + line + "\n" for line in text.splitlines())
