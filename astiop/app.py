@@ -23,7 +23,7 @@ from astiop.config import Settings
 from astiop.recording import RecordingError, SessionRecorder, default_path
 from astiop.robot.factory import make_robot_graph, make_sim_graph
 from astiop.robot.gateway import RobotGateway
-from astiop.robot.render import sent_text
+from astiop.robot.render import goto_command, sent_text
 from astiop.robot.state import RobotState, TopicStat
 from astiop.robot.validation import Checked
 from astiop.screens.bench import BenchScreen
@@ -261,9 +261,7 @@ class AstiopApp(App):
 
     def goto_location(self, name: str) -> None:
         """Drive to a named location: the same y/n as every actuation, off the UI thread."""
-        cmd = (
-            f"ros2 service call /goto_position astiop_msgs/srv/GotoPosition \"{{name: '{name}'}}\""
-        )
+        cmd = goto_command(name)
         self.run_worker(lambda: self._goto(cmd), thread=True, group="goto", exit_on_error=False)
 
     def _goto(self, cmd: str) -> None:

@@ -13,10 +13,10 @@ from dataclasses import dataclass
 from astiop.agent.intent import SERVICE_FOR, Intent, Motion
 from astiop.agent.rules import command_for
 from astiop.robot.catalog import Catalog
+from astiop.robot.render import GOTO_TYPE, goto_command
 
 READABLE_EXCLUDED = {"/cmd_vel", "/tf", "/tf_static", "/plan"}
 TRIGGER = "std_srvs/srv/Trigger"
-GOTO_TYPE = "astiop_msgs/srv/GotoPosition"
 
 
 @dataclass(frozen=True)
@@ -76,7 +76,7 @@ def build_tools(catalog: Catalog, locations: list[str]) -> list[Tool]:
         Tool(
             name,
             f"drives to {name}",
-            f"ros2 service call /goto_position {GOTO_TYPE} \"{{name: '{name}'}}\"",
+            goto_command(name),
             "navigate",
         )
         for name in locations

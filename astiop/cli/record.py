@@ -111,9 +111,9 @@ def _drive_to(gateway, name: str, deadline: float, progress, target) -> str:
     robot that reports no outcome is judged by its reported pose (as the agent does)."""
     from astiop.agent.goals import outcome_at
     from astiop.recording import RecordingError
+    from astiop.robot.render import goto_command
 
-    cmd = f"ros2 service call /goto_position astiop_msgs/srv/GotoPosition \"{{name: '{name}'}}\""
-    result = gateway.run(cmd, confirm=lambda _c: True, source="record")
+    result = gateway.run(goto_command(name), confirm=lambda _c: True, source="record")
     if not result.executed or result.error:
         raise RecordingError(f"--goto {name}: {result.reason or result.error}")
     time.sleep(0.5)  # the goal shows in the robot's status

@@ -12,6 +12,13 @@ import yaml
 
 from astiop.robot.validation import Checked
 
+GOTO_TYPE = "astiop_msgs/srv/GotoPosition"
+
+
+def goto_command(name: str) -> str:
+    """The command that sends the robot to a named location (console, agent, `record --goto`)."""
+    return f"ros2 service call /goto_position {GOTO_TYPE} \"{{name: '{name}'}}\""
+
 
 def flow_yaml(message: dict) -> str:
     return yaml.safe_dump(message, default_flow_style=True, width=100_000, sort_keys=False).strip()
