@@ -222,8 +222,9 @@ class Agent:
             tools = build_tools(self.graph.catalog, locations)
             if self.narrow_tools:
                 tools = narrow(tools, intent.classify(request, locations))
-            system, schema = prompts.tool_prompt(tools), tool_schema(tools)
+            system, schema = prompts.tool_prompt(), tool_schema(tools)
             grammar = tool_grammar(tools)
+            note = [prompts.tools_note(tools)]
 
             def parse(text):
                 return steps_from_reply(text, tools)
@@ -231,13 +232,14 @@ class Agent:
             system, schema = prompts.command_prompt(self.graph.catalog, locations), command_schema()
             grammar = command_grammar()
             parse = commands_from_reply
+            note = []
         messages = [{"role": "system", "content": system}, *prompts.example_messages(self.mode)]
         for past_request, past_answer in self.history[-HISTORY_TURNS:]:
             messages += [
                 {"role": "user", "content": past_request},
                 {"role": "assistant", "content": past_answer},
             ]
-        messages.append({"role": "user", "content": request})
+        messages += [*note, {"role": "user", "content": request}]
         ask = functools.partial(
             self._ask, schema=schema, result=result, emit=emit, kind="plan_token", grammar=grammar
         )
