@@ -35,6 +35,7 @@ def emulated_robot(
     distro: str = "jazzy",
     missing: tuple[str, ...] = (),
     speed: float = 1.0,
+    daemon_stopped: bool = False,
 ):
     folder = Path(tempfile.mkdtemp(prefix="emu-", dir="/tmp"))  # short: a Unix socket path
     argv = [
@@ -53,6 +54,8 @@ def emulated_robot(
     ]
     for name in missing:
         argv += ["--missing", name]
+    if daemon_stopped:
+        argv.append("--daemon-stopped")
     proc = subprocess.Popen(argv, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True)
     try:
         deadline = time.monotonic() + 30

@@ -42,6 +42,9 @@ def idle(graph) -> bool:
     return st.pose is not None and st.status is not None and st.status.state == "idle"
 
 
+pytestmark = pytest.mark.slow  # each test starts a robot process
+
+
 @pytest.fixture
 def robot(monkeypatch):
     with emulated_robot(speed=4.0) as folder:  # motion 4x real time: tests wait less
@@ -248,6 +251,21 @@ def test_the_graph_is_read_from_the_robot_and_refreshed_when_a_name_is_missing(r
         graph.close()
 
 
+def test_a_fresh_daemon_is_read_until_the_graph_settles_a_running_one_once(monkeypatch):
+    def rounds(folder) -> int:
+        return sum(c == ["topic", "list", "-t"] for c in ros2_calls(folder))
+
+    with emulated_robot(daemon_stopped=True) as folder:
+        on_path(monkeypatch, folder)
+        assert subprocess.run(
+            ["ros2", "daemon", "status"], capture_output=True, text=True
+        ).stdout == ("The daemon is not running\n")
+        gateway(stream=False).close()  # started the daemon: discovery may still be under way
+        assert rounds(folder) == 2
+        gateway(stream=False).close()  # a second console finds it running
+        assert rounds(folder) == 3
+
+
 def test_byte_fields_printed_as_characters_are_read_as_numbers(robot):
     graph = gateway(stream=False)
     try:
@@ -325,7 +343,7 @@ async def test_a_turn_on_the_robot_says_started_then_follows_up_arrived(robot, s
 
 
 def test_parameters_are_read_from_the_robot_with_their_types(robot):
-    graph = gateway()
+    graph = gateway(stream=False)
     try:
         params = graph.catalog.params
         assert params[("/astibot_base", "max_linear_speed")].type == "double"

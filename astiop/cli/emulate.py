@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import signal
 from pathlib import Path
 
 import typer
@@ -24,8 +25,11 @@ def emulate_ros2(
     speed: float = typer.Option(
         1.0, "--speed", min=0.1, max=20.0, help="Real-time factor of the robot (tests: > 1)."
     ),
+    daemon_stopped: bool = typer.Option(
+        False, "--daemon-stopped", help="Start with the ros2 daemon down, as on a fresh boot."
+    ),
 ) -> None:
-    """Run an emulated robot until Ctrl-C; put DIR on PATH and use `astiop --robot ros2`."""
+    """Run an emulated robot until Ctrl-C (or SIGTERM); put DIR on PATH and use `astiop --robot ros2`."""
     from astiop.robot.emulator.robot import EmulatedRobot, write_client
     from astiop.robot.ros2cli_args import DISTROS
 
@@ -37,7 +41,14 @@ def emulate_ros2(
     try:
         exe = write_client(folder, distro=distro, latency_ms=latency_ms, missing=tuple(missing))
         os.environ["ROS_DISTRO"] = distro  # as a sourced ROS 2 sets it, for the robot's types
-        robot = EmulatedRobot(folder, seed=seed, distro=distro, missing=tuple(missing), speed=speed)
+        robot = EmulatedRobot(
+            folder,
+            seed=seed,
+            distro=distro,
+            missing=tuple(missing),
+            speed=speed,
+            daemon_running=not daemon_stopped,
+        )
     except OSError as exc:
         fail(f"cannot set up {folder}: {exc.strerror or exc}")
     typer.echo(
@@ -46,5 +57,8 @@ def emulate_ros2(
         "  every call is logged to " + str(folder / "ros2.log") + "; Ctrl-C stops the robot",
         err=True,
     )
+    # Stop on Ctrl-C or SIGTERM even when started with SIGINT ignored (a script's `&` job).
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    signal.signal(signal.SIGTERM, signal.default_int_handler)
     with contextlib.suppress(KeyboardInterrupt):
         robot.serve(str(folder / "robot.sock"))

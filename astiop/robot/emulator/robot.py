@@ -49,8 +49,10 @@ class EmulatedRobot(TopicVerbs):
         distro: str,
         missing: tuple[str, ...] = (),
         speed: float = 1.0,
+        daemon_running: bool = True,
     ):
         self.folder = folder
+        self.daemon_running = daemon_running  # the ros2 daemon: up unless the computer just booted
         self.distro = distro
         self.missing = set(missing)
         self.sim = Simulator(seed=seed)
@@ -127,6 +129,8 @@ class EmulatedRobot(TopicVerbs):
             return
         args = req.get("args", {})
         handler = getattr(self, f"_{args.get('command')}_{args.get('verb')}", None)
+        if args.get("command") not in (None, "daemon") and not args.get("no_daemon"):
+            self.daemon_running = True  # as NodeStrategy spawns it (ros2cli/node/strategy.py)
         code = 1
         try:
             if handler is None:
@@ -328,16 +332,21 @@ class EmulatedRobot(TopicVerbs):
         call.out("Set parameter successful\n")
         return 0
 
+    # The messages of ros2cli/verb/daemon/{start,status,stop}.py, humble and jazzy alike.
     def _daemon_start(self, call: Call, a: dict) -> int:
-        call.out("The daemon has been started\n")
+        started, self.daemon_running = not self.daemon_running, True
+        call.out("The daemon has been started\n" if started else "The daemon is already running\n")
         return 0
 
     def _daemon_status(self, call: Call, a: dict) -> int:
-        call.out("The daemon is running\n")
+        call.out(
+            "The daemon is running\n" if self.daemon_running else "The daemon is not running\n"
+        )
         return 0
 
     def _daemon_stop(self, call: Call, a: dict) -> int:
-        call.out("The daemon has been stopped\n")
+        stopped, self.daemon_running = self.daemon_running, False
+        call.out("The daemon has been stopped\n" if stopped else "The daemon is not running\n")
         return 0
 
 
