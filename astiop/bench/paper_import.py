@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import ast
 import contextlib
+import gc
 from pathlib import Path
 from typing import Any
 
@@ -78,11 +79,23 @@ def _prompt_templates(tree: ast.Module) -> dict[str, str]:
     return found
 
 
+def _parse(source: str, filename: str) -> ast.Module:
+    # CPython 3.11.7: a collection that runs finalizers mid-parse can break ast's recursion
+    # check ("AST constructor recursion depth mismatch"); hold the collector off meanwhile.
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        return ast.parse(source, filename=filename)
+    finally:
+        if enabled:
+            gc.enable()
+
+
 def paper_suite(path: Path) -> dict[str, Any]:
     """The suite data of one of the paper's two scripts; SuiteError for any other file."""
     try:
         source = Path(path).read_text(encoding="utf-8")
-        tree = ast.parse(source, filename=str(path))
+        tree = _parse(source, str(path))
     except (OSError, UnicodeDecodeError) as exc:
         raise SuiteError(f"cannot read {path}: {getattr(exc, 'strerror', None) or exc}") from None
     except (SyntaxError, ValueError, RecursionError, MemoryError) as exc:
