@@ -14,7 +14,7 @@ from astiop.robot.safety import SafetyPolicy
 from astiop.robot.sim_backend import SimBackend
 from astiop.sim.simulator import Simulator
 
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("embedded")]  # one server
 
 
 @pytest.fixture(scope="module")
@@ -68,9 +68,18 @@ async def test_json_schema_reply_validates(server):
     assert json.loads(c.text)["level"] in ("low", "high")
 
 
-def make_agent(endpoint, store):
+def make_agent(endpoint, store, interpret_tokens=8):
+    # These check the plan; a short interpretation (replaced by the results when cut) saves CPU.
     graph = RobotGateway(SimBackend(Simulator(seed=0), store), SafetyPolicy())
-    return Agent(graph, endpoint, store, mode="tool", max_tokens=96, confirm=lambda c: True)
+    return Agent(
+        graph,
+        endpoint,
+        store,
+        mode="tool",
+        max_tokens=96,
+        confirm=lambda c: True,
+        interpret_tokens=interpret_tokens,
+    )
 
 
 async def test_agent_reads_the_battery(endpoint, store):
@@ -111,7 +120,7 @@ async def test_every_narrowed_tool_grammar_is_one_llama_cpp_parses(endpoint, sto
 async def test_a_grounded_answer_states_only_what_the_robot_reported(endpoint, store):
     from astiop.agent import grounding
 
-    result = await make_agent(endpoint, store).turn("is anything blocking the robot?")
+    result = await make_agent(endpoint, store, 96).turn("is anything blocking the robot?")
     facts = grounding.facts_of(result.prompt, result.commands)
     assert result.grounding in ("kept",) or result.grounding.startswith("replaced: ")
     assert grounding.unsupported(result.answer, facts) is None

@@ -21,16 +21,20 @@ from astiop.robot.sim_backend import SimBackend
 from astiop.robot.validation import validate
 from astiop.sim.simulator import Simulator
 from astiop.store import LocationError, Store, StoreError
+from tests.cli_runner import run_cli
 from tests.scripted_llm import ScriptedLLM
 from tests.test_agent import make_agent
 
 TWIST = "ros2 topic pub --once /cmd_vel geometry_msgs/msg/Twist"
 
 
-def cli(*args, db=None, stdin=subprocess.DEVNULL, env=None):
-    cmd = [sys.executable, "-m", "astiop", *(["--db", str(db)] if db else []), *args]
-    run_env = {**os.environ, **(env or {})}
-    return subprocess.run(cmd, capture_output=True, text=True, timeout=60, stdin=stdin, env=run_env)
+def cli(*args, db=None, process=False):
+    """`astiop ARGS` through its entry point in this process, or as a process of its own."""
+    argv = [*(["--db", str(db)] if db else []), *args]
+    if not process:
+        return run_cli(*argv)
+    cmd = [sys.executable, "-m", "astiop", *argv]
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL)
 
 
 def one_line(result, code=2):
@@ -266,7 +270,8 @@ def test_a_bad_option_is_one_line_and_nothing_is_written(tmp_path, args):
     db = tmp_path / "o.db"
     Store(db).close()
     before = digest(db)
-    one_line(cli(*args, db=db))
+    # The first and the last also as the installed executable, a process of their own.
+    one_line(cli(*args, db=db, process=args[0] in ("no-such-command", "--model")))
     assert digest(db) == before
 
 

@@ -274,6 +274,7 @@ def test_protocols_and_suites_that_do_not_fit_are_refused(tmp_path, paper_repo):
         assert out.returncode == 2 and says in out.stderr, (args, out.stderr)
 
 
+@pytest.mark.slow
 def test_figures_are_image_files_with_the_runs_numbers(tmp_path, paper_repo, server):
     import xml.etree.ElementTree as ET
 

@@ -8,6 +8,7 @@ import subprocess
 import sys
 import time
 
+import pytest
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
@@ -75,6 +76,7 @@ def test_a_recorded_trip_decodes_with_the_ros2_reader(tmp_path, monkeypatch):
         assert info.schemas[events[0].schema_id].encoding == "jsonschema"
 
 
+@pytest.mark.slow
 def test_a_recording_killed_mid_way_keeps_its_chunks_and_repairs(tmp_path):
     path = tmp_path / "cut.mcap"
     env = {**os.environ, "ASTIOP_SIM__SPEED": "5"}
@@ -120,6 +122,7 @@ def test_record_refuses_bad_input_in_one_line(tmp_path):
         assert out.returncode == 2 and len(out.stderr.strip().splitlines()) == 1, out.stderr
 
 
+@pytest.mark.slow
 def test_a_recording_on_the_robot_logs_every_topic_on_its_receive_clock(tmp_path, monkeypatch):
     from astiop.recording.reader import Recording
     from tests.emulator import emulated_robot, on_path

@@ -112,6 +112,7 @@ def test_replay_refuses_bad_input_in_one_line(tmp_path):
         assert len(out.stderr.strip().splitlines()) == 1
 
 
+@pytest.mark.slow
 async def test_the_replay_console_shows_the_recording_and_refuses_commands(trip, tmp_path):
     settings = load_settings({"llm": {"model": "rules"}}, env={}, path=tmp_path / "none.toml")
     store = Store(tmp_path / "replay.db")

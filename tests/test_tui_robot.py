@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import time
 
+import pytest
 from rich.text import Text
 from textual.widgets import DataTable, Input
 
@@ -36,6 +37,7 @@ def ros2_console(tmp_path):
     return make_app(cfg, Store(tmp_path / "console.db"))
 
 
+@pytest.mark.slow
 async def test_ros2_dashboard_and_estop_during_a_confirmation(tmp_path, monkeypatch):
     with emulated_robot() as robot:
         on_path(monkeypatch, robot)
@@ -65,6 +67,7 @@ async def test_ros2_dashboard_and_estop_during_a_confirmation(tmp_path, monkeypa
         assert ARMED_ESTOP in calls
 
 
+@pytest.mark.slow
 async def test_ros2_teleop_moves_the_robot(tmp_path, monkeypatch):
     with emulated_robot(speed=4.0) as robot:
         on_path(monkeypatch, robot)
@@ -80,7 +83,7 @@ async def test_ros2_teleop_moves_the_robot(tmp_path, monkeypatch):
             assert await wait_for(pilot, idle)
             x0 = app.robot_state.pose.x
             await pilot.press("f5")
-            for _ in range(20):
+            for _ in range(6):  # each key press is waited on until the app is idle
                 await pilot.press("s")  # it faces west: backwards is +x
                 await pilot.pause(0.1)
             assert await wait_for(pilot, lambda: app.robot_state.pose.x > x0 + 0.2)
