@@ -5,7 +5,8 @@ import time
 import pytest
 
 from astiop.agent import grounding
-from astiop.agent.llm import OpenAIClient, repeating
+from astiop.agent.llm import OpenAIClient
+from astiop.agent.reply_stream import repeating
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.safety import SafetyPolicy
 from astiop.robot.sim_backend import SimBackend

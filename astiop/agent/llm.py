@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import asyncio
 import json
-import re
 import time
 from collections.abc import AsyncIterator, Callable
 from dataclasses import dataclass
@@ -16,6 +15,7 @@ from typing import Any
 
 import httpx
 
+from astiop.agent.reply_stream import Completion, StreamState
 from astiop.bounded import one_line
 
 Messages = list[dict[str, str]]
@@ -44,18 +44,6 @@ class LLMHTTPError(LLMError):
 
 class LLMProtocolError(LLMError):
     pass
-
-
-@dataclass
-class Completion:
-    text: str
-    ttft_s: float | None
-    total_s: float
-    prompt_tokens: int | None = None
-    completion_tokens: int | None = None
-    tokens_per_s: float | None = None
-    finish_reason: str | None = None
-    cached_tokens: int | None = None
 
 
 @dataclass(frozen=True)
@@ -142,7 +130,7 @@ class ChatClient:
     async def _chat_once(self, messages, opts: _Options, on_token) -> Completion:
         url, body = self._request(messages, opts)
         t0 = time.perf_counter()
-        state = _StreamState(t0)
+        state = StreamState(t0)
         try:
             async with (
                 httpx.AsyncClient(timeout=self._timeout(), headers=self._headers()) as cl,
@@ -159,7 +147,7 @@ class ChatClient:
                         state.add(piece)
                         if on_token:
                             on_token(piece)
-                        if opts.guard and state.cut(opts):
+                        if opts.guard and state.cut(opts.max_tokens, opts.deadline_s):
                             break
         except httpx.ConnectError as exc:
             raise _partial(
@@ -203,7 +191,7 @@ class ChatClient:
     def _request(self, messages: Messages, opts: _Options) -> tuple[str, dict]:
         raise NotImplementedError
 
-    def _pieces(self, resp: httpx.Response, state: _StreamState) -> AsyncIterator[str]:
+    def _pieces(self, resp: httpx.Response, state: StreamState) -> AsyncIterator[str]:
         raise NotImplementedError
 
     def _chunk(self, text: str) -> dict[str, Any]:
@@ -221,72 +209,10 @@ class ChatClient:
         return chunk
 
 
-def _partial(exc: LLMError, state: _StreamState) -> LLMError:
+def _partial(exc: LLMError, state: StreamState) -> LLMError:
     """The exception, carrying what the reply said before it failed (kept with the turn)."""
     exc.partial = "".join(state.parts)
     return exc
-
-
-def repeating(text: str) -> bool:
-    """The text ends in a loop: its last n words three times over (one word: six times)."""
-    words = re.findall(r"\S+", text[-800:])
-    for n in range(1, 16):
-        times = 6 if n == 1 else 3
-        if len(words) < n * times:
-            return False
-        tail = words[-n:]
-        if all(words[len(words) - (k + 1) * n : len(words) - k * n] == tail for k in range(times)):
-            return True
-    return False
-
-
-class _StreamState:
-    def __init__(self, t0: float):
-        self.t0 = t0
-        self.parts: list[str] = []
-        self.ttft: float | None = None
-        self.done = False
-        self.finish_reason: str | None = None
-        self.prompt_tokens: int | None = None
-        self.completion_tokens: int | None = None
-        self.cached_tokens: int | None = None
-        self.gen_seconds: float | None = None
-
-    def add(self, piece: str) -> None:
-        if self.ttft is None and piece.strip():
-            self.ttft = time.perf_counter() - self.t0
-        self.parts.append(piece)
-
-    def cut(self, opts: _Options) -> bool:
-        """Whether the reply must stop here; if so, it is marked done with the reason."""
-        if len(self.parts) > opts.max_tokens + 8:  # a streamed piece is about one token
-            reason = "length"
-        elif opts.deadline_s is not None and time.perf_counter() - self.t0 > opts.deadline_s:
-            reason = "deadline"
-        elif repeating("".join(self.parts[-200:])):
-            reason = "repetition"
-        else:
-            return False
-        self.done, self.finish_reason = True, reason
-        return True
-
-    def completion(self) -> Completion:
-        total = time.perf_counter() - self.t0
-        tps = None
-        if self.completion_tokens and self.gen_seconds:
-            tps = self.completion_tokens / self.gen_seconds
-        elif self.completion_tokens and self.ttft is not None and total > self.ttft:
-            tps = max(self.completion_tokens - 1, 1) / (total - self.ttft)
-        return Completion(
-            "".join(self.parts),
-            self.ttft,
-            total,
-            self.prompt_tokens,
-            self.completion_tokens,
-            tps,
-            self.finish_reason,
-            self.cached_tokens,
-        )
 
 
 class OpenAIClient(ChatClient):

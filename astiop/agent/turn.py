@@ -1,4 +1,5 @@
-"""One agent turn: plan commands with the model, check and run them, explain the results.
+"""One agent turn: plan commands with the model (`planner`), check and run them, explain the
+results, the interaction written to the store as it goes (`recorder`).
 
 Only the planning reply, written before any robot output is seen, is turned into commands; the
 interpretation reply never is. So nothing a robot prints can make a command run. The intent
@@ -9,34 +10,18 @@ held to what the robot reported (`grounding`).
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import functools
 import time
 from collections.abc import Callable
 from typing import Any
 
-from astiop.agent import gate, goals, grounding, intent, prompts, rules
-from astiop.agent.llm import (
-    Completion,
-    LLMError,
-    LLMHTTPError,
-    LLMProtocolError,
-    LLMTimeout,
-    LLMUnavailable,
-)
+from astiop.agent import gate, goals, grounding, intent, planner, prompts, rules
+from astiop.agent.llm import LLMError, LLMHTTPError, LLMTimeout, LLMUnavailable
 from astiop.agent.recorder import Recorder
-from astiop.agent.replies import ReplyError, commands_from_reply, steps_from_reply
+from astiop.agent.reply_stream import Completion
 from astiop.agent.result import TurnResult
 from astiop.agent.specs import LLMEndpoint
 from astiop.agent.summaries import summarize
-from astiop.agent.tools import (
-    build_tools,
-    command_grammar,
-    command_schema,
-    narrow,
-    tool_grammar,
-    tool_schema,
-)
 from astiop.robot.gateway import Confirm, RobotGateway
 from astiop.robot.output import Execution
 from astiop.robot.safety import Review
@@ -218,69 +203,30 @@ class Agent:
         locations = self.locations()
         if self.endpoint.is_rules:
             return rules.plan(request, locations)
-        if self.mode == "tool":
-            tools = build_tools(self.graph.catalog, locations)
-            if self.narrow_tools:
-                tools = narrow(tools, intent.classify(request, locations))
-            system, schema = prompts.tool_prompt(), tool_schema(tools)
-            grammar = tool_grammar(tools)
-            note = [prompts.tools_note(tools)]
-
-            def parse(text):
-                return steps_from_reply(text, tools)
-        else:
-            system, schema = prompts.command_prompt(self.graph.catalog, locations), command_schema()
-            grammar = command_grammar()
-            parse = commands_from_reply
-            note = []
-        messages = [{"role": "system", "content": system}, *prompts.example_messages(self.mode)]
-        for past_request, past_answer in self.history[-HISTORY_TURNS:]:
-            messages += [
-                {"role": "user", "content": past_request},
-                {"role": "assistant", "content": past_answer},
-            ]
-        messages += [*note, {"role": "user", "content": request}]
-        ask = functools.partial(
-            self._ask, schema=schema, result=result, emit=emit, kind="plan_token", grammar=grammar
+        req = planner.plan_request(
+            self.mode,
+            self.graph.catalog,
+            locations,
+            request,
+            self.history[-HISTORY_TURNS:],
+            self.narrow_tools,
         )
-        c = await ask(messages)
-        try:
-            commands = _parsed(parse, c.text)
-        except ReplyError as exc:
-            commands = await self._repair(messages, c.text, str(exc), ask, parse, result)
-        if commands and not result.repaired:
-            commands = await self._repair_invalid(messages, c.text, commands, ask, parse, result)
-        refused = await asyncio.to_thread(self.gate_reason, request, commands)
-        if refused and not result.repaired:
-            with contextlib.suppress(LLMProtocolError):  # else the gate refuses the first plan
-                commands = await self._repair(messages, c.text, refused, ask, parse, result)
-        return commands
+        ask = functools.partial(
+            self._ask,
+            schema=req.schema,
+            result=result,
+            emit=emit,
+            kind="plan_token",
+            grammar=req.grammar,
+        )
 
-    async def _repair(self, messages, reply, reason, ask, parse, result) -> list[str]:
-        result.repaired = True
-        retry = messages + [
-            {"role": "assistant", "content": reply},
-            {
-                "role": "user",
-                "content": f"That reply could not be used: {reason}. Answer again with JSON only.",
-            },
-        ]
-        c = await ask(retry)
-        try:
-            return _parsed(parse, c.text)
-        except ReplyError as exc:
-            raise LLMProtocolError(f"the model's reply could not be used: {exc}") from None
+        def review(cmd: str):
+            return asyncio.to_thread(self._review, cmd)  # may read the robot's graph
 
-    async def _repair_invalid(self, messages, reply, commands, ask, parse, result) -> list[str]:
-        for cmd in commands:
-            review = await asyncio.to_thread(self._review, cmd)  # may read the robot's graph
-            if not review.checked.valid:
-                reason = f"the command `{cmd}` was rejected: {review.checked.reason}"
-                try:
-                    return await self._repair(messages, reply, reason, ask, parse, result)
-                except LLMProtocolError:
-                    return commands  # keep the first plan; its rejection is recorded
-        return commands
+        def gate_reason(commands: list[str]):
+            return asyncio.to_thread(self.gate_reason, request, commands)
+
+        return await planner.plan(req, ask, review, gate_reason, result)
 
     # -- execution -----------------------------------------------------------------------
     async def _refuse(self, commands: list[str], reason: str, result: TurnResult, emit) -> None:
@@ -394,16 +340,6 @@ class Agent:
 def _keep_partial(result: TurnResult, exc: LLMError) -> None:
     if exc.partial and f"{exc.partial} [cut off]" not in result.raw_replies:
         result.raw_replies.append(f"{exc.partial} [cut off]")
-
-
-def _parsed(parse, text: str) -> list[str]:
-    """A reply's commands; whatever a hostile reply breaks becomes a ReplyError."""
-    try:
-        return parse(text)
-    except ReplyError:
-        raise
-    except (ValueError, TypeError, OverflowError, RecursionError) as exc:
-        raise ReplyError(f"the reply could not be read ({type(exc).__name__})") from None
 
 
 def _with_started(text: str, started: str) -> str:

@@ -14,7 +14,6 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-import pymunk
 
 from astiop.sim import lidar
 from astiop.sim.battery import Battery
@@ -33,7 +32,7 @@ from astiop.sim.navigation import (
 )
 from astiop.sim.perception import DetectedObstacle, detect
 from astiop.sim.planner import Planner
-from astiop.sim.state import Event, SimState
+from astiop.sim.state import Event, SimState, lamp, state_word
 from astiop.sim.world import CT_OBSTACLE, CT_ROBOT, CT_STATIC, World
 from astiop.warehouse import WarehouseMap, default_map
 
@@ -123,24 +122,13 @@ class Simulator(NavigationMixin):
         return tuple(float(v) for v in start)
 
     def _build_robot(self, pose) -> None:
-        space = self.world.space
-        space.collision_slop = 0.002
-        self.control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
-        moment = pymunk.moment_for_box(ROBOT_MASS, (ROBOT_LENGTH, ROBOT_WIDTH))
-        self.body = pymunk.Body(ROBOT_MASS, moment)
-        self.body.position = self.control.position = pose[:2]
-        self.body.angle = self.control.angle = pose[2]
-        hl, hw = ROBOT_LENGTH / 2, ROBOT_WIDTH / 2
-        self.shape = pymunk.Poly(self.body, [(-hl, -hw), (hl, -hw), (hl, hw), (-hl, hw)])
-        self.shape.collision_type = CT_ROBOT
-        self.shape.friction = 0.5
-        pivot = pymunk.PivotJoint(self.control, self.body, (0, 0), (0, 0))
-        pivot.max_bias, pivot.max_force = 0.0, 1500.0
-        gear = pymunk.GearJoint(self.control, self.body, 0.0, 1.0)
-        gear.max_bias, gear.max_force = 0.0, 1500.0
-        space.add(self.control, self.body, self.shape, pivot, gear)
+        self.control, self.body, self.shape = self.world.add_robot(
+            pose, ROBOT_MASS, ROBOT_LENGTH, ROBOT_WIDTH
+        )
         for other in (CT_STATIC, CT_OBSTACLE):
-            space.on_collision(CT_ROBOT, other, begin=self._on_contact, post_solve=self._on_depth)
+            self.world.space.on_collision(
+                CT_ROBOT, other, begin=self._on_contact, post_solve=self._on_depth
+            )
 
     def _on_contact(self, arbiter, space, data) -> None:
         other = arbiter.shapes[1] if arbiter.shapes[0] is self.shape else arbiter.shapes[0]
@@ -177,27 +165,15 @@ class Simulator(NavigationMixin):
         return float(math.hypot(self._v[0], self._v[1]))
 
     def state_word(self) -> str:
-        if self.e_stopped:
-            return "e_stopped"
-        if self.fault:
-            return "fault"
-        if self.goal is not None:
-            if self.goal.blocked_since is not None:
-                return "blocked"
-            return "docking" if self.goal.current.kind == "dock" else "navigating"
-        if self.docked():
-            return "charging" if self.battery.charging else "idle"
-        return "idle"
-
-    def lamp(self) -> str:
-        state = self.state_word()
-        if state in ("e_stopped", "fault"):
-            return "red"
-        if state == "blocked" or self.conveyor.running:
-            return "yellow"
-        if state == "charging":
-            return "blue"
-        return "green_flashing" if self.speed() > 0.01 or self.goal else "green"
+        goal = self.goal
+        return state_word(
+            e_stopped=self.e_stopped,
+            fault=self.fault,
+            goal_kind=None if goal is None else goal.current.kind,
+            blocked=goal is not None and goal.blocked_since is not None,
+            docked=self.docked(),
+            charging=self.battery.charging,
+        )
 
     def snapshot(self) -> SimState:
         with self.lock:
@@ -227,7 +203,7 @@ class Simulator(NavigationMixin):
                 conveyor_direction=self.conveyor.direction,
                 sensor_entry=self.conveyor.sensor_entry,
                 sensor_seated=self.conveyor.sensor_seated,
-                lamp=self.lamp(),
+                lamp=lamp(self.state_word(), self.conveyor.running, self.speed(), self.goal),
                 scan_ranges=self.scan_ranges.copy(),
                 scan_stamp=self.scan_stamp,
                 detected=tuple(self.detected),

@@ -61,3 +61,37 @@ class SimState:
     @property
     def speed(self) -> float:
         return math.hypot(self.vx, self.vy)
+
+
+def state_word(
+    *,
+    e_stopped: bool,
+    fault: str,
+    goal_kind: str | None,
+    blocked: bool,
+    docked: bool,
+    charging: bool,
+) -> str:
+    """The word /robot_status reports, from the robot's condition, the gravest first."""
+    if e_stopped:
+        return "e_stopped"
+    if fault:
+        return "fault"
+    if goal_kind is not None:
+        if blocked:
+            return "blocked"
+        return "docking" if goal_kind == "dock" else "navigating"
+    if docked:
+        return "charging" if charging else "idle"
+    return "idle"
+
+
+def lamp(state: str, conveyor_running: bool, speed: float, goal) -> str:
+    """The signal lamp's colour for a state word."""
+    if state in ("e_stopped", "fault"):
+        return "red"
+    if state == "blocked" or conveyor_running:
+        return "yellow"
+    if state == "charging":
+        return "blue"
+    return "green_flashing" if speed > 0.01 or goal else "green"

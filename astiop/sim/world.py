@@ -68,6 +68,26 @@ class World:
         self._ids = itertools.count(1)
         self._edges_cache: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
+    def add_robot(self, pose, mass: float, length: float, width: float):
+        """The robot's box body, led by a kinematic body through two joints with bounded force
+        (the base's motors): a wall stops it instead of being pushed through.
+        Returns (control, body, shape)."""
+        self.space.collision_slop = 0.002
+        control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+        body = pymunk.Body(mass, pymunk.moment_for_box(mass, (length, width)))
+        body.position = control.position = pose[:2]
+        body.angle = control.angle = pose[2]
+        hl, hw = length / 2, width / 2
+        shape = pymunk.Poly(body, [(-hl, -hw), (hl, -hw), (hl, hw), (-hl, hw)])
+        shape.collision_type = CT_ROBOT
+        shape.friction = 0.5
+        pivot = pymunk.PivotJoint(control, body, (0, 0), (0, 0))
+        pivot.max_bias, pivot.max_force = 0.0, 1500.0
+        gear = pymunk.GearJoint(control, body, 0.0, 1.0)
+        gear.max_bias, gear.max_force = 0.0, 1500.0
+        self.space.add(control, body, shape, pivot, gear)
+        return control, body, shape
+
     def add_obstacle(self, kind: str, x: float, y: float, theta: float = 0.0) -> Obstacle:
         if kind not in OBSTACLE_SIZES:
             raise WorldError(f"unknown obstacle kind '{kind}' (one of {', '.join(OBSTACLE_SIZES)})")
