@@ -51,24 +51,26 @@ def plan_request(
     """The messages of one planning call: the prompt of the mode and its examples (the same for
     every request, so a server's prompt cache keeps them), earlier turns, then the request."""
     if mode == "tool":
-        tools = build_tools(catalog, locations)
-        if narrow_tools:
-            tools = narrow(tools, intent.classify(request, locations))
-        system, schema, grammar = prompts.tool_prompt(), tool_schema(tools), tool_grammar(tools)
-        note = [prompts.tools_note(tools)]
+        every = build_tools(catalog, locations)
+        tools = narrow(every, intent.classify(request, locations)) if narrow_tools else every
+        system, schema, grammar = (
+            prompts.tool_prompt(every),
+            tool_schema(tools),
+            tool_grammar(tools),
+        )
 
         def parse(text: str) -> list[str]:
             return steps_from_reply(text, tools)
     else:
         system, schema = prompts.command_prompt(catalog, locations), command_schema()
-        grammar, note, parse = command_grammar(), [], commands_from_reply
+        grammar, parse = command_grammar(), commands_from_reply
     messages = [{"role": "system", "content": system}, *prompts.example_messages(mode)]
     for past_request, past_answer in history:
         messages += [
             {"role": "user", "content": past_request},
             {"role": "assistant", "content": past_answer},
         ]
-    messages += [*note, {"role": "user", "content": request}]
+    messages.append({"role": "user", "content": request})
     return PlanRequest(messages, schema, grammar, parse)
 
 

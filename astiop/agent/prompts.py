@@ -39,14 +39,10 @@ def command_prompt(catalog: Catalog, locations: list[str]) -> str:
     )
 
 
-def tool_prompt() -> str:
-    """The same for every request, so a server's prompt cache keeps it and the examples."""
-    return template("agent_tool")
-
-
-def tools_note(tools: list[Tool]) -> dict[str, str]:
-    """The request's own tools, as a message just before it (after the cached prefix)."""
-    return {"role": "system", "content": "Tools: " + ", ".join(t.id for t in tools)}
+def tool_prompt(tools: list[Tool]) -> str:
+    """Every tool of the robot, the same for every request, so a server's prompt cache keeps
+    it and the examples; the request's own tools are held by the grammar and the schema."""
+    return fill(template("agent_tool"), tools=", ".join(t.id for t in tools))
 
 
 @lru_cache(maxsize=1)
