@@ -7,7 +7,7 @@ import pytest
 
 from astiop.sim.controller import tracking_error
 from astiop.sim.lidar import LidarSpec, cast
-from astiop.sim.planner import Planner, PlanningError
+from astiop.sim.path_planner import PathPlanner, PlanningError
 from astiop.sim.simulator import ROBOT_LENGTH, GoalError, Simulator
 from astiop.warehouse import parse_map
 
@@ -227,7 +227,7 @@ def test_same_seed_same_run():
 
 def test_grid_astar_fallback_finds_a_clear_path():
     sim = Simulator(seed=0, lidar_enabled=False)
-    planner: Planner = sim.planner
+    planner: PathPlanner = sim.path_planner
     plan = planner.plan((2.5, 3.0), (37.6, 21.0), method="grid")
     vis = planner.plan((2.5, 3.0), (37.6, 21.0), method="visibility")
     assert plan.method == "grid" and plan.waypoints[-1] == (37.6, 21.0)

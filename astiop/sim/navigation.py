@@ -1,6 +1,6 @@
 """Goals for the base: checking, planning, the goto-pose control loop's targets, re-planning.
 
-A mixin of `Simulator`: it works on the simulator's world, planner, pose and lock.
+A mixin of `Simulator`: it works on the simulator's world, path planner, pose and lock.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import numpy as np
 from astiop.sim.controller import ControllerGains, arrived, goto_pose_command, tracking_error
 from astiop.sim.geometry import path_length, segments_hit_boxes, wrap_angle
 from astiop.sim.goal import Goal, GoalResult, Leg
-from astiop.sim.planner import PlanningError
+from astiop.sim.path_planner import PlanningError
 
 ROBOT_LENGTH, ROBOT_WIDTH = 1.0, 0.735
 INFLATION = math.hypot(ROBOT_LENGTH, ROBOT_WIDTH) / 2 + 0.1  # circumscribed radius + margin
@@ -41,7 +41,7 @@ class NavigationMixin:
             )
 
     def _plan(self, start, goal_xy, extra=()) -> tuple[tuple[float, float], ...]:
-        plan = self.planner.plan(start, goal_xy, extra)
+        plan = self.path_planner.plan(start, goal_xy, extra)
         self.plan_ms.append(plan.ms)
         return plan.waypoints
 

@@ -30,8 +30,8 @@ from astiop.sim.navigation import (
     GoalError,
     NavigationMixin,
 )
+from astiop.sim.path_planner import PathPlanner
 from astiop.sim.perception import DetectedObstacle, detect
-from astiop.sim.planner import Planner
 from astiop.sim.state import Event, SimState, lamp, state_word
 from astiop.sim.world import CT_OBSTACLE, CT_ROBOT, CT_STATIC, World
 from astiop.warehouse import WarehouseMap, default_map
@@ -76,7 +76,7 @@ class Simulator(NavigationMixin):
         self._beam_angles = self.lidar_spec.beam_angles()
         self.gains = ControllerGains(v_max=v_max, w_max=w_max)
         self.world = World(self.map)
-        self.planner = Planner(self.world.static_boxes, self.map.bounds, INFLATION)
+        self.path_planner = PathPlanner(self.world.static_boxes, self.map.bounds, INFLATION)
         self.battery = Battery(battery_soc)
         self.conveyor = Conveyor()
         self._build_robot(self._resolve_start(start))

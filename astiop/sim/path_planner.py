@@ -40,7 +40,7 @@ def _corners(boxes: np.ndarray, offset: float) -> np.ndarray:
     )
 
 
-class Planner:
+class PathPlanner:
     def __init__(
         self,
         static_boxes: np.ndarray,
