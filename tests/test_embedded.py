@@ -106,15 +106,15 @@ async def test_agent_sends_the_robot_to_a_named_location(endpoint, store):
 async def test_every_narrowed_tool_grammar_is_one_llama_cpp_parses(endpoint, store):
     """The grammar offers only the tools of the request's intent; each variant must parse."""
     agent = make_agent(endpoint, store)
-    result = await agent.turn("Save this spot as bay_9")
-    assert result.commands and result.commands[0].command.startswith(
-        "ros2 service call /save_location"
-    )
-    assert "bay" in result.commands[0].command and result.commands[0].values["success"] is True
     result = await agent.turn("Leave the dock")
     assert [c.command for c in result.commands] == [
         "ros2 service call /undock std_srvs/srv/Trigger"
     ]
+    result = await agent.turn("Save this spot as bay_9")  # last: a new place changes the prompt
+    assert result.commands and result.commands[0].command.startswith(
+        "ros2 service call /save_location"
+    )
+    assert "bay" in result.commands[0].command and result.commands[0].values["success"] is True
 
 
 async def test_a_grounded_answer_states_only_what_the_robot_reported(endpoint, store):
