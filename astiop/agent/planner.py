@@ -101,7 +101,9 @@ async def plan(
     return commands
 
 
-async def _repair(req: PlanRequest, reply: str, reason: str, ask: Ask, result: TurnResult):
+async def _repair(
+    req: PlanRequest, reply: str, reason: str, ask: Ask, result: TurnResult
+) -> list[str]:
     result.repaired = True
     retry = req.messages + [
         {"role": "assistant", "content": reply},
