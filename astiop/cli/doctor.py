@@ -74,7 +74,7 @@ def _check_database(st, add) -> None:
     except (StoreError, OSError) as exc:
         add("FAIL", "database", str(exc))
         return
-    version = store.db.conn.execute("PRAGMA user_version").fetchone()[0]
+    version = store.schema_version()
     mode = "read-only" if store.readonly else "read-write"
     add(
         "ok",

@@ -84,6 +84,10 @@ class Store(LocationTables, JournalTables, BenchTables):
             self._local.db = db
         return db
 
+    def schema_version(self) -> int:
+        """How many of the schema's migrations this file has had."""
+        return self.db.conn.execute("PRAGMA user_version").fetchone()[0]
+
     def _check_integrity(self) -> None:
         """PRAGMA quick_check before anything is written: a damaged file is refused whole."""
         if not self.path.exists() or self.path.stat().st_size == 0:
