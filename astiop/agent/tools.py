@@ -115,12 +115,18 @@ def build_tools(catalog: Catalog, locations: list[str]) -> list[Tool]:
 
 def narrow(tools: list[Tool], intents: list[Intent]) -> list[Tool]:
     """The tools that can do what the request asks, when every clause's intent is known:
-    a question gets the reads, a stop the stop, a trip the places. The model still picks
-    which; the gate checks the pick."""
+    a question gets the reads (of its topics, when each names one), a stop the stop, a trip
+    the places. The model still picks which; the gate checks the pick."""
     kinds = {i.kind for i in intents}
     if not kinds or kinds & {"unknown", "none"}:
         return tools
     kept = [t for t in tools if t.kind in kinds]
+    reads = [i.topic for i in intents if i.kind == "read"]
+    if reads and all(reads):  # every question names what it asks about: only those reads
+        echoes = {f"ros2 topic echo {topic} --once" for topic in reads}
+        on_topic = [t for t in kept if t.kind != "read" or t.command in echoes]
+        if any(t.kind == "read" for t in on_topic):
+            kept = on_topic
     return kept or tools
 
 
