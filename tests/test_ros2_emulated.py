@@ -255,11 +255,14 @@ def test_a_fresh_daemon_is_read_until_the_graph_settles_a_running_one_once(monke
     def rounds(folder) -> int:
         return sum(c == ["topic", "list", "-t"] for c in ros2_calls(folder))
 
+    def status() -> str:
+        return subprocess.run(["ros2", "daemon", "status"], capture_output=True, text=True).stdout
+
     with emulated_robot(daemon_stopped=True) as folder:
         on_path(monkeypatch, folder)
-        assert subprocess.run(
-            ["ros2", "daemon", "status"], capture_output=True, text=True
-        ).stdout == ("The daemon is not running\n")
+        assert status() == "The daemon is not running\n"
+        subprocess.run(["ros2", "interface", "show", "std_srvs/srv/Trigger"], capture_output=True)
+        assert status() == "The daemon is not running\n"  # no NodeStrategy: no daemon
         gateway(stream=False).close()  # started the daemon: discovery may still be under way
         assert rounds(folder) == 2
         gateway(stream=False).close()  # a second console finds it running

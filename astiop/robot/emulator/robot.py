@@ -129,8 +129,8 @@ class EmulatedRobot(TopicVerbs):
             return
         args = req.get("args", {})
         handler = getattr(self, f"_{args.get('command')}_{args.get('verb')}", None)
-        if args.get("command") not in (None, "daemon") and not args.get("no_daemon"):
-            self.daemon_running = True  # as NodeStrategy spawns it (ros2cli/node/strategy.py)
+        if (args.get("command"), args.get("verb")) in SPAWN_DAEMON and not args.get("no_daemon"):
+            self.daemon_running = True
         code = 1
         try:
             if handler is None:
@@ -349,6 +349,17 @@ class EmulatedRobot(TopicVerbs):
         call.out("The daemon has been stopped\n" if stopped else "The daemon is not running\n")
         return 0
 
+
+# The verbs that build a NodeStrategy, which spawns the daemon when it is down
+# (ros2cli/node/strategy.py; each */verb/*.py, humble and jazzy). pub, hz, service call,
+# send_goal and interface use a DirectNode or none and leave the daemon as it is.
+SPAWN_DAEMON = {
+    *(("topic", v) for v in ("echo", "find", "info", "list", "type")),
+    *(("service", v) for v in ("echo", "find", "info", "list", "type")),
+    *(("action", v) for v in ("info", "list", "type")),
+    *(("node", v) for v in ("info", "list")),
+    *(("param", v) for v in ("delete", "describe", "dump", "get", "list", "load", "set")),
+}
 
 CLIENT = """#!{python}
 # The emulated ros2 of `astiop emulate-ros2` ({distro}); written by astiop.
