@@ -125,7 +125,11 @@ def test_other_files_are_refused_in_one_line(tmp_path):
     other.write_text("X = 1\n")
     broken = tmp_path / "broken.yaml"
     broken.write_text("name: x\nstage: 3\nsystem: s\n")
+    odd = tmp_path / "odd" / "test_ros_agents.py"  # the script's names, not its case format
+    odd.parent.mkdir()
+    odd.write_text('ROS_EXPERT_SYSTEM_PROMPT = "x"\nROS_TEST_PROMPTS = {"beginner": [1]}\n')
     for path, says in ((other, "not test_ros_agents.py"), (broken, "stage must be 1 or 2"),
+                       (odd, "not in the script's format"),
                        (tmp_path / "none.py", "no such file")):  # fmt: skip
         out = cli(tmp_path, "import", str(path))
         assert out.returncode == 2 and says in out.stderr, out.stderr

@@ -102,14 +102,17 @@ def paper_suite(path: Path) -> dict[str, Any]:
         raise SuiteError(f"{path}: not a Python file astiop can read ({exc})") from None
     names = _literals(tree)
     source_text = f"{Path(path).name} of {REPO}, imported by astiop"
-    if all(k in names for k in STAGE1):
-        return _stage1(names, source_text, path)
-    if all(k in names for k in STAGE2):
-        templates = _prompt_templates(tree)
-        if set(templates) != set(STAGE2_PROMPTS.values()):
-            raise SuiteError(f"{path}: the two stage-2 prompts (stage1_prompt, stage2_prompt) "
-                             "were not found as f-strings")  # fmt: skip
-        return _stage2(names, templates, source_text, path)
+    try:
+        if all(k in names for k in STAGE1):
+            return _stage1(names, source_text, path)
+        if all(k in names for k in STAGE2):
+            templates = _prompt_templates(tree)
+            if set(templates) != set(STAGE2_PROMPTS.values()):
+                raise SuiteError(f"{path}: the two stage-2 prompts (stage1_prompt, "
+                                 "stage2_prompt) were not found as f-strings")  # fmt: skip
+            return _stage2(names, templates, source_text, path)
+    except (KeyError, TypeError, AttributeError) as exc:  # a case without the script's fields
+        raise SuiteError(f"{path}: a case is not in the script's format ({exc!r})") from None
     raise SuiteError(
         f"{path}: not test_ros_agents.py or test_ros_command_agent.py of {REPO} "
         f"(it assigns neither {STAGE1[1]} nor {STAGE2[1]}), nor an astiop suite"
