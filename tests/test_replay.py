@@ -4,7 +4,6 @@ nothing is ever sent to a robot."""
 import pytest
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
-from textual.widgets import Input
 
 from astiop.app import make_app
 from astiop.config import load_settings
@@ -14,6 +13,7 @@ from astiop.robot.replay_backend import READ_ONLY, open_replay
 from astiop.store import Store
 from tests.cli_runner import run_cli
 from tests.recordings import GOTO, record_trip
+from tests.tui_helpers import ask
 
 
 @pytest.fixture(scope="module")
@@ -134,13 +134,7 @@ async def test_the_replay_console_shows_the_recording_and_refuses_commands(trip,
         await pilot.pause(0.3)
         assert gateway.playback.playing and gateway.playback.speed == 2.0
         assert "▶ 2×" in str(app.screen.query_one("#replay-bar").render())
-        await pilot.press("f2")
-        await pilot.pause()
-        app.screen.query_one(Input).value = "send the robot to shipping"
-        await pilot.press("enter")
-        await app.workers.wait_for_complete()
-        await pilot.pause()
-        text = " ".join(str(w.render()) for w in app.screen.query(".answer"))
+        text = await ask(app, pilot, "send the robot to shipping")
         assert "replay is read-only" in text
         assert app.screen.query_one("#replay-bar") is not None
     assert store.commands_for(store.interactions()[0]["id"])[0]["executed"] == 0

@@ -4,7 +4,7 @@ import math
 
 from textual.widgets import DataTable, Input
 
-from tests.tui_helpers import console, sim_of
+from tests.tui_helpers import ask, console, sim_of
 
 SIZE = (120, 40)
 
@@ -27,13 +27,7 @@ async def test_function_keys_switch_screens(tmp_path):
 async def test_chat_answers_and_logs_it(tmp_path):
     app = console(tmp_path)
     async with app.run_test(size=SIZE) as pilot:
-        await pilot.press("f2")
-        await pilot.pause()
-        app.screen.query_one(Input).value = "what is the battery level?"
-        await pilot.press("enter")
-        await app.workers.wait_for_complete()
-        await pilot.pause()
-        text = " ".join(str(w.render()) for w in app.screen.query(".answer"))
+        text = await ask(app, pilot, "what is the battery level?")
         assert "battery 85.0 %" in text
         assert app.services.store.interactions()[0]["status"] == "done"
         rows = app.services.store.interactions()

@@ -17,3 +17,16 @@ def console(tmp_path, model: str = "rules", sim: Simulator | None = None, **kwar
 def sim_of(app) -> Simulator:
     """The simulator behind the console (tests only: the UI never reaches it)."""
     return app.services.gateway.backend.sim
+
+
+async def ask(app, pilot, request: str) -> str:
+    """Send a request from the Chat screen and wait for the turn: the answers' text."""
+    from textual.widgets import Input
+
+    await pilot.press("f2")
+    await pilot.pause()
+    app.screen.query_one(Input).value = request
+    await pilot.press("enter")
+    await app.workers.wait_for_complete()
+    await pilot.pause()
+    return " ".join(str(w.render()) for w in app.screen.query(".answer"))
