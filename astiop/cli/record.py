@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import contextlib
 import math
 import time
 from pathlib import Path
@@ -72,10 +71,10 @@ def record(
 
     def progress() -> None:
         nonlocal seq
-        for ev in gateway.events_since(seq):  # the store keeps every event, as the console does
-            seq = max(seq, ev.seq)
-            with contextlib.suppress(Exception):  # the record must never stop the recording
-                st.store.add_event(ev.kind, ev.message, severity=ev.severity, sim_t=ev.t)
+        events = gateway.events_since(seq)  # the store keeps every event, as the console does
+        if events:
+            seq = max(seq, events[-1].seq)
+            st.store.keep_robot_events(events)
         if not as_json:
             typer.echo(f"\r  recording {time.monotonic() - t0:5.1f} s", nl=False, err=True)
 

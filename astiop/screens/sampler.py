@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import contextlib
 import threading
 
 from astiop.screens.messages import RobotStateSampled
@@ -38,8 +37,6 @@ class StateSampler(threading.Thread):
             n += 1
             if events:
                 seq = events[-1].seq
-                for ev in events:  # the record must never stop the console
-                    with contextlib.suppress(Exception):
-                        store.add_event(ev.kind, ev.message, severity=ev.severity, sim_t=ev.t)
+                store.keep_robot_events(events)
             self.app.post_message(RobotStateSampled(state, events, stats))
         store.close()

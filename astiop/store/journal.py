@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import time
@@ -51,6 +52,18 @@ class JournalTables:
                     "message": message,
                 }
             )
+
+    def keep_robot_events(self, events) -> None:
+        """The robot's events (RobotEvent), in one write. It never raises: the record must
+        never stop what is watching the robot (the console, `astiop record`)."""
+        rows = [
+            {"t": time.time(), "sim_t": e.t, "kind": e.kind, "severity": e.severity,
+             "message": e.message}
+            for e in events
+        ]  # fmt: skip
+        if rows:
+            with contextlib.suppress(Exception), self._tx():
+                self.db["events"].insert_all(rows)
 
     def interactions(self, limit: int = 500) -> list[dict[str, Any]]:
         return list(self.db.query("SELECT * FROM interactions ORDER BY id DESC LIMIT ?", [limit]))
