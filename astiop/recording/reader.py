@@ -144,8 +144,19 @@ class Recording:
         ch = self.channels.get(topic)
         if ch is None:
             return []
-        lo, hi = bisect.bisect_right(ch.times, t0_ns), bisect.bisect_right(ch.times, t1_ns)
-        return [(ch.times[i], ch.message(i)) for i in range(lo, hi)]
+        return [(ch.times[i], ch.message(i)) for i in range(*self._span(ch, t0_ns, t1_ns))]
+
+    def count_between(self, topic: str, t0_ns: int, t1_ns: int) -> int:
+        """How many messages of a topic have t0 < log time <= t1 (none is decoded)."""
+        ch = self.channels.get(topic)
+        if ch is None:
+            return 0
+        lo, hi = self._span(ch, t0_ns, t1_ns)
+        return hi - lo
+
+    @staticmethod
+    def _span(ch: Channel, t0_ns: int, t1_ns: int) -> tuple[int, int]:
+        return bisect.bisect_right(ch.times, t0_ns), bisect.bisect_right(ch.times, t1_ns)
 
     def counts(self) -> dict[str, int]:
         return {topic: len(ch.times) for topic, ch in self.channels.items()}

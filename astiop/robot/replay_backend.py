@@ -183,7 +183,7 @@ class ReplayBackend:
             if ch is None:
                 stats.append(TopicStat(name, spec.type, spec.rate_hz, 0.0, float("inf"), 0))
                 continue
-            window = len(self.recording.between(name, t_ns - 2_000_000_000, t_ns))
+            window = self.recording.count_between(name, t_ns - 2_000_000_000, t_ns)
             age = (t_ns - ch.times[i]) / 1e9 if i >= 0 else float("inf")
             stats.append(TopicStat(name, spec.type, spec.rate_hz, window / 2.0, age, i + 1))
         return stats
