@@ -1,6 +1,7 @@
 """The console driven with Pilot: what an operator does on each screen."""
 
 import math
+import threading
 
 from textual.widgets import DataTable, Input
 
@@ -222,6 +223,47 @@ async def test_a_refused_plan_and_a_replaced_answer_are_shown_as_such(tmp_path):
             assert "⛔ refused by the intent gate" in text and "did not run this plan" in text
             assert "⚠ answer built from the results" in text and "0 obstacles detected" in text
             assert sim_of(app).docked()
+    finally:
+        llm.close()
+
+
+async def test_a_request_sent_during_a_turn_waits_for_it_and_is_answered(tmp_path):
+    from tests.scripted_llm import ScriptedLLM
+
+    llm = ScriptedLLM("openai")
+    held = threading.Event()  # the first plan is held until the second request is in
+
+    def first_plan(_messages) -> str:
+        held.wait(20)
+        return '{"steps": [{"tool": "battery"}]}'
+
+    llm.replies = [
+        first_plan,
+        "The battery is fine.",
+        '{"steps": [{"tool": "where"}]}',
+        "It is somewhere.",
+    ]
+    try:
+        app = console(tmp_path, model=f"openai:scripted@{llm.url}")
+        async with app.run_test(size=SIZE) as pilot:
+            await pilot.press("f2")
+            await pilot.pause()
+            for request in ("what is the battery level?", "where is the robot?"):
+                app.screen.query_one(Input).value = request
+                await pilot.press("enter")
+            assert "waiting for the turn before it" in " ".join(
+                str(w.render()) for w in app.screen.query(".answer")
+            )
+            held.set()
+            await app.workers.wait_for_complete()
+            await pilot.pause()
+            text = " ".join(str(w.render()) for w in app.screen.query(".answer"))
+            assert "battery 85.0 %" in text and "x 1.15" in text and "thinking" not in text
+            rows = app.services.store.interactions()
+            assert [(r["prompt"], r["status"]) for r in reversed(rows)] == [
+                ("what is the battery level?", "done"),
+                ("where is the robot?", "done"),
+            ]
     finally:
         llm.close()
 

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
+
 from rich.text import Text
 from textual import work
 from textual.app import ComposeResult
@@ -41,6 +44,9 @@ class CommandView(Static):
         super().__init__(line, classes="cmd-ok" if ok else "cmd-bad")
 
 
+SHOWN_WAIT_S = 5.0
+
+
 class ChatScreen(ConsoleScreen):
     BINDINGS = [Binding("escape", "cancel", "Cancel reply")]
 
@@ -53,6 +59,8 @@ class ChatScreen(ConsoleScreen):
         yield Footer()
 
     def on_mount(self) -> None:
+        self._turn_lock = asyncio.Lock()
+        self._shown = asyncio.Event()
         services = self.app.services
         self.agent = self._make_agent(services.endpoint, services.settings.llm.mode)
         self.query_one(Input).focus()
@@ -110,25 +118,40 @@ class ChatScreen(ConsoleScreen):
         self.run_worker(old.close, thread=True, group="model")
         self.notify(f"model: {endpoint.spec.raw}", markup=False)
 
-    @work(exclusive=True, group="llm", exit_on_error=False)
+    @work(group="llm", exit_on_error=False)
     async def run_turn(self, text: str) -> None:
-        self._status = Static(Text("thinking…", style="dim"), classes="answer")
-        self._answer = Static("", classes="answer")
-        self._parts: list[str] = []
-        self._log(self._status)
-
-        def on_event(kind: str, data) -> None:  # the agent's progress, as messages
-            if kind == "command":
-                self.post_message(CommandExecuted(data))
-            elif kind in ("answer_token", "status"):
-                self.post_message(ReplyTokenReceived(kind, str(data)))
-
+        """One turn at a time, in the order asked: a request sent during a turn waits for it
+        (escape cancels the turn and every request waiting)."""
+        waiting = self._turn_lock.locked()
+        status = Static(
+            Text("waiting for the turn before it…" if waiting else "thinking…", style="dim"),
+            classes="answer",
+        )
+        self._log(status)
         try:
-            result: TurnResult = await self.agent.turn(text, on_event)
-        except EmbeddedModelError as exc:
-            self._status.update(Text(str(exc), style="red"))
-            return
-        self.app.post_message(TurnFinished(result, self.agent.model))
+            async with self._turn_lock:
+                status.update(Text("thinking…", style="dim"))
+                self._status, self._answer, self._parts = status, Static("", classes="answer"), []
+                self._shown = asyncio.Event()
+
+                def on_event(kind: str, data) -> None:  # the agent's progress, as messages
+                    if kind == "command":
+                        self.post_message(CommandExecuted(data))
+                    elif kind in ("answer_token", "status"):
+                        self.post_message(ReplyTokenReceived(kind, str(data)))
+
+                try:
+                    result: TurnResult = await self.agent.turn(text, on_event)
+                except EmbeddedModelError as exc:
+                    status.update(Text(str(exc), style="red"))
+                    return
+                self.app.post_message(TurnFinished(result, self.agent.model))
+                # the next turn takes over the chat's widgets once this one is shown
+                with contextlib.suppress(asyncio.TimeoutError):
+                    await asyncio.wait_for(self._shown.wait(), SHOWN_WAIT_S)
+        except asyncio.CancelledError:
+            status.update(Text("canceled: nothing more was sent for this request", style="red"))
+            raise
 
     def _before_status(self, widget) -> None:
         self.query_one("#chat-log").mount(widget, before=self._status)
@@ -173,6 +196,7 @@ class ChatScreen(ConsoleScreen):
             info += f" · {result.error}"
         self._status.update(Text(info, style="dim red" if result.error else "dim"))
         self.query_one("#chat-log", VerticalScroll).scroll_end(animate=False)
+        self._shown.set()
 
     @work(group="follow", exit_on_error=False)
     async def follow(self, result: TurnResult) -> None:
