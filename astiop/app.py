@@ -23,9 +23,10 @@ from astiop.config import Settings
 from astiop.recording import RecordingError, SessionRecorder, default_path
 from astiop.robot.factory import make_robot_graph, make_sim_graph
 from astiop.robot.gateway import RobotGateway
-from astiop.robot.render import goto_command, sent_text
+from astiop.robot.sampler import StateSampler
 from astiop.robot.state import RobotState, TopicStat
-from astiop.robot.validation import Checked
+from astiop.ros2.render import goto_command, sent_text
+from astiop.ros2.validation import Checked
 from astiop.screens.bench import BenchScreen
 from astiop.screens.chat import ChatScreen
 from astiop.screens.dashboard import DashboardScreen
@@ -33,7 +34,6 @@ from astiop.screens.locations import LocationsScreen
 from astiop.screens.logs import LogsScreen
 from astiop.screens.messages import RobotStateSampled, TurnFinished
 from astiop.screens.modals import ConfirmModal
-from astiop.screens.sampler import StateSampler
 from astiop.screens.teleop import TeleopScreen
 from astiop.store import Store
 
@@ -96,7 +96,9 @@ class AstiopApp(App):
         self.topic_stats: list[TopicStat] = []
         self.listeners: list[Any] = []  # screens that take broadcasts
         last = self.recent_events[-1].seq if self.recent_events else 0
-        self._sampler = StateSampler(self, sample_hz, last)
+        self._sampler = StateSampler(
+            services.gateway, self._state_sampled, self._sampler_failed, sample_hz, last
+        )
 
     def on_mount(self) -> None:
         graph = self.services.gateway
@@ -128,6 +130,12 @@ class AstiopApp(App):
             screen.post_message(message_factory())
 
     # -- live state ---------------------------------------------------------------------
+    def _state_sampled(self, state, events, stats) -> None:  # the sampler's thread
+        self.post_message(RobotStateSampled(state, events, stats))
+
+    def _sampler_failed(self, text: str) -> None:  # the sampler's thread
+        self.call_from_thread(self.notify, text, severity="error", markup=False)
+
     def on_robot_state_sampled(self, msg: RobotStateSampled) -> None:
         self.robot_state = msg.state
         if msg.events:  # kept here: a screen not shown when they came still shows them

@@ -11,7 +11,7 @@ from astiop.bench import runner, scoring, suites
 from astiop.bench.report import load_report, to_csv, to_markdown
 from astiop.bench.stage2 import build_sim, check_answer, score_case
 from astiop.config import load_settings
-from astiop.robot.output import Execution
+from astiop.robot.backend import Execution
 from astiop.store import Store
 from tests.cli_runner import run_cli
 

@@ -9,9 +9,9 @@ from astiop.agent.embedded import EmbeddedServer, smollm2_path
 from astiop.agent.llm import OpenAIClient
 from astiop.agent.specs import LLMEndpoint, parse_spec
 from astiop.agent.turn import Agent
+from astiop.robot.backends.sim.backend import SimBackend
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.safety import SafetyPolicy
-from astiop.robot.sim_backend import SimBackend
 from astiop.sim.simulator import Simulator
 
 pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("embedded")]  # one server

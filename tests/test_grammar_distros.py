@@ -4,9 +4,9 @@ ros2interface/verb/show.py, ros2param/verb/{list,set}.py, ros2node/verb/list.py)
 
 import pytest
 
-from astiop.robot.catalog import astibot_catalog
-from astiop.robot.render import sent_argv
-from astiop.robot.validation import validate
+from astiop.ros2.catalog import astibot_catalog
+from astiop.ros2.render import sent_argv
+from astiop.ros2.validation import validate
 
 CAT = astibot_catalog()
 BOTH = ("humble", "jazzy")
@@ -93,10 +93,10 @@ def test_what_is_sent_is_rebuilt_from_the_parse():
 def test_a_stamped_cmd_vel_gets_the_same_clamp_and_a_fresh_stamp(store):
     from dataclasses import replace
 
+    from astiop.robot.backends.sim.backend import SimBackend
     from astiop.robot.gateway import RobotGateway
-    from astiop.robot.render import STAMPED
     from astiop.robot.safety import SafetyPolicy
-    from astiop.robot.sim_backend import SimBackend
+    from astiop.ros2.render import STAMPED
     from astiop.sim.simulator import Simulator
 
     backend = SimBackend(Simulator(seed=0), store)
@@ -114,7 +114,7 @@ def test_a_stamped_cmd_vel_gets_the_same_clamp_and_a_fresh_stamp(store):
 
 def test_types_are_as_each_distro_defines_them():
     """Read from `git show humble:` / `jazzy:` of common_interfaces and navigation2."""
-    from astiop.robot.interfaces import interface_show
+    from astiop.ros2.interfaces import interface_show
 
     humble = interface_show("nav2_msgs/action/NavigateToPose", "humble")
     jazzy = interface_show("nav2_msgs/action/NavigateToPose", "jazzy")
@@ -131,9 +131,9 @@ def test_types_are_as_each_distro_defines_them():
 def test_the_astibot_reports_its_lead_acid_battery_where_the_distro_can_say_so(
     monkeypatch, distro, technology
 ):
+    from astiop.robot.backends.sim.backend import SimBackend
     from astiop.robot.gateway import RobotGateway
     from astiop.robot.safety import SafetyPolicy
-    from astiop.robot.sim_backend import SimBackend
     from astiop.sim.simulator import Simulator
 
     monkeypatch.setenv("ROS_DISTRO", distro)

@@ -7,9 +7,9 @@ import pytest
 from astiop.agent import grounding
 from astiop.agent.llm import OpenAIClient
 from astiop.agent.reply_stream import repeating
+from astiop.robot.backends.sim.backend import SimBackend
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.safety import SafetyPolicy
-from astiop.robot.sim_backend import SimBackend
 from astiop.sim.simulator import Simulator
 from tests.scripted_llm import ScriptedLLM
 from tests.test_agent import make_agent

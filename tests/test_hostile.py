@@ -14,11 +14,11 @@ import pytest
 
 from astiop.agent.specs import SpecError, parse_spec
 from astiop.config import ConfigError, load_settings
-from astiop.robot.catalog import astibot_catalog
+from astiop.robot.backends.sim.backend import SimBackend
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.safety import SafetyPolicy
-from astiop.robot.sim_backend import SimBackend
-from astiop.robot.validation import validate
+from astiop.ros2.catalog import astibot_catalog
+from astiop.ros2.validation import validate
 from astiop.sim.simulator import Simulator
 from astiop.store import LocationError, Store, StoreError
 from tests.cli_runner import run_cli

@@ -6,8 +6,8 @@ from astiop.agent import rules
 from astiop.agent.gate import action_of, check
 from astiop.agent.intent import classify
 from astiop.agent.specs import open_endpoint
-from astiop.robot.catalog import astibot_catalog
-from astiop.robot.validation import validate
+from astiop.ros2.catalog import astibot_catalog
+from astiop.ros2.validation import validate
 from astiop.store import Store
 from benchmarks.agent_requests import load_requests, run_one
 from tests.test_rules import GOTO, LOCS

@@ -8,8 +8,8 @@ from mcap_ros2.decoder import DecoderFactory
 from astiop.app import make_app
 from astiop.config import load_settings
 from astiop.recording.reader import Recording
+from astiop.robot.backends.replay.backend import READ_ONLY, open_replay
 from astiop.robot.gateway import RobotGateway
-from astiop.robot.replay_backend import READ_ONLY, open_replay
 from astiop.store import Store
 from tests.cli_runner import run_cli
 from tests.recordings import GOTO, record_trip

@@ -7,13 +7,13 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from astiop.robot.catalog import astibot_catalog
+from astiop.robot.backends.sim.backend import SimBackend
 from astiop.robot.gateway import RobotGateway
-from astiop.robot.grammar import CommandSyntaxError, parse
-from astiop.robot.interfaces import interface_show
 from astiop.robot.safety import SafetyPolicy
-from astiop.robot.sim_backend import SimBackend
-from astiop.robot.validation import validate
+from astiop.ros2.catalog import astibot_catalog
+from astiop.ros2.grammar import CommandSyntaxError, parse
+from astiop.ros2.interfaces import interface_show
+from astiop.ros2.validation import validate
 from astiop.sim.simulator import Simulator
 
 CAT = astibot_catalog()

@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from astiop.robot.sim_backend import SimBackend
+from astiop.robot.backends.sim.backend import SimBackend
 from astiop.robot.state import from_messages
 from astiop.sim.simulator import Simulator
 

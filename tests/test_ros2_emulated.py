@@ -53,7 +53,7 @@ def robot(monkeypatch):
 
 
 def gateway(store: Store | None = None, *, stream: bool = True) -> RobotGateway:
-    from astiop.robot.ros2_backend import Ros2Backend
+    from astiop.robot.backends.ros2cli.backend import Ros2Backend
 
     graph = RobotGateway(Ros2Backend("ros2", 10.0, stream=stream), SafetyPolicy(), store=store)
     graph.start()
@@ -207,7 +207,7 @@ def test_a_stream_that_dies_is_restarted_and_said_so(robot):
 
 
 def test_a_refusal_printed_with_status_0_is_an_error(robot):
-    from astiop.robot.ros2_backend import Ros2Backend
+    from astiop.robot.backends.ros2cli.backend import Ros2Backend
 
     graph = gateway(stream=False)
     try:
@@ -224,8 +224,8 @@ def test_a_refusal_printed_with_status_0_is_an_error(robot):
 def test_a_service_nobody_serves_is_reported_within_its_bound(monkeypatch):
     with emulated_robot(missing=("/dock",)) as folder:
         on_path(monkeypatch, folder)
-        from astiop.robot.catalog import astibot_catalog
-        from astiop.robot.ros2_backend import Ros2Backend
+        from astiop.robot.backends.ros2cli.backend import Ros2Backend
+        from astiop.ros2.catalog import astibot_catalog
 
         backend = Ros2Backend("ros2", 10.0, stream=False)
         backend.catalog.services["/dock"] = astibot_catalog().services["/dock"]  # listed earlier

@@ -11,7 +11,7 @@ import math
 from dataclasses import dataclass
 
 from astiop.agent.intent import SERVICE_FOR, Intent
-from astiop.robot.validation import Checked
+from astiop.ros2.validation import Checked
 
 PLACE_TOLERANCE_M = 0.3
 

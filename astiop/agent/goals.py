@@ -11,8 +11,8 @@ import math
 import re
 import time
 
+from astiop.robot.backend import Execution
 from astiop.robot.gateway import RobotGateway
-from astiop.robot.output import Execution
 
 NAVIGATING = ("/goto_position", "/dock", "/undock", "send_goal")
 MOVING = ("navigating", "docking", "undocking", "blocked")

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from astiop.agent.summaries import STATUS_WORDS, summarize
-from astiop.robot.output import Execution
+from astiop.robot.backend import Execution
 
 _NUMBER = re.compile(r"(?<![\w.])-?\d+(?:\.\d+)?(?![\w])")
 _COUNT_WORDS = {

@@ -23,8 +23,8 @@ from astiop.agent.tools import (
     tool_grammar,
     tool_schema,
 )
-from astiop.robot.catalog import Catalog
 from astiop.robot.safety import Review
+from astiop.ros2.catalog import Catalog
 
 Messages = list[dict[str, str]]
 Ask = Callable[[Messages], Awaitable[Completion]]

@@ -9,7 +9,7 @@ import yaml
 
 from astiop.agent.tools import READABLE_EXCLUDED, Tool
 from astiop.resources import prompts_path
-from astiop.robot.catalog import Catalog
+from astiop.ros2.catalog import Catalog
 
 
 @cache

@@ -10,7 +10,7 @@ import asyncio
 import time
 
 from astiop.agent.result import TurnResult
-from astiop.robot.output import Execution
+from astiop.robot.backend import Execution
 from astiop.store import Store
 
 

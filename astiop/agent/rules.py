@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from astiop.agent.grounding import factual_answer
 from astiop.agent.intent import SERVICE_FOR, Intent, classify
-from astiop.robot.output import Execution
+from astiop.robot.backend import Execution
 
 GOTO = "ros2 service call /goto_position astiop_msgs/srv/GotoPosition"
 TRIGGER = "std_srvs/srv/Trigger"

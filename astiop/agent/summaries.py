@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from astiop.robot.output import Execution
+from astiop.robot.backend import Execution
 
 STATUS_WORDS = {0: "unknown", 1: "charging", 2: "discharging", 3: "not charging", 4: "full"}
 

@@ -12,8 +12,8 @@ from dataclasses import dataclass
 
 from astiop.agent.intent import SERVICE_FOR, Intent, Motion
 from astiop.agent.rules import command_for
-from astiop.robot.catalog import Catalog
-from astiop.robot.render import GOTO_TYPE, goto_command
+from astiop.ros2.catalog import Catalog
+from astiop.ros2.render import GOTO_TYPE, goto_command
 
 READABLE_EXCLUDED = {"/cmd_vel", "/tf", "/tf_static", "/plan"}
 TRIGGER = "std_srvs/srv/Trigger"

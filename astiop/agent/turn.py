@@ -22,8 +22,8 @@ from astiop.agent.reply_stream import Completion
 from astiop.agent.result import TurnResult
 from astiop.agent.specs import LLMEndpoint
 from astiop.agent.summaries import summarize
+from astiop.robot.backend import Execution
 from astiop.robot.gateway import Confirm, RobotGateway
-from astiop.robot.output import Execution
 from astiop.robot.safety import Review
 from astiop.store import Store
 from astiop.warehouse import WarehouseMap

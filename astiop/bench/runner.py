@@ -22,9 +22,9 @@ from astiop.bench import library, paper_protocol, stage1, stage2
 from astiop.bench.suites import SuiteError
 from astiop.config import Settings
 from astiop.recording import FLUSH_S, SessionRecorder
+from astiop.robot.backends.sim.backend import SimBackend
 from astiop.robot.factory import make_safety
 from astiop.robot.gateway import RobotGateway
-from astiop.robot.sim_backend import SimBackend
 from astiop.store import Store
 
 

@@ -9,7 +9,7 @@ from typing import Any
 
 from astiop.agent.turn import TurnResult
 from astiop.bench.suites import RobotCase
-from astiop.robot.grammar import CommandSyntaxError, parse
+from astiop.ros2.grammar import CommandSyntaxError, parse
 from astiop.sim.simulator import Simulator
 from astiop.sim.state import SimState
 from astiop.store import Store

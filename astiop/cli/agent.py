@@ -7,7 +7,7 @@ import asyncio
 import typer
 
 from astiop.cli.common import fail, interactive, print_json, state
-from astiop.robot.output import BackendError
+from astiop.robot.backend import BackendError
 
 
 def chat(

@@ -14,7 +14,7 @@ def run_console(st: CliState, record: str | None = None) -> None:
     from astiop.app import make_app
     from astiop.cli.common import fail
     from astiop.recording import default_path
-    from astiop.robot.output import BackendError
+    from astiop.robot.backend import BackendError
 
     record_path = None
     if record is not None:
@@ -42,9 +42,9 @@ def replay(
     from astiop.app import make_app
     from astiop.cli.common import fail, state
     from astiop.recording import RecordingError
+    from astiop.robot.backend import BackendError
+    from astiop.robot.backends.replay.backend import SPEEDS, open_replay
     from astiop.robot.gateway import RobotGateway
-    from astiop.robot.output import BackendError
-    from astiop.robot.replay_backend import SPEEDS, open_replay
     from astiop.store import Store
 
     if not (SPEEDS[0] <= speed <= SPEEDS[-1]):

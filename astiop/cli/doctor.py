@@ -114,7 +114,7 @@ def _check_robot(settings, add) -> None:
     if exe is None:
         add("FAIL", "robot", f"ros2 backend: '{settings.robot.ros2_executable}' is not on PATH")
         return
-    from astiop.robot.grammar import current_distro
+    from astiop.ros2.grammar import current_distro
 
     add("ok", "robot", f"ros2 backend: {exe}, ROS_DISTRO {current_distro()}")
     for argv, name in ((["daemon", "status"], "ros2 daemon"), (["topic", "list"], "ros2 graph")):

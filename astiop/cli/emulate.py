@@ -30,8 +30,8 @@ def emulate_ros2(
     ),
 ) -> None:
     """Run an emulated robot until Ctrl-C (or SIGTERM); put DIR on PATH and use `astiop --robot ros2`."""
-    from astiop.robot.emulator.robot import EmulatedRobot, write_client
-    from astiop.robot.ros2cli_args import DISTROS
+    from astiop.ros2.cli_args import DISTROS
+    from astiop.sim_robots.emulated_cli.robot import EmulatedRobot, write_client
 
     if distro not in DISTROS:
         fail(f"--distro must be one of {', '.join(DISTROS)}, not '{distro}'")

@@ -9,7 +9,7 @@ from pathlib import Path
 import typer
 
 from astiop.cli.common import fail, print_json, state
-from astiop.robot.output import BackendError
+from astiop.robot.backend import BackendError
 
 
 def record(
@@ -71,10 +71,9 @@ def record(
 
     def progress() -> None:
         nonlocal seq
-        events = gateway.events_since(seq)  # the store keeps every event, as the console does
+        events = gateway.events_since(seq)  # the gateway keeps each in the store
         if events:
             seq = max(seq, events[-1].seq)
-            st.store.keep_robot_events(events)
         if not as_json:
             typer.echo(f"\r  recording {time.monotonic() - t0:5.1f} s", nl=False, err=True)
 
@@ -110,7 +109,7 @@ def _drive_to(gateway, name: str, deadline: float, progress, target) -> str:
     robot that reports no outcome is judged by its reported pose (as the agent does)."""
     from astiop.agent.goals import outcome_at
     from astiop.recording import RecordingError
-    from astiop.robot.render import goto_command
+    from astiop.ros2.render import goto_command
 
     result = gateway.run(goto_command(name), confirm=lambda _c: True, source="record")
     if not result.executed or result.error:

@@ -5,8 +5,8 @@ from __future__ import annotations
 import typer
 
 from astiop.cli.common import fail, interactive, print_json, state
-from astiop.robot.output import BackendError
-from astiop.robot.validation import Checked
+from astiop.robot.backend import BackendError
+from astiop.ros2.validation import Checked
 
 
 def exec_command(

@@ -22,8 +22,8 @@ from mcap.records import Channel, Message, Schema
 from mcap.stream_reader import StreamReader
 from mcap.writer import Writer
 
-from astiop.robot.definitions import definitions
-from astiop.robot.interfaces import normalize_type, used_types
+from astiop.ros2.definitions import definitions
+from astiop.ros2.interfaces import normalize_type, used_types
 
 FLUSH_S = 2.0
 POLL_HZ = 20.0
@@ -49,7 +49,7 @@ class RecordingError(Exception):
 def ros2msg(type_name: str, distro: str | None = None) -> str:
     """The type's definition followed by every type it uses, as rosbag2 writes `ros2msg`
     schemas: each dependency after a line of '=' and 'MSG: pkg/msg/Name'."""
-    from astiop.robot.grammar import current_distro
+    from astiop.ros2.grammar import current_distro
 
     defs = definitions(distro or current_distro())
     text = [defs[normalize_type(type_name)].strip()]
@@ -61,7 +61,7 @@ def ros2msg(type_name: str, distro: str | None = None) -> str:
 def session_metadata(gateway) -> dict[str, str]:
     """Which robot, and the two clocks at the start: the robot's and the wall's, so a sim-time
     recording can be placed in wall time (export)."""
-    from astiop.robot.grammar import current_distro
+    from astiop.ros2.grammar import current_distro
 
     return {
         "backend": gateway.backend.name,

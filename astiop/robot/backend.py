@@ -3,16 +3,56 @@
 from __future__ import annotations
 
 from collections.abc import Iterable
-from typing import Protocol, Union
+from dataclasses import asdict, dataclass, field
+from typing import Any, Protocol, Union
 
-from astiop.robot.catalog import Catalog
 from astiop.robot.state import OccupancyGrid, RobotEvent, RobotState, TopicStat
-from astiop.robot.validation import Checked
+from astiop.ros2.catalog import Catalog
+from astiop.ros2.validation import Checked
 from astiop.warehouse import WarehouseMap
 
 # A known layout (the simulator's warehouse), the robot's /map, or nothing: then the map view
 # follows the robot and shows its scan.
 MapGeometry = Union[WarehouseMap, OccupancyGrid, None]
+
+
+class BackendError(Exception):
+    """The command was valid but running it failed (timeout, no message, process error)."""
+
+
+@dataclass
+class Execution:
+    command: str
+    valid: bool
+    reason: str = ""
+    kind: str = "read"
+    executed: bool = False
+    output: str = ""
+    values: Any = None
+    notes: list[str] = field(default_factory=list)
+    error: str = ""
+    duration_s: float = 0.0
+
+    def record(self) -> dict[str, Any]:
+        """The fields a stored command row keeps."""
+        return {
+            "command": self.command,
+            "valid": int(self.valid),
+            "reason": self.reason or self.error or None,
+            "kind": self.kind,
+            "executed": int(self.executed),
+            "output": self.output,
+            "values": self.values,
+        }
+
+    def as_json(self) -> dict[str, Any]:
+        keys = ("command", "valid", "reason", "kind", "executed", "output", "values")
+        data = {k: v for k, v in asdict(self).items() if k in keys}
+        if self.notes:
+            data["notes"] = self.notes
+        if self.error:
+            data["error"] = self.error
+        return data
 
 
 class RobotBackend(Protocol):

@@ -33,7 +33,7 @@ def make_sim_graph(
     sim: Simulator | None = None,
     who: str = "astiop",
 ) -> RobotGateway:
-    from astiop.robot.sim_backend import SimBackend
+    from astiop.robot.backends.sim.backend import SimBackend
 
     sim = sim or Simulator(seed=settings.sim.seed, v_max=settings.robot.max_linear_speed)
     backend = SimBackend(sim, store, realtime=realtime, speed=settings.sim.speed)
@@ -44,7 +44,7 @@ def make_robot_graph(
     settings: Settings, store: Store | None, *, realtime: bool = False, who: str = "astiop"
 ) -> RobotGateway:
     if settings.robot.backend == "ros2":
-        from astiop.robot.ros2_backend import Ros2Backend
+        from astiop.robot.backends.ros2cli.backend import Ros2Backend
 
         backend = Ros2Backend(settings.robot.ros2_executable, settings.robot.ros2_timeout_s)
         return RobotGateway(

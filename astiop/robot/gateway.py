@@ -8,16 +8,16 @@ before anything is sent.
 from __future__ import annotations
 
 import contextlib
+import threading
 import time
 from collections.abc import Callable
 
-from astiop.robot.backend import MapGeometry, RobotBackend
-from astiop.robot.catalog import Catalog
-from astiop.robot.output import BackendError, Execution
-from astiop.robot.render import STAMPED
+from astiop.robot.backend import BackendError, Execution, MapGeometry, RobotBackend
 from astiop.robot.safety import ALWAYS_ALLOWED, Review, SafetyPolicy
 from astiop.robot.state import RobotEvent, RobotState, TopicStat
-from astiop.robot.validation import Checked, validate
+from astiop.ros2.catalog import Catalog
+from astiop.ros2.render import STAMPED
+from astiop.ros2.validation import Checked, validate
 from astiop.store import Store, StoreError
 
 Confirm = Callable[[Checked], bool]
@@ -40,6 +40,8 @@ class RobotGateway:
         self.store = store
         self.who = who
         self._last_drive: tuple[float, float, float] | None = None
+        self._journaled = 0  # the last event kept in the store
+        self._journal_lock = threading.Lock()
         if self.latched and not backend.e_stopped:
             backend.estop()  # a restart keeps the E-STOP until it is released
 
@@ -82,7 +84,17 @@ class RobotGateway:
         return self.backend.state().with_e_stop(self.latched)
 
     def events_since(self, seq: int) -> list[RobotEvent]:
-        return self.backend.events_since(seq)
+        """The robot's events after `seq`. Each is kept in the store the first time any reader
+        (the console's sampler, a recording, `astiop record`) sees it, as commands are."""
+        events = self.backend.events_since(seq)
+        if self.store is not None and events:
+            with self._journal_lock:
+                new = [e for e in events if e.seq > self._journaled]
+                if new:
+                    self._journaled = new[-1].seq
+            if new:
+                self.store.keep_robot_events(new)  # never raises
+        return events
 
     def messages(self, names) -> dict[str, dict]:
         """The latest message per topic, as the robot sent it (for recording)."""

@@ -6,7 +6,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
-from astiop.robot.validation import Checked
+from astiop.ros2.validation import Checked
 from astiop.warehouse import GEOFENCE_MARGIN, fence_text, inside_fence
 
 # Services that only ever make the robot safer: never held by the e-stop, never confirmed.

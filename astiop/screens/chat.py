@@ -16,7 +16,7 @@ from astiop.agent.embedded import EmbeddedModelError
 from astiop.agent.specs import SpecError, open_endpoint
 from astiop.agent.turn import Agent, TurnResult
 from astiop.bounded import escape_controls
-from astiop.robot.output import Execution
+from astiop.robot.backend import Execution
 from astiop.screens.base import ConsoleScreen
 from astiop.screens.messages import (
     CommandExecuted,

@@ -86,7 +86,7 @@ def battery_state(s: SimState) -> dict:
 def battery_technology() -> int:
     """The ASTIbot's two 12 V lead-acid batteries: VRLA (8), a constant Jazzy's BatteryState
     has and Humble's does not (there: UNKNOWN, 0)."""
-    from astiop.robot.grammar import current_distro
+    from astiop.ros2.grammar import current_distro
 
     return 0 if current_distro() == "humble" else 8
 

@@ -7,12 +7,12 @@ import time
 from collections import deque
 from typing import Any
 
-from astiop.robot import sim_messages as sm
-from astiop.robot.catalog import Catalog, astibot_catalog
-from astiop.robot.interfaces import default_value
-from astiop.robot.output import BackendError
-from astiop.robot.sim_verbs import SimVerbs
+from astiop.robot.backend import BackendError
+from astiop.robot.backends.sim import messages as sm
+from astiop.robot.backends.sim.verbs import SimVerbs
 from astiop.robot.state import RobotEvent, RobotState, TopicStat, from_messages
+from astiop.ros2.catalog import Catalog, astibot_catalog
+from astiop.ros2.interfaces import default_value
 from astiop.sim.runner import SimRunner
 from astiop.sim.simulator import GoalError, Simulator
 from astiop.store import Store

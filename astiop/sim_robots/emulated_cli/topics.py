@@ -9,9 +9,10 @@ import time
 import numpy as np
 import yaml
 
-from astiop.robot.emulator.call import Call
-from astiop.robot.interfaces import InterfaceError, fill, python_repr
-from astiop.robot.output import BackendError, echo_yaml
+from astiop.robot.backend import BackendError
+from astiop.ros2.interfaces import InterfaceError, fill, python_repr
+from astiop.ros2.printing import echo_yaml
+from astiop.sim_robots.emulated_cli.call import Call
 
 HIDDEN_TOPICS = {
     "/parameter_events": "rcl_interfaces/msg/ParameterEvent",

@@ -7,9 +7,9 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from astiop.robot.catalog import Catalog
-from astiop.robot.grammar import CommandSyntaxError, Ros2Command, parse
-from astiop.robot.interfaces import InterfaceError, fill, known_type, normalize_type
+from astiop.ros2.catalog import Catalog
+from astiop.ros2.grammar import CommandSyntaxError, Ros2Command, parse
+from astiop.ros2.interfaces import InterfaceError, fill, known_type, normalize_type
 
 MAX_PUBLISH_S = 30.0
 

@@ -15,7 +15,7 @@ from typing import Any
 
 import yaml
 
-from astiop.robot import ros2_process
+from astiop.robot.backends.ros2cli import process as ros2_process
 
 try:
     _Loader = yaml.CSafeLoader

@@ -8,7 +8,8 @@ from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import replace
 
-from astiop.robot.catalog import (
+from astiop.robot.backend import BackendError
+from astiop.ros2.catalog import (
     ActionSpec,
     Catalog,
     ParamSpec,
@@ -16,8 +17,7 @@ from astiop.robot.catalog import (
     TopicSpec,
     astibot_catalog,
 )
-from astiop.robot.output import BackendError
-from astiop.robot.render import STAMPED
+from astiop.ros2.render import STAMPED
 
 _LISTED = re.compile(r"^(?P<name>/\S*)\s+\[(?P<type>[^\]]+)\]\s*$")
 _PARAM_LINE = re.compile(r"^  (?P<name>\S+)(?: \(type: (?P<type>[^)]+)\))?\s*$")

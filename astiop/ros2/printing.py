@@ -1,9 +1,8 @@
-"""Text as the `ros2` CLI prints it, and the result record of one command."""
+"""Text as the `ros2` CLI prints it: echo YAML and indented values."""
 
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import yaml
@@ -11,45 +10,6 @@ import yaml
 TRUNCATE = 128
 # libyaml's emitter when PyYAML has it: the same text, several times faster (a /scan at 10 Hz)
 DUMPER = getattr(yaml, "CSafeDumper", yaml.SafeDumper)
-
-
-class BackendError(Exception):
-    """The command was valid but running it failed (timeout, no message, process error)."""
-
-
-@dataclass
-class Execution:
-    command: str
-    valid: bool
-    reason: str = ""
-    kind: str = "read"
-    executed: bool = False
-    output: str = ""
-    values: Any = None
-    notes: list[str] = field(default_factory=list)
-    error: str = ""
-    duration_s: float = 0.0
-
-    def record(self) -> dict[str, Any]:
-        """The fields a stored command row keeps."""
-        return {
-            "command": self.command,
-            "valid": int(self.valid),
-            "reason": self.reason or self.error or None,
-            "kind": self.kind,
-            "executed": int(self.executed),
-            "output": self.output,
-            "values": self.values,
-        }
-
-    def as_json(self) -> dict[str, Any]:
-        keys = ("command", "valid", "reason", "kind", "executed", "output", "values")
-        data = {k: v for k, v in asdict(self).items() if k in keys}
-        if self.notes:
-            data["notes"] = self.notes
-        if self.error:
-            data["error"] = self.error
-        return data
 
 
 def _prepare(value: Any, no_arr: bool, truncate: int | None, no_str: bool = False) -> Any:

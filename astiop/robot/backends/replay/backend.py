@@ -12,8 +12,7 @@ from typing import Any
 
 from astiop.recording.reader import Recording
 from astiop.recording.writer import TOPICS
-from astiop.robot.catalog import Catalog, astibot_catalog
-from astiop.robot.output import BackendError
+from astiop.robot.backend import BackendError
 from astiop.robot.state import (
     RobotEvent,
     RobotState,
@@ -21,7 +20,8 @@ from astiop.robot.state import (
     from_messages,
     grid_from_message,
 )
-from astiop.robot.validation import Checked
+from astiop.ros2.catalog import Catalog, astibot_catalog
+from astiop.ros2.validation import Checked
 from astiop.warehouse import default_map
 
 READ_ONLY = "replay is read-only: nothing is sent to any robot"

@@ -25,7 +25,7 @@ from astiop.bounded import (
     load_yaml,
     preview,
 )
-from astiop.robot.ros2cli_args import DISTROS, build_parser
+from astiop.ros2.cli_args import DISTROS, build_parser
 
 SHELL_OPERATORS = {"|", "||", "&", "&&", ";", ";;", ">", ">>", "<", "<<", "$(", "`", "(", ")"}
 SUPPORTED = {

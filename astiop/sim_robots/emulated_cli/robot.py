@@ -21,16 +21,16 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from astiop.robot import sim_messages as sm
-from astiop.robot.catalog import astibot_catalog
-from astiop.robot.definitions import DEFINITIONS
-from astiop.robot.emulator.call import Call, Interrupted
-from astiop.robot.emulator.topics import HIDDEN_TOPICS, TopicVerbs
-from astiop.robot.interfaces import InterfaceError, fill, interface_show, python_repr
-from astiop.robot.output import indent_yaml
-from astiop.robot.sim_backend import SimBackend
+from astiop.robot.backends.sim import messages as sm
+from astiop.robot.backends.sim.backend import SimBackend
 from astiop.robot.state import yaw_of
+from astiop.ros2.catalog import astibot_catalog
+from astiop.ros2.definitions import DEFINITIONS
+from astiop.ros2.interfaces import InterfaceError, fill, interface_show, python_repr
+from astiop.ros2.printing import indent_yaml
 from astiop.sim.simulator import GoalError, Simulator
+from astiop.sim_robots.emulated_cli.call import Call, Interrupted
+from astiop.sim_robots.emulated_cli.topics import HIDDEN_TOPICS, TopicVerbs
 from astiop.store import LocationError, Store
 
 MAP_TYPE = "nav_msgs/msg/OccupancyGrid"
@@ -364,7 +364,7 @@ SPAWN_DAEMON = {
 CLIENT = """#!{python}
 # The emulated ros2 of `astiop emulate-ros2` ({distro}); written by astiop.
 import sys
-from astiop.robot.emulator.client import main
+from astiop.sim_robots.emulated_cli.client import main
 sys.exit(main(sys.argv[1:], {folder!r}))
 """
 

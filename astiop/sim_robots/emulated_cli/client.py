@@ -15,7 +15,7 @@ import socket
 import sys
 import time
 
-from astiop.robot.ros2cli_args import build_parser
+from astiop.ros2.cli_args import build_parser
 
 
 def _log(folder: str, argv: list[str]) -> None:

@@ -7,10 +7,11 @@ import time
 import uuid
 from typing import Any
 
-from astiop.robot.interfaces import interface_show, python_repr
-from astiop.robot.output import BackendError, echo_text, indent_yaml
+from astiop.robot.backend import BackendError
 from astiop.robot.state import yaw_of
-from astiop.robot.validation import Checked
+from astiop.ros2.interfaces import interface_show, python_repr
+from astiop.ros2.printing import echo_text, indent_yaml
+from astiop.ros2.validation import Checked
 from astiop.sim.simulator import GoalError
 from astiop.store import LocationError
 
@@ -235,7 +236,7 @@ class SimVerbs:
         return interface_show(c.command.args["type"]), None
 
     def _interface_list(self, c: Checked, timeout: float):
-        from astiop.robot.definitions import DEFINITIONS
+        from astiop.ros2.definitions import DEFINITIONS
 
         names = sorted(DEFINITIONS)
         return "\n".join(f"    {n}" for n in names) + "\n", names

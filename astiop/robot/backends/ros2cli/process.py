@@ -13,7 +13,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from astiop.robot.output import BackendError
+from astiop.robot.backend import BackendError
 
 MAX_OUTPUT = 4_000_000  # characters kept per stream of one call
 

@@ -14,25 +14,16 @@ import time
 from collections import deque
 from typing import Any
 
-from astiop.robot import ros2_process
-from astiop.robot.grammar import current_distro
-from astiop.robot.interfaces import decode_bytes
-from astiop.robot.output import BackendError, echo_text
-from astiop.robot.render import (
-    flow_yaml,
-    sent_argv,
-    stamped_now,
-    velocity_message,
-    zero_twist,
-)
-from astiop.robot.ros2_graph import GraphReader
-from astiop.robot.ros2_motion import STDIN_DISTROS, ArmedStop, TeleopPublisher
-from astiop.robot.ros2_replies import (
+from astiop.robot.backend import BackendError
+from astiop.robot.backends.ros2cli import process as ros2_process
+from astiop.robot.backends.ros2cli.graph import GraphReader
+from astiop.robot.backends.ros2cli.motion import STDIN_DISTROS, ArmedStop, TeleopPublisher
+from astiop.robot.backends.ros2cli.replies import (
     FAILED_WITH_STATUS_0,
     parse_response,
     without_display_options,
 )
-from astiop.robot.ros2_streams import TopicStream, parse_document
+from astiop.robot.backends.ros2cli.streams import TopicStream, parse_document
 from astiop.robot.state import (
     OccupancyGrid,
     RobotEvent,
@@ -41,7 +32,17 @@ from astiop.robot.state import (
     from_messages,
     grid_from_message,
 )
-from astiop.robot.validation import Checked
+from astiop.ros2.grammar import current_distro
+from astiop.ros2.interfaces import decode_bytes
+from astiop.ros2.printing import echo_text
+from astiop.ros2.render import (
+    flow_yaml,
+    sent_argv,
+    stamped_now,
+    velocity_message,
+    zero_twist,
+)
+from astiop.ros2.validation import Checked
 
 # Streamed for the live state, where the robot has them; /odom only when /robot_pose is absent
 # (50 Hz of YAML costs more than it tells).

@@ -10,7 +10,7 @@ import shlex
 
 import yaml
 
-from astiop.robot.validation import Checked
+from astiop.ros2.validation import Checked
 
 GOTO_TYPE = "astiop_msgs/srv/GotoPosition"
 

@@ -18,8 +18,8 @@ import subprocess
 import threading
 import time
 
-from astiop.robot import ros2_process
-from astiop.robot.render import flow_yaml, stamped_now, velocity_message, zero_twist
+from astiop.robot.backends.ros2cli import process as ros2_process
+from astiop.ros2.render import flow_yaml, stamped_now, velocity_message, zero_twist
 
 STDIN_DISTROS = {"jazzy", "kilted", "rolling"}
 TELEOP_RATE_HZ = 10

@@ -9,7 +9,7 @@ from functools import cache
 from typing import Any
 
 from astiop.bounded import preview
-from astiop.robot.definitions import DEFINITIONS, definitions
+from astiop.ros2.definitions import DEFINITIONS, definitions
 
 INT_RANGES = {
     "int8": (-(2**7), 2**7 - 1),
@@ -105,7 +105,7 @@ def _parse_block(name: str, text: str) -> MessageType:
 
 def _distro(distro: str | None) -> str:
     if distro is None:
-        from astiop.robot.grammar import current_distro
+        from astiop.ros2.grammar import current_distro
 
         return current_distro()
     return distro

@@ -1,0 +1,1 @@
+"""A recorded session (MCAP) played back as a read-only robot."""

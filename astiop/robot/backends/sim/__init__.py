@@ -1,0 +1,1 @@
+"""The simulator in process: the default robot."""
