@@ -21,7 +21,7 @@ from textual.worker import Worker, WorkerState
 from astiop.agent.specs import LLMEndpoint, open_endpoint
 from astiop.config import Settings
 from astiop.recording import RecordingError, SessionRecorder, default_path
-from astiop.robot.factory import make_robot_graph, make_sim_graph
+from astiop.robot.factory import make_robot_gateway, make_sim_gateway
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.sampler import StateSampler
 from astiop.robot.state import RobotState, TopicStat
@@ -101,10 +101,10 @@ class AstiopApp(App):
         )
 
     def on_mount(self) -> None:
-        graph = self.services.gateway
+        gateway = self.services.gateway
         self.refresh_subtitle()
-        graph.start()
-        self.topic_stats = graph.topic_stats()
+        gateway.start()
+        self.topic_stats = gateway.topic_stats()
         self.switch_mode("dashboard")
         self._sampler.start()
         if self.record_path is not None:
@@ -153,7 +153,7 @@ class AstiopApp(App):
 
     def refresh_subtitle(self) -> None:
         backend = self.services.gateway.backend
-        robot = getattr(backend, "label", backend.name)
+        robot = backend.label or backend.name
         rec = "  ● REC" if self.recorder is not None else ""
         self.sub_title = f"robot: {robot}  model: {self.services.endpoint.spec.raw}{rec}"
 
@@ -355,7 +355,7 @@ def make_app(
     settings: Settings,
     store: Store,
     *,
-    graph: RobotGateway | None = None,
+    gateway: RobotGateway | None = None,
     endpoint: LLMEndpoint | None = None,
     sim: Any = None,
     realtime: bool = True,
@@ -367,11 +367,11 @@ def make_app(
 
     `sim` hands a prepared simulator to the sim backend (tests: seeded and paused).
     """
-    if graph is None:
+    if gateway is None:
         if settings.robot.backend == "sim":
-            graph = make_sim_graph(settings, store, realtime=realtime, sim=sim, who="console")
+            gateway = make_sim_gateway(settings, store, realtime=realtime, sim=sim, who="console")
         else:
-            graph = make_robot_graph(settings, store, realtime=True, who="console")
+            gateway = make_robot_gateway(settings, store, realtime=True, who="console")
     endpoint = endpoint or open_endpoint(
         settings.llm.model,
         threads=settings.llm.threads,
@@ -379,7 +379,7 @@ def make_app(
         timeout_s=settings.llm.timeout_s,
     )
     return AstiopApp(
-        Services(settings, store, graph, endpoint),
+        Services(settings, store, gateway, endpoint),
         sample_hz=sample_hz,
         confirm_timeout_s=confirm_timeout_s,
         record=record,

@@ -57,9 +57,9 @@ async def run_one(
     case: RobotCase, endpoint, mode: str, interpretation: str, store: Store, narrow: bool = True
 ):
     sim = stage2.build_sim(case, store, seed=7)
-    graph = RobotGateway(SimBackend(sim, store), SafetyPolicy())
+    gateway = RobotGateway(SimBackend(sim, store), SafetyPolicy())
     agent = Agent(
-        graph,
+        gateway,
         endpoint,
         store,
         mode=mode,

@@ -32,8 +32,8 @@ async def once(latency_ms: int) -> tuple[float, float, float]:
         cfg = load_settings({"llm": {"model": "rules"}, "robot": {"backend": "ros2"}}, env={})
         app = make_app(cfg, Store(Path(tempfile.mkdtemp()) / "bench.db"))
         async with app.run_test(size=(120, 40)) as pilot:
-            graph = app.services.gateway
-            graph.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=lambda _c: True)
+            gateway = app.services.gateway
+            gateway.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=lambda _c: True)
             await asyncio.sleep(3.0)  # undocked; the armed publisher has started
             await pilot.press("f5")
             n0 = len(cmd_vel_received(robot))

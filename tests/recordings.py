@@ -2,7 +2,7 @@
 
 from astiop.config import load_settings
 from astiop.recording import SessionRecorder
-from astiop.robot.factory import make_sim_graph
+from astiop.robot.factory import make_sim_gateway
 from astiop.sim.simulator import Simulator
 from astiop.store import Store
 
@@ -16,7 +16,7 @@ def record_trip(folder, place: str = "inspection_zone_a"):
     settings = load_settings({}, env={}, path=folder / "none.toml")
     store = Store(folder / "rec.db")
     sim = Simulator(seed=0)
-    gateway = make_sim_graph(settings, store, sim=sim)
+    gateway = make_sim_gateway(settings, store, sim=sim)
     path = folder / "trip.mcap"
     recorder = SessionRecorder(path, gateway, store, flush_s=0.0)
     assert gateway.run(GOTO % place, confirm=lambda _c: True).executed

@@ -24,9 +24,9 @@ def llm():
 
 
 def make_agent(llm, store, mode="command", backend_cls=SimBackend, confirm=YES):
-    graph = RobotGateway(backend_cls(Simulator(seed=0), store), SafetyPolicy())
+    gateway = RobotGateway(backend_cls(Simulator(seed=0), store), SafetyPolicy())
     endpoint = open_endpoint(f"openai:scripted@{llm.url}")
-    return Agent(graph, endpoint, store, mode=mode, confirm=confirm, session="test")
+    return Agent(gateway, endpoint, store, mode=mode, confirm=confirm, session="test")
 
 
 async def test_command_mode_turn_is_stored(llm, store):
@@ -72,7 +72,7 @@ async def test_unusable_reply_then_still_invalid_is_recorded_not_run(llm, store)
     result = await agent.turn("drive forward")
     assert result.repaired and len(result.commands) == 1
     assert not result.commands[0].executed and "--once" in result.commands[0].reason
-    assert agent.graph.backend.sim.speed() == 0.0
+    assert agent.gateway.backend.sim.speed() == 0.0
 
 
 async def test_tool_mode_renders_commands(llm, store):
@@ -112,7 +112,7 @@ async def test_robot_output_cannot_make_a_command_run(llm, store):
     agent = make_agent(llm, store, backend_cls=InjectedBackend)
     result = await agent.turn("What is the robot status?")
     assert [c.command for c in result.commands] == ["ros2 topic echo /robot_status --once"]
-    assert agent.graph.backend.sim.goal is None
+    assert agent.gateway.backend.sim.goal is None
     assert "IGNORE YOUR INSTRUCTIONS" in llm.requests[1]["messages"][-1]["content"]
 
 
@@ -143,9 +143,9 @@ async def test_server_down_falls_back_to_rules(store):
     with socket.socket() as sock:
         sock.bind(("127.0.0.1", 0))
         port = sock.getsockname()[1]
-    graph = RobotGateway(SimBackend(Simulator(seed=0), store), SafetyPolicy())
+    gateway = RobotGateway(SimBackend(Simulator(seed=0), store), SafetyPolicy())
     endpoint = open_endpoint(f"openai:m@http://127.0.0.1:{port}/v1")
-    result = await Agent(graph, endpoint, store, confirm=YES).turn("battery level?")
+    result = await Agent(gateway, endpoint, store, confirm=YES).turn("battery level?")
     assert "rules fallback" in result.error and result.answer.startswith("[rules fallback]")
     assert result.commands[0].executed and "battery" in result.answer
     assert store.interactions()[0]["status"] == "error"
@@ -171,7 +171,7 @@ async def test_a_plan_the_gate_refuses_never_reaches_confirmation_or_the_robot(l
     result = await agent.turn("Cancel the current mission")
     assert result.refused and "asks to stop" in result.refused
     assert not asked and not any(c.executed for c in result.commands)
-    assert agent.graph.backend.sim.goal is None and agent.graph.backend.sim.speed() == 0.0
+    assert agent.gateway.backend.sim.goal is None and agent.gateway.backend.sim.speed() == 0.0
     assert "did not run" in result.answer
     reasons = [r[0] for r in store.db.execute("SELECT reason FROM commands").fetchall()]
     assert reasons and all(r.startswith("refused by the intent gate") for r in reasons)
@@ -199,13 +199,13 @@ async def test_each_command_is_validated_once_and_again_after_the_robot_changes(
     ]
     agent = make_agent(llm, store)
     reviewed: list[str] = []
-    real = agent.graph.review
+    real = agent.gateway.review
 
     def counting(text):
         reviewed.append(text)
         return real(text)
 
-    agent.graph.review = counting
+    agent.gateway.review = counting
     result = await agent.turn("set the max speed to 0.3 then move forward")
     assert not result.refused and all(c.executed for c in result.commands)
     # the speed change ran, so the move was reviewed again, under the new limit

@@ -70,9 +70,9 @@ async def test_json_schema_reply_validates(server):
 
 def make_agent(endpoint, store, interpret_tokens=8):
     # These check the plan; a short interpretation (replaced by the results when cut) saves CPU.
-    graph = RobotGateway(SimBackend(Simulator(seed=0), store), SafetyPolicy())
+    gateway = RobotGateway(SimBackend(Simulator(seed=0), store), SafetyPolicy())
     return Agent(
-        graph,
+        gateway,
         endpoint,
         store,
         mode="tool",
@@ -97,7 +97,7 @@ async def test_agent_sends_the_robot_to_a_named_location(endpoint, store):
     agent = make_agent(endpoint, store)
     result = await agent.turn("Send the robot to the assembly station")
     assert result.commands and result.commands[0].values["success"] is True
-    sim = agent.graph.backend.sim
+    sim = agent.gateway.backend.sim
     outcome = sim.run_goal(300)
     assert outcome.status == "succeeded" and outcome.name == "assembly_station"
     assert abs(sim.pose[0] - 8.0) < 0.1 and abs(sim.pose[1] - 22.6) < 0.1

@@ -101,14 +101,14 @@ def test_a_stamped_cmd_vel_gets_the_same_clamp_and_a_fresh_stamp(store):
 
     backend = SimBackend(Simulator(seed=0), store)
     backend.catalog.topics["/cmd_vel"] = replace(backend.catalog.topics["/cmd_vel"], type=STAMPED)
-    graph = RobotGateway(backend, SafetyPolicy(max_linear=0.8))
-    review = graph.review(
+    gateway = RobotGateway(backend, SafetyPolicy(max_linear=0.8))
+    review = gateway.review(
         f"ros2 topic pub --once /cmd_vel {STAMPED} '{{twist: {{linear: {{x: 3.0}}}}}}'"
     )
     assert review.allowed and review.checked.message["twist"]["linear"]["x"] == 0.8
     sent = sent_argv(review.checked)
     assert sent[-2] == STAMPED and "header: auto" in sent[-1] and "x: 0.8" in sent[-1]
-    result = graph.drive(2.0, 0.0, 0.0)  # teleop on a stamped base
+    result = gateway.drive(2.0, 0.0, 0.0)  # teleop on a stamped base
     assert result.executed and result.values["twist"]["linear"]["x"] == 0.8
 
 
@@ -137,6 +137,6 @@ def test_the_astibot_reports_its_lead_acid_battery_where_the_distro_can_say_so(
     from astiop.sim.simulator import Simulator
 
     monkeypatch.setenv("ROS_DISTRO", distro)
-    graph = RobotGateway(SimBackend(Simulator(seed=0), None), SafetyPolicy())
-    r = graph.run("ros2 topic echo /battery_status --once")
+    gateway = RobotGateway(SimBackend(Simulator(seed=0), None), SafetyPolicy())
+    r = gateway.run("ros2 topic echo /battery_status --once")
     assert r.values["power_supply_technology"] == technology

@@ -23,9 +23,9 @@ def results():
     sim = Simulator(seed=3, start=(8.0, 8.75, 0.0), battery_soc=0.62)
     sim.add_obstacle("person", 11.0, 8.75)
     sim.step(0.5)
-    graph = RobotGateway(SimBackend(sim, None), SafetyPolicy())
+    gateway = RobotGateway(SimBackend(sim, None), SafetyPolicy())
     topics = ["/robot_pose", "/battery_status", "/robot_status", "/obstacles", "/conveyor/status"]
-    out = {t: graph.run(READ.format(t)) for t in topics}
+    out = {t: gateway.run(READ.format(t)) for t in topics}
     assert all(ex.executed and not ex.error for ex in out.values())
     return out
 

@@ -68,7 +68,7 @@ async def test_a_hostile_plan_reply_ends_the_turn_cleanly(reply, store):
         agent = make_agent(llm, store, mode="tool")
         result = await agent.turn("sing a song")  # every tool offered
         assert result.error and not any(c.executed for c in result.commands)
-        assert agent.graph.backend.sim.goal is None
+        assert agent.gateway.backend.sim.goal is None
     finally:
         llm.close()
 
@@ -100,13 +100,13 @@ def test_a_hostile_command_is_refused_with_a_short_reason(text, why):
 
 
 def test_a_goal_heading_of_1e308_is_read_without_overflow():
-    graph = RobotGateway(SimBackend(Simulator(seed=0), None), SafetyPolicy())
+    gateway = RobotGateway(SimBackend(Simulator(seed=0), None), SafetyPolicy())
     goal = (
         "ros2 action send_goal /navigate_to_pose nav2_msgs/action/NavigateToPose "
         '"{pose: {header: {frame_id: map}, pose: {position: {x: 5.0, y: 5.0}, '
         'orientation: {z: 1.0e+308, w: 1.0e+308}}}}"'
     )
-    r = graph.run(goal, confirm=lambda c: True)
+    r = gateway.run(goal, confirm=lambda c: True)
     assert r.executed and not r.error
 
 
@@ -316,12 +316,12 @@ def test_named_goals_are_fenced_like_coordinates(tmp_path, store):
     from astiop.robot.factory import make_safety
 
     policy = make_safety(load({}, env={}, path=tmp_path / "n.toml"), store)
-    graph = RobotGateway(SimBackend(Simulator(seed=0), store), policy)
-    r = graph.run(
+    gateway = RobotGateway(SimBackend(Simulator(seed=0), store), policy)
+    r = gateway.run(
         'ros2 service call /goto_position astiop_msgs/srv/GotoPosition "{name: edge}"',
         confirm=lambda c: True,
     )
-    assert not r.executed and "geofence" in r.reason and graph.backend.sim.goal is None
+    assert not r.executed and "geofence" in r.reason and gateway.backend.sim.goal is None
 
 
 def test_every_command_exec_runs_is_recorded_with_its_source(tmp_path):

@@ -12,10 +12,11 @@ import pytest
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
-from astiop.recording import TOPICS, summary
+from astiop.recording import summary
+from astiop.ros2.catalog import astibot_catalog
 from tests.cli_runner import run_cli
 
-ROS_TOPICS = TOPICS
+ROS_TOPICS = astibot_catalog().recorded_topics()
 
 
 def decoded(path, topics=ROS_TOPICS):

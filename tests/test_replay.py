@@ -117,7 +117,7 @@ async def test_the_replay_console_shows_the_recording_and_refuses_commands(trip,
     settings = load_settings({"llm": {"model": "rules"}}, env={}, path=tmp_path / "none.toml")
     store = Store(tmp_path / "replay.db")
     gateway = RobotGateway(open_replay(trip, store=store, paused=True), store=store)
-    app = make_app(settings, store, graph=gateway, sample_hz=20)
+    app = make_app(settings, store, gateway=gateway, sample_hz=20)
     async with app.run_test(size=(120, 40)) as pilot:
         await pilot.pause(0.3)
         bar = app.screen.query_one("#replay-bar")

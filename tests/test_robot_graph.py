@@ -131,15 +131,15 @@ class RecordingBackend(SimBackend):
 
 
 @pytest.fixture
-def graph(store):
+def gateway(store):
     backend = RecordingBackend(Simulator(seed=0), store)
     return RobotGateway(backend, SafetyPolicy())
 
 
 @pytest.mark.parametrize("command,why", INVALID)
-def test_rejected_commands_never_reach_the_backend(graph, command, why):
-    result = graph.run(command, confirm=YES)
-    assert not result.executed and result.reason and graph.backend.ran == []
+def test_rejected_commands_never_reach_the_backend(gateway, command, why):
+    result = gateway.run(command, confirm=YES)
+    assert not result.executed and result.reason and gateway.backend.ran == []
 
 
 @settings(max_examples=300, deadline=None)
@@ -186,34 +186,34 @@ _pieces = st.sampled_from(
 def test_no_rejected_command_reaches_a_backend(words):
     backend = _SHARED.backend
     backend.ran = []
-    graph = _SHARED
+    gateway = _SHARED
     text = " ".join(words)
-    result = graph.run(text, confirm=YES)
+    result = gateway.run(text, confirm=YES)
     if not result.valid or result.reason:
         assert backend.ran == []
     else:
         assert backend.ran == [text.strip()]
 
 
-def test_actuating_commands_need_confirmation(graph):
+def test_actuating_commands_need_confirmation(gateway):
     cmd = "ros2 service call /dock std_srvs/srv/Trigger"
-    assert graph.run(cmd).reason.startswith("this command moves the robot")
-    assert graph.run(cmd, confirm=lambda c: False).reason == "not confirmed by the operator"
-    assert graph.backend.ran == []
-    assert graph.run("ros2 service call /stop std_srvs/srv/Trigger").executed  # never held
+    assert gateway.run(cmd).reason.startswith("this command moves the robot")
+    assert gateway.run(cmd, confirm=lambda c: False).reason == "not confirmed by the operator"
+    assert gateway.backend.ran == []
+    assert gateway.run("ros2 service call /stop std_srvs/srv/Trigger").executed  # never held
 
 
-def test_echo_battery_matches_the_sim(graph):
-    result = graph.run("ros2 topic echo /battery_status --once")
+def test_echo_battery_matches_the_sim(gateway):
+    result = gateway.run("ros2 topic echo /battery_status --once")
     assert result.executed and "percentage:" in result.output and result.output.endswith("---\n")
-    assert result.values["percentage"] == pytest.approx(graph.backend.sim.battery.soc, abs=1e-3)
+    assert result.values["percentage"] == pytest.approx(gateway.backend.sim.battery.soc, abs=1e-3)
 
 
-def test_speed_clamping(graph):
-    sim = graph.backend.sim
+def test_speed_clamping(gateway):
+    sim = gateway.backend.sim
     sim.undock()
     sim.run_goal(60)
-    r = graph.run(
+    r = gateway.run(
         "ros2 topic pub -r 10 -t 20 /cmd_vel geometry_msgs/msg/Twist "
         "'{linear: {x: 2.0, y: 2.0}, angular: {z: 5.0}}'",
         confirm=YES,
@@ -225,16 +225,16 @@ def test_speed_clamping(graph):
     assert sim.snapshot().speed <= 0.8 + 1e-6
 
 
-def test_goto_named_location_service(graph):
-    r = graph.run(
+def test_goto_named_location_service(gateway):
+    r = gateway.run(
         "ros2 service call /goto_position astiop_msgs/srv/GotoPosition "
         "\"{name: 'inspection_zone_a'}\"",
         confirm=YES,
     )
     assert r.values["success"] is True
-    result = graph.backend.sim.run_goal(300)
+    result = gateway.backend.sim.run_goal(300)
     assert result.status == "succeeded"
-    r = graph.run(
+    r = gateway.run(
         "ros2 service call /goto_position astiop_msgs/srv/GotoPosition \"{name: 'mars'}\"",
         confirm=YES,
     )
@@ -243,16 +243,16 @@ def test_goto_named_location_service(graph):
     )
 
 
-def test_geofence(graph):
-    r = graph.run(
+def test_geofence(gateway):
+    r = gateway.run(
         "ros2 service call /goto_position astiop_msgs/srv/GotoPosition '{x: 39.9, y: 3.0}'",
         confirm=YES,
     )
     assert not r.executed and "geofence" in r.reason
 
 
-def test_action_goal_with_feedback_until_arrival(graph):
-    r = graph.run(
+def test_action_goal_with_feedback_until_arrival(gateway):
+    r = gateway.run(
         "ros2 action send_goal /navigate_to_pose nav2_msgs/action/NavigateToPose "
         '"{pose: {header: {frame_id: map}, pose: {position: {x: 15.0, y: 3.5}, '
         'orientation: {z: 0.0, w: 1.0}}}}" --feedback',
@@ -265,15 +265,15 @@ def test_action_goal_with_feedback_until_arrival(graph):
     assert math.hypot(p["x"] - 15.0, p["y"] - 3.5) < 0.3
 
 
-def test_estop_during_navigation(graph):
-    sim = graph.backend.sim
-    graph.run(
+def test_estop_during_navigation(gateway):
+    sim = gateway.backend.sim
+    gateway.run(
         'ros2 service call /goto_position astiop_msgs/srv/GotoPosition "{name: shipping}"',
         confirm=YES,
     )
     sim.step(5.0)
-    graph.estop()
-    held = graph.run(
+    gateway.estop()
+    held = gateway.run(
         'ros2 service call /goto_position astiop_msgs/srv/GotoPosition "{name: shipping}"',
         confirm=YES,
     )
@@ -281,27 +281,27 @@ def test_estop_during_navigation(graph):
     pose = sim.pose
     sim.step(2.0)
     assert math.dist(pose[:2], sim.pose[:2]) < 0.02
-    status = graph.run("ros2 topic echo /robot_status --once").values
+    status = gateway.run("ros2 topic echo /robot_status --once").values
     assert status["state"] == "e_stopped" and status["e_stopped"] is True
-    graph.release_estop()
-    assert graph.run(
+    gateway.release_estop()
+    assert gateway.run(
         'ros2 service call /goto_position astiop_msgs/srv/GotoPosition "{name: shipping}"',
         confirm=YES,
     ).values["success"]
 
 
-def test_obstacles_topic_reports_a_person(graph):
-    sim = graph.backend.sim
+def test_obstacles_topic_reports_a_person(gateway):
+    sim = gateway.backend.sim
     sim.undock()
     sim.run_goal(60)
     sim.add_obstacle("person", 5.5, 3.0)
-    r = graph.run("ros2 topic echo /obstacles --once")
+    r = gateway.run("ros2 topic echo /obstacles --once")
     assert r.values["count"] == 1 and r.values["obstacles"][0]["kind"] == "person"
     assert r.values["obstacles"][0]["distance"] == pytest.approx(2.7, abs=0.15)
 
 
-def test_topic_stats_rates(graph):
-    backend = graph.backend
+def test_topic_stats_rates(gateway):
+    backend = gateway.backend
     assert backend.sim.t == 0.0
     backend.topic_stats()
     backend.sim.step(1.0)
@@ -320,14 +320,14 @@ def test_interface_show_like_ros2():
     assert "---" in interface_show("std_srvs/srv/Trigger")
 
 
-def test_echo_text_follows_the_operators_options_and_the_values_stay_whole(graph):
-    r = graph.run("ros2 topic echo /scan --once -l 5")
+def test_echo_text_follows_the_operators_options_and_the_values_stay_whole(gateway):
+    r = gateway.run("ros2 topic echo /scan --once -l 5")
     ranges = r.output.split("ranges:\n", 1)[1].split("intensities:")[0]
     assert ranges.count("\n- ") == 6 - 1 and ranges.rstrip().endswith("- '...'")  # 5, then ...
     assert len(r.values["ranges"]) == 360  # what astiop reads is never cut
-    r = graph.run("ros2 topic echo /robot_status --once --no-str")
+    r = gateway.run("ros2 topic echo /robot_status --once --no-str")
     state = r.values["state"]  # PyYAML quotes it, as ros2's own yaml.dump does
     assert f"state: '<string length: <{len(state)}>>'" in r.output
     assert f"state: {state}" not in r.output
-    r = graph.run("ros2 topic echo /battery_status --once -l 3")
+    r = gateway.run("ros2 topic echo /battery_status --once -l 3")
     assert "location: 2x ..." in r.output  # strings are cut too, with '...'

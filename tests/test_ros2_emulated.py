@@ -37,8 +37,8 @@ def until(predicate, timeout: float = 30.0) -> bool:  # returns as soon as it ho
     return False
 
 
-def idle(graph) -> bool:
-    st = graph.state()
+def idle(gateway) -> bool:
+    st = gateway.state()
     return st.pose is not None and st.status is not None and st.status.state == "idle"
 
 
@@ -52,53 +52,53 @@ def robot(monkeypatch):
         yield folder
 
 
-def gateway(store: Store | None = None, *, stream: bool = True) -> RobotGateway:
+def make_gateway(store: Store | None = None, *, stream: bool = True) -> RobotGateway:
     from astiop.robot.backends.ros2cli.backend import Ros2Backend
 
-    graph = RobotGateway(Ros2Backend("ros2", 10.0, stream=stream), SafetyPolicy(), store=store)
-    graph.start()
-    return graph
+    gateway = RobotGateway(Ros2Backend("ros2", 10.0, stream=stream), SafetyPolicy(), store=store)
+    gateway.start()
+    return gateway
 
 
 def test_live_state_comes_from_echo_streams(robot):
-    graph = gateway()
+    gateway = make_gateway()
     try:
 
         def complete() -> bool:  # each topic has its own stream: wait for all it reads
-            st = graph.state()
+            st = gateway.state()
             return None not in (st.battery, st.scan, st.status, st.pose)
 
         assert until(complete)
-        st = graph.state()
+        st = gateway.state()
         assert st.status.state == "charging" and st.pose.x == pytest.approx(1.15, abs=0.05)
         assert 0.0 < st.battery.percentage <= 1.0
         assert len(st.scan.ranges) == 360  # echoed in full, not ros2's 128
-        assert until(lambda: graph.map_geometry() is not None)
-        assert graph.map_geometry().bounds == pytest.approx((0.0, 0.0, 40.0, 25.0))
+        assert until(lambda: gateway.map_geometry() is not None)
+        assert gateway.map_geometry().bounds == pytest.approx((0.0, 0.0, 40.0, 25.0))
         echoes = [c for c in ros2_calls(robot) if c[:2] == ["topic", "echo"]]
         streams = [c for c in echoes if "--once" not in c]
         assert len(streams) == len({c[2] for c in streams})  # one process per topic
     finally:
-        graph.close()
+        gateway.close()
 
 
 def test_what_is_sent_is_rebuilt_and_clamped(robot):
-    graph = gateway(stream=False)
+    gateway = make_gateway(stream=False)
     try:
-        graph.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=YES)
-        r = graph.run(
+        gateway.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=YES)
+        r = gateway.run(
             "ros2 service call /goto_position astiop_msgs/srv/GotoPosition \"{name: 'x; rm -rf /'}\"",
             confirm=YES,
         )
         assert r.executed and r.values["success"] is False  # the robot knows no such place
-        r = graph.run(
+        r = gateway.run(
             "ros2 topic pub --once /cmd_vel geometry_msgs/msg/Twist '{linear: {x: 5.0}}'",
             confirm=YES,
         )
         assert r.executed and not r.error, r.error
-        assert not graph.run("ros2 service call /warp std_srvs/srv/Trigger", confirm=YES).executed
+        assert not gateway.run("ros2 service call /warp std_srvs/srv/Trigger", confirm=YES).executed
     finally:
-        graph.close()
+        gateway.close()
     calls = ros2_calls(robot)
     goto = next(c for c in calls if c[:3] == ["service", "call", "/goto_position"])
     assert goto[3] == "astiop_msgs/srv/GotoPosition"  # the type is always sent
@@ -110,28 +110,28 @@ def test_what_is_sent_is_rebuilt_and_clamped(robot):
 
 
 def test_goal_returns_at_acceptance_and_stop_cancels_it(robot):
-    graph = gateway()
+    gateway = make_gateway()
     try:
-        graph.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=YES)
-        assert until(lambda: idle(graph))
-        r = graph.run(GOAL, confirm=YES)
+        gateway.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=YES)
+        assert until(lambda: idle(gateway))
+        r = gateway.run(GOAL, confirm=YES)
         assert r.values["accepted"]
-        assert any(p.poll() is None for p in graph.backend._goal_procs)  # returned at acceptance
-        assert until(lambda: graph.state().status.state == "navigating")
-        graph.run("ros2 service call /stop std_srvs/srv/Trigger")
-        assert graph.wait_until_idle(15) == "canceled"
+        assert any(p.poll() is None for p in gateway.backend._goal_procs)  # returned at acceptance
+        assert until(lambda: gateway.state().status.state == "navigating")
+        gateway.run("ros2 service call /stop std_srvs/srv/Trigger")
+        assert gateway.wait_until_idle(15) == "canceled"
     finally:
-        graph.close()
+        gateway.close()
 
 
 def test_estop_sends_zero_twist_even_without_a_stop_service(monkeypatch):
     with emulated_robot(latency_ms=300, missing=("/stop",)) as folder:
         on_path(monkeypatch, folder)
-        graph = gateway(stream=False)
+        gateway = make_gateway(stream=False)
         try:
             time.sleep(0.6)  # the armed publisher has paid its start-up
             pressed = time.monotonic()
-            failures = graph.estop()
+            failures = gateway.estop()
             assert any("/stop" in f for f in failures)
             assert until(lambda: cmd_vel_received(folder))
             first = cmd_vel_received(folder)[0]
@@ -140,36 +140,36 @@ def test_estop_sends_zero_twist_even_without_a_stop_service(monkeypatch):
             pubs = [e for e in ros2_log(folder) if e["argv"][:2] == ["topic", "pub"]]
             assert pubs and all(e["mono"] < pressed for e in pubs)
             assert first["mono"] >= pressed
-            r = graph.run(GOAL, confirm=YES)
+            r = gateway.run(GOAL, confirm=YES)
             assert not r.executed and "E-STOP" in r.reason
         finally:
-            graph.close()
+            gateway.close()
         assert not any(c[:2] == ["action", "send_goal"] for c in ros2_calls(folder))
 
 
 def test_teleop_holds_one_publisher_and_lapses(robot):
-    graph = gateway()
+    gateway = make_gateway()
     try:
-        graph.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=YES)
-        assert until(lambda: idle(graph))
-        x0 = graph.state().pose.x
+        gateway.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=YES)
+        assert until(lambda: idle(gateway))
+        x0 = gateway.state().pose.x
         for _ in range(15):
-            r = graph.drive(-0.4, 0.0, 0.0)  # it faces west after undocking: +x
+            r = gateway.drive(-0.4, 0.0, 0.0)  # it faces west after undocking: +x
             assert r.executed, r.reason
             time.sleep(0.1)
-        assert until(lambda: graph.state().pose.x > x0 + 0.2)
+        assert until(lambda: gateway.state().pose.x > x0 + 0.2)
         pubs = [c for c in ros2_calls(robot) if c[:4] == ["topic", "pub", "-r", "10"]]
         assert len(pubs) == 1  # one long-lived publisher, not a process per key
         assert until(lambda: cmd_vel_received(robot)[-1]["twist"]["linear"]["x"] == 0.0)
     finally:
-        graph.close()
+        gateway.close()
 
 
 def test_estop_in_one_process_holds_another(robot, tmp_path):
     store = Store(tmp_path / "shared.db")
-    graph = gateway(store, stream=False)
-    graph.estop()
-    graph.close()
+    gateway = make_gateway(store, stream=False)
+    gateway.estop()
+    gateway.close()
     cmd = [
         sys.executable,
         "-m",
@@ -185,7 +185,7 @@ def test_estop_in_one_process_holds_another(robot, tmp_path):
     out = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
     assert out.returncode == 2 and "E-STOP" in out.stderr
     assert not any(c[:3] == ["service", "call", "/dock"] for c in ros2_calls(robot))
-    restarted = gateway(Store(tmp_path / "shared.db"), stream=False)
+    restarted = make_gateway(Store(tmp_path / "shared.db"), stream=False)
     try:
         assert restarted.e_stopped  # a restart keeps it until it is released
     finally:
@@ -193,32 +193,32 @@ def test_estop_in_one_process_holds_another(robot, tmp_path):
 
 
 def test_a_stream_that_dies_is_restarted_and_said_so(robot):
-    graph = gateway()
+    gateway = make_gateway()
     try:
-        stream = graph.backend._streams["/battery_status"]
+        stream = gateway.backend._streams["/battery_status"]
         assert until(lambda: stream.count >= 1)
         stream._proc.kill()
         count = stream.count
         assert until(lambda: stream.restarts == 1 and stream.count > count, 15)
-        events = graph.events_since(0)
+        events = gateway.events_since(0)
         assert any(e.kind == "stream" and "/battery_status" in e.message for e in events)
     finally:
-        graph.close()
+        gateway.close()
 
 
 def test_a_refusal_printed_with_status_0_is_an_error(robot):
     from astiop.robot.backends.ros2cli.backend import Ros2Backend
 
-    graph = gateway(stream=False)
+    gateway = make_gateway(stream=False)
     try:
-        r = graph.run("ros2 param set /astibot_base max_linear_speed 1", confirm=YES)
+        r = gateway.run("ros2 param set /astibot_base max_linear_speed 1", confirm=YES)
         assert r.executed and not r.error  # astiop sends 1.0 for a double parameter
         assert ["param", "set", "/astibot_base", "max_linear_speed", "1.0"] in ros2_calls(robot)
-        backend: Ros2Backend = graph.backend
+        backend: Ros2Backend = gateway.backend
         out = backend._run(["param", "set", "/astibot_base", "max_linear_speed", "1"], 10.0)
         assert out.returncode == 0 and "Setting parameter failed" in out.out  # as rclcpp does
     finally:
-        graph.close()
+        gateway.close()
 
 
 def test_a_service_nobody_serves_is_reported_within_its_bound(monkeypatch):
@@ -229,26 +229,26 @@ def test_a_service_nobody_serves_is_reported_within_its_bound(monkeypatch):
 
         backend = Ros2Backend("ros2", 10.0, stream=False)
         backend.catalog.services["/dock"] = astibot_catalog().services["/dock"]  # listed earlier
-        graph = RobotGateway(backend, SafetyPolicy())
+        gateway = RobotGateway(backend, SafetyPolicy())
         t0 = time.monotonic()
-        r = graph.run("ros2 service call /dock std_srvs/srv/Trigger", confirm=YES, timeout=2.0)
+        r = gateway.run("ros2 service call /dock std_srvs/srv/Trigger", confirm=YES, timeout=2.0)
         assert "service /dock is not available" in r.error
         assert time.monotonic() - t0 < 30  # not forever: the bound holds
-        graph.close()
+        gateway.close()
 
 
 def test_the_graph_is_read_from_the_robot_and_refreshed_when_a_name_is_missing(robot):
-    graph = gateway(stream=False)
+    gateway = make_gateway(stream=False)
     try:
-        backend = graph.backend
+        backend = gateway.backend
         assert "/navigator" in backend.catalog.nodes and "/map" in backend.catalog.topics
         assert ["daemon", "start"] in ros2_calls(robot)
         del backend.catalog.topics["/battery_status"]  # as if it appeared after the last read
         backend.refreshed_at = 0.0
-        r = graph.run("ros2 topic echo /battery_status --once")
+        r = gateway.run("ros2 topic echo /battery_status --once")
         assert r.executed and not r.error and 0 < r.values["percentage"] <= 1
     finally:
-        graph.close()
+        gateway.close()
 
 
 def test_a_fresh_daemon_is_read_until_the_graph_settles_a_running_one_once(monkeypatch):
@@ -263,51 +263,51 @@ def test_a_fresh_daemon_is_read_until_the_graph_settles_a_running_one_once(monke
         assert status() == "The daemon is not running\n"
         subprocess.run(["ros2", "interface", "show", "std_srvs/srv/Trigger"], capture_output=True)
         assert status() == "The daemon is not running\n"  # no NodeStrategy: no daemon
-        gateway(stream=False).close()  # started the daemon: discovery may still be under way
+        make_gateway(stream=False).close()  # started the daemon: discovery may still be under way
         assert rounds(folder) == 2
-        gateway(stream=False).close()  # a second console finds it running
+        make_gateway(stream=False).close()  # a second console finds it running
         assert rounds(folder) == 3
 
 
 def test_byte_fields_printed_as_characters_are_read_as_numbers(robot):
-    graph = gateway(stream=False)
+    gateway = make_gateway(stream=False)
     try:
-        r = graph.run("ros2 topic echo /diagnostics --once")
+        r = gateway.run("ros2 topic echo /diagnostics --once")
         assert r.executed and not r.error, r.error
         levels = [s["level"] for s in r.values["status"]]
         assert levels and all(isinstance(level, int) for level in levels)
-        echoed = graph.backend._run(["topic", "echo", "/diagnostics", "--once"], 10.0).out
+        echoed = gateway.backend._run(["topic", "echo", "/diagnostics", "--once"], 10.0).out
         assert 'level: "\\0"' in echoed or 'level: "\\x00"' in echoed  # what ros2 printed
     finally:
-        graph.close()
+        gateway.close()
 
 
 def test_hz_returns_after_two_windows_with_the_rate(monkeypatch):
     with emulated_robot() as folder:  # real time: the rate is measured on the wall clock
         on_path(monkeypatch, folder)
-        graph = gateway(stream=False)
+        gateway = make_gateway(stream=False)
         try:
-            r = graph.run("ros2 topic hz /robot_pose", timeout=15)
+            r = gateway.run("ros2 topic hz /robot_pose", timeout=15)
             assert r.values["windows"] == 2  # stopped after two windows, not at the bound
             assert 5.0 < r.values["average_rate"] < 15.0  # /robot_pose is 10 Hz
         finally:
-            graph.close()
+            gateway.close()
 
 
 def test_a_goal_with_feedback_is_followed_to_its_result(robot):
-    graph = gateway()
+    gateway = make_gateway()
     try:
-        graph.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=YES)
-        assert until(lambda: idle(graph))
+        gateway.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=YES)
+        assert until(lambda: idle(gateway))
         near = GOAL.replace("x: 6.0", "x: 3.0") + " --feedback"
-        r = graph.run(near, confirm=YES)
+        r = gateway.run(near, confirm=YES)
         assert r.values["accepted"]
-        assert graph.wait_until_idle(60) == "succeeded"
-        pose = graph.state().pose
+        assert gateway.wait_until_idle(60) == "succeeded"
+        pose = gateway.state().pose
         assert abs(pose.x - 3.0) < 0.3 and abs(pose.y - 3.0) < 0.3  # it got there
-        assert any(e.kind == "goal" and "SUCCEEDED" in e.message for e in graph.events_since(0))
+        assert any(e.kind == "goal" and "SUCCEEDED" in e.message for e in gateway.events_since(0))
     finally:
-        graph.close()
+        gateway.close()
 
 
 def test_the_emulated_ros2_refuses_what_real_ros2_refuses(robot):
@@ -328,11 +328,11 @@ async def test_a_turn_on_the_robot_says_started_then_follows_up_arrived(robot, s
     from astiop.agent.specs import open_endpoint
     from astiop.agent.turn import Agent
 
-    graph = gateway()
+    gateway = make_gateway()
     try:
-        graph.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=YES)
-        assert until(lambda: idle(graph))
-        agent = Agent(graph, open_endpoint("rules"), store, confirm=YES)
+        gateway.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=YES)
+        assert until(lambda: idle(gateway))
+        agent = Agent(gateway, open_endpoint("rules"), store, confirm=YES)
         result = await agent.turn("go to x 4, y 3")
         assert result.started.startswith("goal accepted: (4, 3)") and "arriv" not in result.answer
         follow = await agent.follow_up(result, timeout_s=60)
@@ -342,31 +342,31 @@ async def test_a_turn_on_the_robot_says_started_then_follows_up_arrived(robot, s
         wrong = agent.gate_reason("where is it?", ["ros2 service call /dock std_srvs/srv/Trigger"])
         assert wrong and "question" in wrong
     finally:
-        graph.close()
+        gateway.close()
 
 
 def test_parameters_are_read_from_the_robot_with_their_types(robot):
-    graph = gateway(stream=False)
+    gateway = make_gateway(stream=False)
     try:
-        params = graph.catalog.params
+        params = gateway.catalog.params
         assert params[("/astibot_base", "max_linear_speed")].type == "double"
         assert params[("/astibot_base", "max_linear_speed")].writable  # astiop knows its limits
         sim_time = params[("/navigator", "use_sim_time")]  # on the robot, not in astiop's table
         assert sim_time.type == "boolean" and not sim_time.writable
-        r = graph.run("ros2 param get /navigator use_sim_time")
+        r = gateway.run("ros2 param get /navigator use_sim_time")
         assert r.executed and not r.error and "Boolean value is: False" in r.output
-        refused = graph.run("ros2 param set /navigator use_sim_time true", confirm=YES)
+        refused = gateway.run("ros2 param set /navigator use_sim_time true", confirm=YES)
         assert not refused.executed and "read-only" in refused.reason
         assert ["param", "list", "--param-type"] in ros2_calls(robot)
     finally:
-        graph.close()
+        gateway.close()
 
 
 def test_echo_text_is_what_ros2_prints_with_the_same_options(robot):
-    graph = gateway(stream=False)
+    gateway = make_gateway(stream=False)
     try:
         argv = ["topic", "echo", "/battery_status", "--once", "-l", "3", "--no-arr"]
-        ours = graph.run("ros2 " + " ".join(argv)).output
+        ours = gateway.run("ros2 " + " ".join(argv)).output
         theirs = subprocess.run(
             [str(robot / "ros2"), *argv], capture_output=True, text=True, timeout=30
         ).stdout
@@ -376,17 +376,17 @@ def test_echo_text_is_what_ros2_prints_with_the_same_options(robot):
         ]
         assert "location: 2x ..." in ours
     finally:
-        graph.close()
+        gateway.close()
 
 
 def test_display_options_shape_the_text_but_the_values_stay_whole(robot):
-    graph = gateway(stream=False)
+    gateway = make_gateway(stream=False)
     try:
-        status = graph.run("ros2 topic echo /robot_status --once --no-str")
+        status = gateway.run("ros2 topic echo /robot_status --once --no-str")
         assert status.values["state"] in ("idle", "charging") and "<string length" in status.output
-        scan = graph.run("ros2 topic echo /scan --once --no-arr -l 5")
+        scan = gateway.run("ros2 topic echo /scan --once --no-arr -l 5")
         assert len(scan.values["ranges"]) == 360 and "<sequence type" in scan.output
         sent = [c for c in ros2_calls(robot) if c[:3] == ["topic", "echo", "/scan"]]
         assert sent and "--no-arr" not in sent[-1] and "-l" not in sent[-1]
     finally:
-        graph.close()
+        gateway.close()

@@ -73,8 +73,8 @@ async def test_ros2_teleop_moves_the_robot(tmp_path, monkeypatch):
         on_path(monkeypatch, robot)
         app = ros2_console(tmp_path)
         async with app.run_test(size=SIZE) as pilot:
-            graph = app.services.gateway
-            graph.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=lambda _c: True)
+            gateway = app.services.gateway
+            gateway.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=lambda _c: True)
 
             def idle() -> bool:
                 st = app.robot_state

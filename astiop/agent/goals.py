@@ -49,10 +49,10 @@ def target_of(ex: Execution, places: dict[str, tuple[float, float]]) -> tuple[fl
     return (float(xy[1]), float(xy[2])) if xy else None
 
 
-def outcome_at(graph: RobotGateway, target: tuple[float, float] | None, name: str = "") -> str:
+def outcome_at(gateway: RobotGateway, target: tuple[float, float] | None, name: str = "") -> str:
     """How a goal that reported no outcome ended, from the robot's reported state and pose
     (for a dock or undock, from its reported docked flag)."""
-    state = graph.state()
+    state = gateway.state()
     if state.state_word in MOVING:
         return "still going"
     if name in ("dock", "undock") and state.status is not None:
@@ -64,11 +64,11 @@ def outcome_at(graph: RobotGateway, target: tuple[float, float] | None, name: st
     return "ended"
 
 
-def started_text(graph: RobotGateway, ex: Execution) -> str:
+def started_text(gateway: RobotGateway, ex: Execution) -> str:
     """'goal accepted: shipping, 11.4 m to go', the distance along the robot's own /plan."""
     deadline = time.monotonic() + 1.0
     while True:
-        togo = graph.state().distance_remaining
+        togo = gateway.state().distance_remaining
         if togo is not None or time.monotonic() > deadline:
             break
         time.sleep(0.05)
@@ -77,7 +77,7 @@ def started_text(graph: RobotGateway, ex: Execution) -> str:
 
 
 async def follow(
-    graph: RobotGateway,
+    gateway: RobotGateway,
     started_line: str,
     timeout_s: float,
     target: tuple[float, float] | None = None,
@@ -92,11 +92,11 @@ async def follow(
     outcome, timed_out = None, False
     while outcome is None:
         step = max(0.0, min(1.0, deadline - time.monotonic()))
-        outcome = await asyncio.to_thread(graph.wait_until_idle, step)
+        outcome = await asyncio.to_thread(gateway.wait_until_idle, step)
         if outcome is None and time.monotonic() >= deadline:
             timed_out = True
             break
-        state = await asyncio.to_thread(graph.state)
+        state = await asyncio.to_thread(gateway.state)
         if state.e_stopped:
             outcome = "e-stopped"
         idle = not (state.status and state.status.active_goal)
@@ -107,8 +107,8 @@ async def follow(
         outcome = "still going"
     where = re.sub(r", [\d.]+ m to go$", "", started_line.removeprefix("goal accepted: "))
     if outcome is None:
-        outcome = await asyncio.to_thread(outcome_at, graph, target, where)
-    state = await asyncio.to_thread(graph.state)
+        outcome = await asyncio.to_thread(outcome_at, gateway, target, where)
+    state = await asyncio.to_thread(gateway.state)
     if outcome == "succeeded":
         text = {"dock": "docked", "undock": "undocked"}.get(where, f"arrived: {where}")
         if state.pose is not None:

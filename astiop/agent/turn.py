@@ -36,7 +36,7 @@ DEADLINE_S = 120.0  # no reply streams longer than this, whatever the server doe
 class Agent:
     def __init__(
         self,
-        graph: RobotGateway,
+        gateway: RobotGateway,
         endpoint: LLMEndpoint,
         store: Store | None = None,
         *,
@@ -55,7 +55,7 @@ class Agent:
             raise ValueError(f"interpretation must be 'grounded' or 'raw', not '{interpretation}'")
         if mode not in ("command", "tool") and not endpoint.is_rules:
             raise ValueError(f"mode must be 'command' or 'tool', not '{mode}'")
-        self.graph = graph
+        self.gateway = gateway
         self.endpoint = endpoint
         self.store = store
         self.recorder = Recorder(store, session)
@@ -87,7 +87,7 @@ class Agent:
             if self.store is not None:
                 found = {loc.name: (loc.x, loc.y) for loc in self.store.list_locations()}
             else:
-                geometry = self.graph.map_geometry()
+                geometry = self.gateway.map_geometry()
                 stations = geometry.stations if isinstance(geometry, WarehouseMap) else ()
                 found = {s.name: s.pose[:2] for s in stations}
             self._turn_places = found
@@ -99,7 +99,7 @@ class Agent:
     def _review(self, command: str) -> Review:
         """Validation and safety for one command, once per turn."""
         if command not in self._reviews:
-            self._reviews[command] = self.graph.review(command)
+            self._reviews[command] = self.gateway.review(command)
         return self._reviews[command]
 
     def gate_reason(self, request: str, commands: list[str]) -> str | None:
@@ -205,7 +205,7 @@ class Agent:
             return rules.plan(request, locations)
         req = planner.plan_request(
             self.mode,
-            self.graph.catalog,
+            self.gateway.catalog,
             locations,
             request,
             self.history[-HISTORY_TURNS:],
@@ -247,7 +247,7 @@ class Agent:
         for seq, cmd in enumerate(commands):
             t0 = time.perf_counter()
             ex = await asyncio.to_thread(
-                self.graph.run, cmd, self.confirm, review=self._reviews.get(cmd)
+                self.gateway.run, cmd, self.confirm, review=self._reviews.get(cmd)
             )
             result.exec_s += time.perf_counter() - t0
             result.commands.append(ex)
@@ -260,16 +260,16 @@ class Agent:
             if seq + 1 < len(commands):
                 emit("status", "waiting for the robot to arrive")
                 t1 = time.perf_counter()
-                outcome = await asyncio.to_thread(self.graph.wait_until_idle, self.nav_wait_s)
+                outcome = await asyncio.to_thread(self.gateway.wait_until_idle, self.nav_wait_s)
                 if outcome is None:  # a robot that reports none: its pose says
                     target = goals.target_of(ex, self.places())
                     outcome = await asyncio.to_thread(
-                        goals.outcome_at, self.graph, target, goals.goal_name(ex)
+                        goals.outcome_at, self.gateway, target, goals.goal_name(ex)
                     )
                 result.exec_s += time.perf_counter() - t1
                 result.waited[seq] = outcome
             else:
-                result.started = await asyncio.to_thread(goals.started_text, self.graph, ex)
+                result.started = await asyncio.to_thread(goals.started_text, self.gateway, ex)
                 result.target = goals.target_of(ex, self.places())
 
     # -- interpretation ------------------------------------------------------------------
@@ -332,7 +332,7 @@ class Agent:
     async def follow_up(self, result: TurnResult, timeout_s: float | None = None) -> str:
         """Wait for the goal the turn started to end; record and return how it ended."""
         wait = self.nav_wait_s if timeout_s is None else timeout_s
-        result.outcome, text = await goals.follow(self.graph, result.started, wait, result.target)
+        result.outcome, text = await goals.follow(self.gateway, result.started, wait, result.target)
         await self.recorder.outcome(result)
         return text
 

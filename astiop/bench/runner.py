@@ -255,30 +255,30 @@ async def _run_case(world, settings, config, endpoint: LLMEndpoint, suite, case,
 async def _robot_case(store, settings, config, endpoint, case, mode, who):
     """One request against a seeded simulator; `store` is the run's own world (locations)."""
     sim = stage2.build_sim(case, store, config.seed)
-    graph = RobotGateway(SimBackend(sim, store), make_safety(settings, store))
-    recorder = _case_recorder(config, graph, sim, case, mode, who)
+    gateway = RobotGateway(SimBackend(sim, store), make_safety(settings, store))
+    recorder = _case_recorder(config, gateway, sim, case, mode, who)
     try:
-        return await _drive_case(store, config, endpoint, case, mode, sim, graph)
+        return await _drive_case(store, config, endpoint, case, mode, sim, gateway)
     finally:
         if recorder is not None:
             sim.after_step.remove(recorder.poll)
             await asyncio.to_thread(recorder.stop)
 
 
-def _case_recorder(config, graph, sim, case, mode, who):
+def _case_recorder(config, gateway, sim, case, mode, who):
     """A recorder polled after every simulator step, when the run records (--record DIR)."""
     if not config.record_dir:
         return None
     run_id, model = who
     name = re.sub(r"[^A-Za-z0-9_.-]+", "_", f"run{run_id}-{model}-{mode}-{case.id}")
-    recorder = SessionRecorder(Path(config.record_dir) / f"{name}.mcap", graph, flush_s=FLUSH_S)
+    recorder = SessionRecorder(Path(config.record_dir) / f"{name}.mcap", gateway, flush_s=FLUSH_S)
     sim.after_step.append(recorder.poll)
     return recorder
 
 
-async def _drive_case(store, config, endpoint, case, mode, sim, graph):
+async def _drive_case(store, config, endpoint, case, mode, sim, gateway):
     agent = Agent(
-        graph,
+        gateway,
         endpoint,
         None,
         mode=mode,

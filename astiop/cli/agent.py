@@ -32,7 +32,7 @@ def chat(
     from astiop.agent.embedded import EmbeddedModelError
     from astiop.agent.specs import SpecError, open_endpoint
     from astiop.agent.turn import Agent
-    from astiop.robot.factory import make_robot_graph
+    from astiop.robot.factory import make_robot_gateway
 
     st = state(ctx)
     settings = st.settings
@@ -48,7 +48,7 @@ def chat(
             n_ctx=settings.llm.context,
             timeout_s=settings.llm.timeout_s,
         )
-        graph = make_robot_graph(settings, st.store)
+        gateway = make_robot_gateway(settings, st.store)
     except (SpecError, BackendError) as exc:
         fail(str(exc))
 
@@ -57,7 +57,7 @@ def chat(
 
     confirm = (lambda _c: True) if yes else (ask if interactive() else None)
     agent = Agent(
-        graph,
+        gateway,
         endpoint,
         st.store,
         mode=mode,
@@ -98,7 +98,7 @@ def chat(
         fail(str(exc))
     finally:
         endpoint.close()
-    graph.close()
+    gateway.close()
     if as_json:
         print_json({**result.as_json(), "follow_up": follow or None})
     else:

@@ -59,7 +59,7 @@ def replay(
         try:
             backend = open_replay(file, store=store, speed=speed, paused=paused)
             gateway = RobotGateway(backend, store=store, who="replay")
-            app = make_app(st.settings, store, graph=gateway)
+            app = make_app(st.settings, store, gateway=gateway)
         except (RecordingError, SpecError, BackendError) as exc:
             fail(str(exc))
         app.run()

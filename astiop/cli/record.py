@@ -48,14 +48,14 @@ def record(
     for name, value in (("--duration", duration), ("--scan-hz", scan_hz)):
         if value is not None and not (math.isfinite(value) and 0 < value <= 86400):
             fail(f"{name} must be a positive number")
-    from astiop.robot.factory import make_robot_graph
+    from astiop.robot.factory import make_robot_gateway
 
     st = state(ctx)
     path = file or default_path(st.db_path.parent)
     for name in goto:
         st.store.require_location(name)  # a one-line error before anything starts
     try:
-        gateway = make_robot_graph(st.settings, st.store, realtime=True, who="astiop record")
+        gateway = make_robot_gateway(st.settings, st.store, realtime=True, who="astiop record")
         gateway.start()
     except BackendError as exc:
         fail(str(exc))

@@ -20,14 +20,14 @@ def exec_command(
     ),
 ) -> None:
     """Validate and run one `ros2` command (the subset the agent uses) on the robot."""
-    from astiop.robot.factory import make_robot_graph
+    from astiop.robot.factory import make_robot_gateway
 
     st = state(ctx)
     try:
-        graph = make_robot_graph(st.settings, st.store)
+        gateway = make_robot_gateway(st.settings, st.store)
     except BackendError as exc:
         fail(str(exc))
-    review = graph.review(command)
+    review = gateway.review(command)
     if dry_run:
         c = review.checked
         data = {
@@ -53,10 +53,10 @@ def exec_command(
 
     # no terminal to ask on and no --yes: the graph refuses actuating commands
     confirm = (lambda _c: True) if yes else (ask if interactive() else None)
-    result = graph.run(command, confirm=confirm, source="exec")
+    result = gateway.run(command, confirm=confirm, source="exec")
     if result.executed and settle and result.kind == "actuate":
-        graph.wait_until_idle(900.0)
-    graph.close()
+        gateway.wait_until_idle(900.0)
+    gateway.close()
     if as_json:
         print_json(result.as_json())
     else:

@@ -2,7 +2,6 @@
 
 from astiop.recording.writer import (
     FLUSH_S,
-    TOPICS,
     RecordingError,
     SessionRecorder,
     default_path,
@@ -13,7 +12,6 @@ from astiop.recording.writer import (
 
 __all__ = [
     "FLUSH_S",
-    "TOPICS",
     "RecordingError",
     "SessionRecorder",
     "default_path",

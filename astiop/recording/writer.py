@@ -27,18 +27,6 @@ from astiop.ros2.interfaces import normalize_type, used_types
 
 FLUSH_S = 2.0
 POLL_HZ = 20.0
-TOPICS = (
-    "/robot_pose",
-    "/odom",
-    "/battery_status",
-    "/robot_status",
-    "/scan",
-    "/obstacles",
-    "/plan",
-    "/tf",
-    "/diagnostics",
-    "/conveyor/status",
-)
 SEPARATOR = "=" * 80
 
 
@@ -160,8 +148,8 @@ class SessionRecorder:
     def poll(self) -> None:
         """Write what is new since the last poll; close a chunk every flush_s."""
         robot_now = self.gateway.state().t  # the clock the topics are logged on
-        types = {n: s.type for n, s in self.gateway.catalog.topics.items()}
-        names = [t for t in TOPICS if t in types]
+        topics = self.gateway.catalog.topics
+        names = self.gateway.catalog.recorded_topics()
         times = self.gateway.message_times(names)  # published, or received on a robot
         for topic, message in self.gateway.messages(names).items():
             stamp = int(times.get(topic, robot_now) * 1e9)
@@ -170,7 +158,7 @@ class SessionRecorder:
                 continue  # nothing new on this topic
             if topic == "/scan" and last is not None and stamp - last < self.scan_period * 1e9:
                 continue
-            self._ros2(topic, types[topic], message, stamp)
+            self._ros2(topic, topics[topic].type, message, stamp)
             self._last[topic] = stamp
         for ev in self.gateway.events_since(self._event_seq):
             self._event_seq = max(self._event_seq, ev.seq)

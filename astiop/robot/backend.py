@@ -2,14 +2,18 @@
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field
-from typing import Any, Protocol, Union
+from typing import TYPE_CHECKING, Any, Union
 
 from astiop.robot.state import OccupancyGrid, RobotEvent, RobotState, TopicStat
 from astiop.ros2.catalog import Catalog
 from astiop.ros2.validation import Checked
 from astiop.warehouse import WarehouseMap
+
+if TYPE_CHECKING:
+    from astiop.robot.backends.replay.backend import Playback
 
 # A known layout (the simulator's warehouse), the robot's /map, or nothing: then the map view
 # follows the robot and shows its scan.
@@ -55,49 +59,74 @@ class Execution:
         return data
 
 
-class RobotBackend(Protocol):
+class RobotBackend(ABC):
+    """The base of every backend: what the gateway and the app read, with the defaults of a live
+    robot whose graph does not change. Each backend overrides what it has."""
+
     name: str  # sim | ros2 | replay
     catalog: Catalog
     capabilities: frozenset[str]  # "commands", "teleop"; a replay has neither
+    label: str = ""  # how the header names it, when `name` alone is not enough
+    read_only: str = ""  # why commands are refused, when they are
+    playback: Playback | None = None  # a replay's clock
+    refreshed_at: float = 0.0  # time.monotonic() of the last read of the robot's graph
+
+    def refresh(self) -> bool:
+        """Read the robot's graph again; False if nothing was read."""
+        return False
 
     @property
+    @abstractmethod
     def e_stopped(self) -> bool: ...
 
+    @abstractmethod
     def start(self) -> None: ...
 
+    @abstractmethod
     def close(self) -> None: ...
 
+    @abstractmethod
     def estop(self) -> list[str]:
         """Stop the robot now; returns the failures of each step (empty: all went out)."""
         ...
 
+    @abstractmethod
     def release_estop(self) -> None: ...
 
+    @abstractmethod
     def execute(self, checked: Checked, timeout: float) -> tuple[str, object]: ...
 
+    @abstractmethod
     def drive(self, twist: dict) -> None:
         """Teleop: hold this (already clamped) velocity for a short lapse time."""
         ...
 
+    @abstractmethod
     def state(self) -> RobotState:
         """The latest state; never blocks on the robot."""
         ...
 
+    @abstractmethod
     def messages(self, names: Iterable[str]) -> dict[str, dict]:
         """The latest message on each of these topics that has one, as the robot sent it."""
         ...
 
+    @abstractmethod
     def message_times(self, names: Iterable[str]) -> dict[str, float]:
         """When each of those latest messages came, on the robot's clock (`RobotState.t`):
         published (simulator), received (robot), logged (replay)."""
         ...
 
+    @abstractmethod
     def events_since(self, seq: int) -> list[RobotEvent]: ...
 
+    @abstractmethod
     def topic_stats(self) -> list[TopicStat]: ...
 
+    @abstractmethod
     def wait_until_idle(self, timeout_s: float) -> str | None:
         """Block until the robot has no active goal; returns how the goal ended, if known."""
         ...
 
+    @abstractmethod
     def map_geometry(self) -> MapGeometry: ...

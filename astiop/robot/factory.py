@@ -25,7 +25,7 @@ def make_safety(settings: Settings, store: Store | None) -> SafetyPolicy:
     )
 
 
-def make_sim_graph(
+def make_sim_gateway(
     settings: Settings,
     store: Store | None,
     *,
@@ -40,7 +40,7 @@ def make_sim_graph(
     return RobotGateway(backend, make_safety(settings, store), store=store, who=who)
 
 
-def make_robot_graph(
+def make_robot_gateway(
     settings: Settings, store: Store | None, *, realtime: bool = False, who: str = "astiop"
 ) -> RobotGateway:
     if settings.robot.backend == "ros2":
@@ -54,4 +54,4 @@ def make_robot_graph(
             store=store,
             who=who,
         )
-    return make_sim_graph(settings, store, realtime=realtime, who=who)
+    return make_sim_gateway(settings, store, realtime=realtime, who=who)

@@ -115,12 +115,12 @@ class RobotGateway:
 
     @property
     def read_only_reason(self) -> str:
-        return getattr(self.backend, "read_only", f"the {self.backend.name} robot is read-only")
+        return self.backend.read_only or f"the {self.backend.name} robot is read-only"
 
     @property
     def playback(self):
         """The replay's clock (pause, step, speed), or None on a live robot."""
-        return getattr(self.backend, "playback", None)
+        return self.backend.playback
 
     # -- commands --------------------------------------------------------------------------
     def review(self, text: str) -> Review:
@@ -130,11 +130,9 @@ class RobotGateway:
         return self.safety.review(checked, self.e_stopped)
 
     def _refresh(self) -> bool:
-        refresh = getattr(self.backend, "refresh", None)
-        last = getattr(self.backend, "refreshed_at", 0.0)
-        if refresh is None or time.monotonic() - last < 5.0:
+        if time.monotonic() - self.backend.refreshed_at < 5.0:
             return False
-        return refresh()
+        return self.backend.refresh()
 
     def run(
         self,

@@ -16,6 +16,8 @@ class TopicSpec:
     publisher: str  # node, '' when the robot only listens
     subscriber: str = ""
     description: str = ""
+    # "state": the live state is built from it, and it is recorded; "record": recorded only
+    role: str = ""
 
     @property
     def actuating(self) -> bool:
@@ -68,6 +70,14 @@ class Catalog:
             "Action Servers": [(a.name, a.type) for a in self.actions.values() if a.node == node],
         }
 
+    def state_topics(self) -> list[str]:
+        """The topics the robot's live state is built from, where the robot has them."""
+        return [t.name for t in self.topics.values() if t.role == "state"]
+
+    def recorded_topics(self) -> list[str]:
+        """The topics a session recording keeps, where the robot has them."""
+        return [t.name for t in self.topics.values() if t.role in ("state", "record")]
+
 
 _TOPICS = [
     TopicSpec(
@@ -85,6 +95,7 @@ _TOPICS = [
         "/astibot_base",
         "",
         "wheel odometry: pose and velocity",
+        role="state",
     ),
     TopicSpec(
         "/robot_pose",
@@ -93,6 +104,7 @@ _TOPICS = [
         "/navigator",
         "",
         "pose in the map frame: x, y in m, theta in rad",
+        role="state",
     ),
     TopicSpec(
         "/battery_status",
@@ -101,6 +113,7 @@ _TOPICS = [
         "/battery_monitor",
         "",
         "voltage, current, charge; percentage is 0-1",
+        role="state",
     ),
     TopicSpec(
         "/robot_status",
@@ -110,9 +123,16 @@ _TOPICS = [
         "",
         "state (idle, navigating, docking, charging, blocked, e_stopped, fault), mode, "
         "goal, fault, speed",
+        role="state",
     ),
     TopicSpec(
-        "/scan", "sensor_msgs/msg/LaserScan", 10, "/lidar_driver", "", "360 beams, 25 m range"
+        "/scan",
+        "sensor_msgs/msg/LaserScan",
+        10,
+        "/lidar_driver",
+        "",
+        "360 beams, 25 m range",
+        role="state",
     ),
     TopicSpec(
         "/obstacles",
@@ -121,6 +141,7 @@ _TOPICS = [
         "/obstacle_detector",
         "",
         "obstacles seen in the scan: count, kind, distance, bearing, position",
+        role="state",
     ),
     TopicSpec(
         "/diagnostics",
@@ -129,6 +150,7 @@ _TOPICS = [
         "/astibot_base",
         "",
         "health of motors, lidar, battery, conveyor",
+        role="record",
     ),
     TopicSpec(
         "/conveyor/status",
@@ -137,11 +159,26 @@ _TOPICS = [
         "/conveyor_plc",
         "",
         "belt running, direction, loaded, both load sensors, lamp",
+        role="state",
     ),
     TopicSpec(
-        "/plan", "nav_msgs/msg/Path", 1, "/navigator", "", "the global path while navigating"
+        "/plan",
+        "nav_msgs/msg/Path",
+        1,
+        "/navigator",
+        "",
+        "the global path while navigating",
+        role="state",
     ),
-    TopicSpec("/tf", "tf2_msgs/msg/TFMessage", 50, "/astibot_base", "", "map -> odom -> base_link"),
+    TopicSpec(
+        "/tf",
+        "tf2_msgs/msg/TFMessage",
+        50,
+        "/astibot_base",
+        "",
+        "map -> odom -> base_link",
+        role="record",
+    ),
     TopicSpec(
         "/tf_static", "tf2_msgs/msg/TFMessage", 0, "/astibot_base", "", "base_link -> laser, camera"
     ),

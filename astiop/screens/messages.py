@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 from textual.message import Message
 
+from astiop.agent.result import TurnResult
+from astiop.robot.backend import Execution
 from astiop.robot.state import RobotEvent, RobotState, TopicStat
 
 
@@ -35,13 +35,13 @@ class ReplyTokenReceived(Message):
 
 
 class CommandExecuted(Message):
-    def __init__(self, execution: Any):
+    def __init__(self, execution: Execution):
         super().__init__()
         self.execution = execution
 
 
 class TurnFinished(Message, bubble=False):
-    def __init__(self, result: Any, model: str):
+    def __init__(self, result: TurnResult, model: str):
         super().__init__()
         self.result = result
         self.model = model
@@ -50,7 +50,7 @@ class TurnFinished(Message, bubble=False):
 class GoalEnded(Message, bubble=False):
     """How the goal a turn started ended: a follow-up line tied to that turn."""
 
-    def __init__(self, result: Any, text: str):
+    def __init__(self, result: TurnResult, text: str):
         super().__init__()
         self.result = result
         self.text = text

@@ -11,8 +11,7 @@ import time
 from typing import Any
 
 from astiop.recording.reader import Recording
-from astiop.recording.writer import TOPICS
-from astiop.robot.backend import BackendError
+from astiop.robot.backend import BackendError, RobotBackend
 from astiop.robot.state import (
     RobotEvent,
     RobotState,
@@ -90,7 +89,7 @@ class Playback:
             return self.speed
 
 
-class ReplayBackend:
+class ReplayBackend(RobotBackend):
     name = "replay"
     capabilities: frozenset[str] = frozenset()  # no commands, no teleop
     read_only = READ_ONLY
@@ -153,7 +152,7 @@ class ReplayBackend:
     def state(self) -> RobotState:
         t_ns = self.playback.now_ns()
         self._show_turns(t_ns)
-        messages = self.recording.latest(TOPICS, t_ns)
+        messages = self.recording.latest(self.catalog.recorded_topics(), t_ns)
         seq = sum(1 for ev in self._events if ev.t * 1e9 <= t_ns)
         return from_messages(t_ns / 1e9, messages, event_seq=seq)
 

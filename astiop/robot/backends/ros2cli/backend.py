@@ -14,7 +14,7 @@ import time
 from collections import deque
 from typing import Any
 
-from astiop.robot.backend import BackendError
+from astiop.robot.backend import BackendError, RobotBackend
 from astiop.robot.backends.ros2cli import process as ros2_process
 from astiop.robot.backends.ros2cli.graph import GraphReader
 from astiop.robot.backends.ros2cli.motion import STDIN_DISTROS, ArmedStop, TeleopPublisher
@@ -44,23 +44,12 @@ from astiop.ros2.render import (
 )
 from astiop.ros2.validation import Checked
 
-# Streamed for the live state, where the robot has them; /odom only when /robot_pose is absent
-# (50 Hz of YAML costs more than it tells).
-STATE_TOPICS = (
-    "/robot_pose",
-    "/battery_status",
-    "/robot_status",
-    "/scan",
-    "/obstacles",
-    "/plan",
-    "/conveyor/status",
-)
 ARRAYS = {"/scan", "/plan", "/obstacles"}  # echoed in full: ros2 truncates at 128 items
 MOVING = {"navigating", "docking", "blocked"}
 GRAPH_REFRESH_S = 30.0
 
 
-class Ros2Backend:
+class Ros2Backend(RobotBackend):
     name = "ros2"
     capabilities = frozenset({"commands", "teleop"})
 
@@ -121,9 +110,10 @@ class Ros2Backend:
                     self._armed.arm()
         if not self.stream:
             return
-        names = [n for n in STATE_TOPICS if n in self.catalog.topics]
-        if "/robot_pose" not in self.catalog.topics and "/odom" in self.catalog.topics:
-            names.append("/odom")
+        # /odom only when /robot_pose is absent (50 Hz of YAML costs more than it tells)
+        names = self.catalog.state_topics()
+        if "/robot_pose" in names and "/odom" in names:
+            names.remove("/odom")
         for name in names:
             extra = ("--full-length",) if name in ARRAYS else ()
             spec = self.catalog.topics[name]

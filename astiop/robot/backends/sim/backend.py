@@ -7,7 +7,7 @@ import time
 from collections import deque
 from typing import Any
 
-from astiop.robot.backend import BackendError
+from astiop.robot.backend import BackendError, RobotBackend
 from astiop.robot.backends.sim import messages as sm
 from astiop.robot.backends.sim.verbs import SimVerbs
 from astiop.robot.state import RobotEvent, RobotState, TopicStat, from_messages
@@ -17,19 +17,8 @@ from astiop.sim.runner import SimRunner
 from astiop.sim.simulator import GoalError, Simulator
 from astiop.store import Store
 
-# What the state is built from: the same messages the robot publishes.
-STATE_TOPICS = (
-    "/robot_pose",
-    "/odom",
-    "/battery_status",
-    "/robot_status",
-    "/obstacles",
-    "/plan",
-    "/conveyor/status",
-)
 
-
-class SimBackend(SimVerbs):
+class SimBackend(SimVerbs, RobotBackend):
     name = "sim"
     capabilities = frozenset({"commands", "teleop"})
 
@@ -76,7 +65,7 @@ class SimBackend(SimVerbs):
     # -- live state -------------------------------------------------------------------
     def state(self) -> RobotState:
         snap = self.sim.snapshot()
-        messages = {name: self.message(name, snap) for name in (*STATE_TOPICS, "/scan")}
+        messages = {name: self.message(name, snap) for name in self.catalog.state_topics()}
         if snap.goal_id == 0:
             del messages["/plan"]
         return from_messages(snap.t, messages, e_stopped=snap.e_stopped, event_seq=snap.event_seq)
