@@ -251,6 +251,19 @@ def test_geofence(gateway):
     assert not r.executed and "geofence" in r.reason
 
 
+@pytest.mark.parametrize(
+    "orientation", ["{z: 1.0e+308, w: 1.0e+308}", "{w: 0.0}", "{z: 0.5, w: 0.5}", "{w: .nan}"]
+)
+def test_a_goal_whose_orientation_is_not_a_unit_quaternion_is_refused(gateway, orientation):
+    r = gateway.run(
+        "ros2 action send_goal /navigate_to_pose nav2_msgs/action/NavigateToPose "
+        f'"{{pose: {{pose: {{position: {{x: 15.0, y: 3.5}}, orientation: {orientation}}}}}}}"',
+        confirm=YES,
+    )
+    assert not r.executed and gateway.backend.ran == []
+    assert "unit quaternion" in r.reason or "finite" in r.reason, r.reason
+
+
 def test_action_goal_with_feedback_until_arrival(gateway):
     r = gateway.run(
         "ros2 action send_goal /navigate_to_pose nav2_msgs/action/NavigateToPose "

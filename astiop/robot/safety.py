@@ -11,6 +11,8 @@ from astiop.warehouse import GEOFENCE_MARGIN, fence_text, inside_fence
 
 # Services that only ever make the robot safer: never held by the e-stop, never confirmed.
 ALWAYS_ALLOWED = {"/stop"}
+# |q| may differ from 1 by this much (a heading printed to a few digits still passes)
+UNIT_QUATERNION_TOLERANCE = 1e-3
 
 
 @dataclass(frozen=True)
@@ -75,6 +77,16 @@ class SafetyPolicy:
             p = pose["pose"]["position"]
             if not self.inside_geofence(p["x"], p["y"]):
                 return Review(False, self._fence_reason(p["x"], p["y"]), checked, False)
+            q = pose["pose"]["orientation"]
+            norm = math.hypot(q["x"], q["y"], q["z"], q["w"])  # hypot: no overflow at 1e308
+            if not abs(norm - 1.0) <= UNIT_QUATERNION_TOLERANCE:
+                return Review(
+                    False,
+                    f"the goal's orientation is not a unit quaternion (|q| = {norm:.6g}); "
+                    "for a heading θ use {z: sin(θ/2), w: cos(θ/2)}",
+                    checked,
+                    False,
+                )
         elif cmd.key == ("param", "set") and cmd.args.get("param") in (
             "max_linear_speed",
             "max_angular_speed",
