@@ -212,3 +212,54 @@ async def test_each_command_is_validated_once_and_again_after_the_robot_changes(
     assert reviewed.count(result.commands[0].command) == 1
     assert reviewed.count(result.commands[1].command) == 2
     assert any("0.3" in n for n in result.commands[1].notes), result.commands[1].notes
+
+
+@pytest.mark.parametrize(
+    ("model", "replies"),
+    [
+        # tool mode: the tools are narrowed by it, the plan and the turn are gated by it
+        ("tool", ['{"steps": [{"tool": "battery"}]}', "85 %."]),
+        # the gate refuses the first plan, the repair passes
+        (
+            "command",
+            [
+                '{"commands": ["ros2 service call /dock std_srvs/srv/Trigger"]}',
+                '{"commands": ["ros2 topic echo /battery_status --once"]}',
+                "85 %.",
+            ],
+        ),
+        ("rules", []),
+        ("down", []),  # the server is down: the rules fallback plans from the same intents
+    ],
+)
+async def test_a_turn_classifies_the_request_once(llm, store, monkeypatch, model, replies):
+    import socket
+
+    from astiop.agent import intent
+
+    classified: list[str] = []
+    real = intent.classify_clause
+
+    def counting(clause, places):
+        classified.append(clause)
+        return real(clause, places)
+
+    monkeypatch.setattr(intent, "classify_clause", counting)  # every classification goes here
+    llm.replies = replies
+    if model == "rules":
+        gateway = RobotGateway(SimBackend(Simulator(seed=0), store), SafetyPolicy())
+        agent = Agent(gateway, open_endpoint("rules"), store, confirm=YES)
+    elif model == "down":
+        with socket.socket() as sock:
+            sock.bind(("127.0.0.1", 0))
+            port = sock.getsockname()[1]
+        gateway = RobotGateway(SimBackend(Simulator(seed=0), store), SafetyPolicy())
+        endpoint = open_endpoint(f"openai:m@http://127.0.0.1:{port}/v1")
+        agent = Agent(gateway, endpoint, store, confirm=YES)
+    else:
+        agent = make_agent(llm, store, mode=model)
+    result = await agent.turn("what is the battery level?")
+    assert [c.command for c in result.commands] == ["ros2 topic echo /battery_status --once"]
+    assert result.commands[0].executed and not result.refused
+    assert result.repaired == (model == "command")
+    assert classified == ["what is the battery level?"]

@@ -10,7 +10,8 @@ import contextlib
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 
-from astiop.agent import intent, prompts
+from astiop.agent import prompts
+from astiop.agent.intent import Intent
 from astiop.agent.llm import LLMProtocolError
 from astiop.agent.replies import ReplyError, commands_from_reply, steps_from_reply
 from astiop.agent.reply_stream import Completion
@@ -45,14 +46,16 @@ def plan_request(
     catalog: Catalog,
     locations: list[str],
     request: str,
+    intents: list[Intent],
     history: list[tuple[str, str]],
     narrow_tools: bool = True,
 ) -> PlanRequest:
     """The messages of one planning call: the prompt of the mode and its examples (the same for
-    every request, so a server's prompt cache keeps them), earlier turns, then the request."""
+    every request, so a server's prompt cache keeps them), earlier turns, then the request.
+    `intents` is the request as classified (tool mode offers only the tools that fit them)."""
     if mode == "tool":
         every = build_tools(catalog, locations)
-        tools = narrow(every, intent.classify(request, locations)) if narrow_tools else every
+        tools = narrow(every, intents) if narrow_tools else every
         system, schema, grammar = (
             prompts.tool_prompt(every),
             tool_schema(tools),

@@ -50,8 +50,13 @@ def command_for(intent: Intent) -> str | None:
 
 
 def plan(request: str, locations: list[str]) -> list[str]:
+    return plan_intents(classify(request, locations))
+
+
+def plan_intents(intents: list[Intent]) -> list[str]:
+    """The commands for a request already classified (an agent turn classifies it once)."""
     commands: list[str] = []
-    for intent in classify(request, locations):
+    for intent in intents:
         command = command_for(intent)
         if command and command not in commands:
             commands.append(command)

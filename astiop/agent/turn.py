@@ -16,6 +16,7 @@ from collections.abc import Callable
 from typing import Any
 
 from astiop.agent import gate, goals, grounding, intent, planner, prompts, rules
+from astiop.agent.intent import Intent
 from astiop.agent.llm import LLMError, LLMHTTPError, LLMTimeout, LLMUnavailable
 from astiop.agent.recorder import Recorder
 from astiop.agent.reply_stream import Completion
@@ -104,9 +105,11 @@ class Agent:
 
     def gate_reason(self, request: str, commands: list[str]) -> str | None:
         """Why the plan does not do what the request asks; None when it does."""
-        places = self.places()
+        return self._gate_reason(intent.classify(request, self.locations()), commands)
+
+    def _gate_reason(self, intents: list[Intent], commands: list[str]) -> str | None:
         actions = [(c, gate.action_of(self._review(c).checked)) for c in commands]
-        return gate.check(intent.classify(request, list(places)), actions, places)
+        return gate.check(intents, actions, self.places())
 
     # -- the turn ------------------------------------------------------------------------
     async def turn(self, request: str, on_event: OnEvent | None = None) -> TurnResult:
@@ -117,8 +120,10 @@ class Agent:
         await self.recorder.start(result)
         try:
             fallback = False
+            # classified once: the planner narrows the tools by it, the gate holds plans to it
+            intents = intent.classify(request, self.locations())
             try:
-                commands = await self._plan(request, result, emit)
+                commands = await self._plan(request, intents, result, emit)
             except (LLMUnavailable, LLMTimeout, LLMHTTPError) as exc:
                 _keep_partial(result, exc)
                 unavailable = not isinstance(exc, LLMHTTPError) or exc.status in (502, 503, 504)
@@ -126,8 +131,8 @@ class Agent:
                     raise
                 # the baseline answers instead, labelled so; the turn still records the error
                 result.error = f"{exc}; answered by the rules fallback"
-                commands, fallback = rules.plan(request, self.locations()), True
-            refused = await asyncio.to_thread(self.gate_reason, request, commands)
+                commands, fallback = rules.plan_intents(intents), True
+            refused = await asyncio.to_thread(self._gate_reason, intents, commands)
             if refused:
                 await self._refuse(commands, refused, result, emit)
             else:
@@ -199,15 +204,17 @@ class Agent:
         return c
 
     # -- planning ------------------------------------------------------------------------
-    async def _plan(self, request: str, result: TurnResult, emit) -> list[str]:
-        locations = self.locations()
+    async def _plan(
+        self, request: str, intents: list[Intent], result: TurnResult, emit
+    ) -> list[str]:
         if self.endpoint.is_rules:
-            return rules.plan(request, locations)
+            return rules.plan_intents(intents)
         req = planner.plan_request(
             self.mode,
             self.gateway.catalog,
-            locations,
+            self.locations(),
             request,
+            intents,
             self.history[-HISTORY_TURNS:],
             self.narrow_tools,
         )
@@ -224,7 +231,7 @@ class Agent:
             return asyncio.to_thread(self._review, cmd)  # may read the robot's graph
 
         def gate_reason(commands: list[str]):
-            return asyncio.to_thread(self.gate_reason, request, commands)
+            return asyncio.to_thread(self._gate_reason, intents, commands)
 
         return await planner.plan(req, ask, review, gate_reason, result)
 
