@@ -263,3 +263,35 @@ async def test_a_turn_classifies_the_request_once(llm, store, monkeypatch, model
     assert result.commands[0].executed and not result.refused
     assert result.repaired == (model == "command")
     assert classified == ["what is the battery level?"]
+
+
+async def test_switching_the_reply_mode_or_the_model_keeps_the_conversation(llm, store):
+    llm.replies = [
+        '{"commands": ["ros2 topic echo /battery_status --once"]}',
+        "The battery is at 85 %.",
+        '{"steps": [{"tool": "where"}]}',
+        "It is at the start.",
+    ]
+    agent = make_agent(llm, store, mode="command")
+    await agent.turn("what is the battery level?")
+    agent.switch(mode="tool")
+    where = result = await agent.turn("where is the robot?")
+    assert result.mode == "tool" and result.commands[0].command.endswith("/robot_pose --once")
+    sent = [(m["role"], m["content"]) for m in llm.requests[2]["messages"]]
+    assert ("user", "what is the battery level?") in sent
+    assert ("assistant", "The battery is at 85 %.") in sent
+
+    other = ScriptedLLM("openai")  # another model, another server: the same conversation
+    try:
+        other.replies = ['{"steps": [{"tool": "status"}]}', "Idle."]
+        agent.switch(open_endpoint(f"openai:other@{other.url}"))
+        result = await agent.turn("and what is it doing?")
+        assert result.model == f"openai:other@{other.url}" and result.mode == "tool"
+        sent = [(m["role"], m["content"]) for m in other.requests[0]["messages"]]
+        assert ("user", "what is the battery level?") in sent
+        assert ("assistant", where.answer) in sent
+        assert len(llm.requests) == 4  # the first server heard no more
+    finally:
+        other.close()
+    with pytest.raises(ValueError, match="mode must be"):
+        agent.switch(mode="poetry")

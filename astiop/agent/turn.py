@@ -54,8 +54,7 @@ class Agent:
     ):
         if interpretation not in ("grounded", "raw"):
             raise ValueError(f"interpretation must be 'grounded' or 'raw', not '{interpretation}'")
-        if mode not in ("command", "tool") and not endpoint.is_rules:
-            raise ValueError(f"mode must be 'command' or 'tool', not '{mode}'")
+        _check_mode(endpoint, mode)
         self.gateway = gateway
         self.endpoint = endpoint
         self.store = store
@@ -78,6 +77,16 @@ class Agent:
     @property
     def model(self) -> str:
         return self.endpoint.spec.raw
+
+    def switch(self, endpoint: LLMEndpoint | None = None, mode: str | None = None) -> None:
+        """Another model or reply mode for the turns to come; the conversation goes on (its
+        history is kept)."""
+        endpoint = endpoint or self.endpoint
+        mode = mode or self.mode
+        _check_mode(endpoint, mode)
+        if endpoint is not self.endpoint:
+            self.endpoint, self._schema_ok = endpoint, True  # the new server may take a schema
+        self.mode = "rules" if endpoint.is_rules else mode
 
     def places(self) -> dict[str, tuple[float, float]]:
         """The named locations and their x, y: what a request may name. Read once per turn
@@ -342,6 +351,11 @@ class Agent:
         result.outcome, text = await goals.follow(self.gateway, result.started, wait, result.target)
         await self.recorder.outcome(result)
         return text
+
+
+def _check_mode(endpoint: LLMEndpoint, mode: str) -> None:
+    if mode not in ("command", "tool") and not endpoint.is_rules:
+        raise ValueError(f"mode must be 'command' or 'tool', not '{mode}'")
 
 
 def _keep_partial(result: TurnResult, exc: LLMError) -> None:

@@ -62,20 +62,16 @@ class ChatScreen(ConsoleScreen):
         self._turn_lock = asyncio.Lock()
         self._shown = asyncio.Event()
         services = self.app.services
-        self.agent = self._make_agent(services.endpoint, services.settings.llm.mode)
-        self.query_one(Input).focus()
-
-    def _make_agent(self, endpoint, mode: str) -> Agent:
-        services = self.app.services
-        return Agent(
+        self.agent = Agent(
             services.gateway,
-            endpoint,
+            services.endpoint,
             services.store,
-            mode=mode,
+            mode=services.settings.llm.mode,
             max_tokens=services.settings.llm.max_tokens,
             confirm=self.app.confirm_from_thread,
             session="console",
         )
+        self.query_one(Input).focus()
 
     def _log(self, widget) -> None:
         log = self.query_one("#chat-log", VerticalScroll)
@@ -99,7 +95,7 @@ class ChatScreen(ConsoleScreen):
         if mode not in ("command", "tool"):
             self.notify("/mode takes 'command' or 'tool'", severity="error", markup=False)
             return
-        self.agent = self._make_agent(self.agent.endpoint, mode)
+        self.agent.switch(mode=mode)  # the conversation goes on
         self.notify(f"reply mode: {mode}")
 
     def switch_model(self, spec: str) -> None:
@@ -110,7 +106,7 @@ class ChatScreen(ConsoleScreen):
             return
         old = self.app.services.endpoint
         self.app.services.endpoint = endpoint
-        self.agent = self._make_agent(
+        self.agent.switch(
             endpoint,
             self.agent.mode if self.agent.mode != "rules" else self.app.services.settings.llm.mode,
         )
