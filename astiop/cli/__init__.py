@@ -19,6 +19,7 @@ from astiop.cli import (
     locations,
     record,
     robot,
+    ros2,
     sim,
 )
 from astiop.cli.common import CliState
@@ -34,6 +35,7 @@ app.add_typer(locations.app, name="locations")
 app.add_typer(sim.app, name="sim")
 app.add_typer(bench.app, name="bench")
 app.add_typer(export.app, name="export")
+app.add_typer(ros2.app, name="ros2")
 app.command("exec")(robot.exec_command)
 app.command("chat")(agent.chat)
 app.command("models")(agent.models)

@@ -4,11 +4,26 @@ Standard types state their upstream interface (field names and types, constants 
 values, as `git show humble:` / `jazzy:` of ros2/common_interfaces and navigation2 have them),
 written here without upstream's comments: the project ships only what we write. On a real
 robot `ros2 interface show` is the robot's own and prints upstream's text. `astiop_msgs` holds
-the project's own types where no standard one fits. Where the distros differ, HUMBLE holds
+the project's own types where no standard one fits, read from its ament package
+(`packages/astiop_msgs`). Where the distros differ, HUMBLE holds
 Humble's version; DEFINITIONS is Jazzy's.
 """
 
 import re
+from pathlib import Path
+
+# astiop_msgs is a real ament package (built with cmake, or colcon on a robot): its files are
+# the definitions.
+ASTIOP_MSGS = Path(__file__).parent / "packages" / "astiop_msgs"
+
+
+def _package_definitions(root: Path) -> dict[str, str]:
+    return {
+        f"{root.name}/{f.parent.name}/{f.stem}": f.read_text(encoding="utf-8")
+        for kind in ("msg", "srv", "action")
+        for f in sorted((root / kind).glob(f"*.{kind}"))
+    }
+
 
 DEFINITIONS: dict[str, str] = {
     "builtin_interfaces/msg/Time": "int32 sec\nuint32 nanosec\n",
@@ -140,61 +155,7 @@ builtin_interfaces/Duration estimated_time_remaining
 int16 number_of_recoveries
 float32 distance_remaining
 """,
-    "astiop_msgs/msg/RobotStatus": """\
-# state: idle, navigating, docking, charging, blocked, e_stopped, fault
-std_msgs/Header header
-string state
-string mode          # auto or manual
-string active_goal   # name or coordinates of the goal, empty when none
-string fault         # empty when healthy
-float64 speed        # m/s, linear
-bool e_stopped
-bool docked
-""",
-    "astiop_msgs/msg/Obstacle": """\
-string kind          # person, pallet, forklift, unknown
-float64 distance     # m, nearest point
-float64 bearing      # rad, robot frame, counter-clockwise from ahead
-geometry_msgs/Point position  # map frame
-float64 size         # m
-""",
-    "astiop_msgs/msg/ObstacleArray": """\
-std_msgs/Header header
-uint32 count
-Obstacle[] obstacles
-""",
-    "astiop_msgs/msg/ConveyorStatus": """\
-std_msgs/Header header
-bool running
-int8 direction        # 1 loading, -1 unloading, 0 stopped
-bool loaded
-bool load_sensor_entry
-bool load_sensor_seated
-string lamp           # green, green_flashing, yellow, blue, red
-""",
-    "astiop_msgs/srv/GotoPosition": """\
-# Either a named location, or coordinates in the map frame (theta in rad).
-string name
-float64 x
-float64 y
-float64 theta
----
-bool success
-string message
-""",
-    "astiop_msgs/srv/SaveLocation": """\
-# Names the robot's current pose.
-string name
-string description
----
-bool success
-string message
-""",
-    "astiop_msgs/srv/ListLocations": """\
----
-string[] names
-geometry_msgs/Pose2D[] poses
-""",
+    **_package_definitions(ASTIOP_MSGS),
 }
 
 # Humble's versions, where Jazzy changed a type.
@@ -212,6 +173,17 @@ HUMBLE: dict[str, str] = {
 }
 
 
+# Kilted's, where it added to Jazzy's (navigation2's kilted branch)
+KILTED: dict[str, str] = {
+    "nav2_msgs/action/NavigateToPose": DEFINITIONS["nav2_msgs/action/NavigateToPose"].replace(
+        "uint16 NONE=0\n",
+        "uint16 NONE=0\nuint16 UNKNOWN=9000\nuint16 FAILED_TO_LOAD_BEHAVIOR_TREE=9001\n"
+        "uint16 TF_ERROR=9002\nuint16 TIMEOUT=9003\n",
+    ),
+}
+
+
 def definitions(distro: str) -> dict[str, str]:
     """Every known type as `distro` defines it."""
-    return {**DEFINITIONS, **HUMBLE} if distro == "humble" else DEFINITIONS
+    overrides = {"humble": HUMBLE, "kilted": KILTED}.get(distro, {})
+    return {**DEFINITIONS, **overrides} if overrides else DEFINITIONS
