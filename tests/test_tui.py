@@ -1,10 +1,12 @@
 """The console driven with Pilot: what an operator does on each screen."""
 
 import math
+import re
 import threading
 
 from textual.widgets import DataTable, Input
 
+from astiop.sim.simulator import Simulator
 from tests.tui_helpers import ask, console, sim_of
 
 SIZE = (120, 40)
@@ -23,6 +25,21 @@ async def test_function_keys_switch_screens(tmp_path):
             await pilot.press(key)
             await pilot.pause()
             assert type(app.screen).__name__ == name
+
+
+async def test_the_robot_line_keeps_its_words_apart(tmp_path):
+    sim = Simulator(seed=0)
+    sim.step(1.0)  # on the dock: charging
+    app = console(tmp_path, sim=sim)
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.pause()
+        line = str(app.screen.query_one("#robot").render()).splitlines()[0]
+        assert line.startswith("robot  CHARGING   mode auto   t 1.0 s")
+        # SVG viewers such as librsvg drop the spaces a text run starts with: in the snapshot
+        # each gap must end the run before it, or the line reads "CHARGINGmode auto"
+        svg = app.export_screenshot()
+        assert "CHARGING&#160;&#160;&#160;</text>" in svg
+        assert not re.search(r">(&#160;)+mode&#160;auto", svg)
 
 
 async def test_chat_answers_and_logs_it(tmp_path):

@@ -32,6 +32,7 @@ STATE_COLOURS = {
     "fault": "bold red",
 }
 EVENT_ROWS = 6
+GAP = "   "
 
 
 def _num(value: float | None, fmt: str) -> str:
@@ -41,10 +42,14 @@ def _num(value: float | None, fmt: str) -> str:
 def robot_text(st: RobotState) -> Text:
     state = st.state_word
     status = st.status
-    text = Text.assemble(("robot  ", "bold"), (state.upper(), STATE_COLOURS.get(state, "white")))
+    # each gap ends the run before it: a run that starts with spaces loses them in some SVG
+    # viewers, which showed the snapshots' robot line as "CHARGINGmode auto"
+    text = Text.assemble(
+        ("robot  ", "bold"), (state.upper() + GAP, STATE_COLOURS.get(state, "white"))
+    )
     if status:
-        text.append(f"   mode {status.mode}")
-    text.append(f"   t {st.t:.1f} s\n")
+        text.append(f"mode {status.mode}{GAP}")
+    text.append(f"t {st.t:.1f} s\n")
     if st.pose is None:
         text.append("pose   — no /robot_pose or /odom\n", style="dim")
     else:
