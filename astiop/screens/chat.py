@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import asyncio
-import contextlib
 
 from rich.text import Text
 from textual import work
@@ -18,12 +17,7 @@ from astiop.agent.turn import Agent, TurnResult
 from astiop.bounded import escape_controls
 from astiop.robot.backend import Execution
 from astiop.screens.base import ConsoleScreen
-from astiop.screens.messages import (
-    CommandExecuted,
-    GoalEnded,
-    ReplyTokenReceived,
-    TurnFinished,
-)
+from astiop.screens.messages import GoalEnded, TurnFinished
 
 HELP = (
     "Ask in plain language, e.g. 'what is the battery level?' or 'send the robot to "
@@ -44,7 +38,57 @@ class CommandView(Static):
         super().__init__(line, classes="cmd-ok" if ok else "cmd-bad")
 
 
-SHOWN_WAIT_S = 5.0
+class TurnView:
+    """One turn in the chat log: its commands and answer go in above its status line."""
+
+    def __init__(self, log: VerticalScroll, status: Static):
+        self.log, self.status = log, status
+        self.answer = Static("", classes="answer")
+        self.parts: list[str] = []
+
+    def _before_status(self, widget) -> None:
+        self.log.mount(widget, before=self.status)
+        self.log.scroll_end(animate=False)
+
+    def on_event(self, kind: str, data) -> None:
+        """The agent's progress. It calls back on the app's loop (its model client streams with
+        asyncio; the robot's commands run in threads but are reported after them), so the
+        widgets are updated here, in order, and are complete when the turn returns."""
+        if kind == "command":
+            self.command_executed(data)
+        elif kind == "status":
+            self.status.update(Text(str(data), style="dim"))
+        elif kind == "answer_token":
+            if not self.parts:
+                self._before_status(self.answer)
+            self.parts.append(str(data))
+            # dim until the turn ends: the shown answer is the checked one, not this stream
+            self.answer.update(Text(escape_controls("".join(self.parts)), style="dim italic"))
+
+    def command_executed(self, ex: Execution) -> None:
+        self._before_status(CommandView(ex))
+        if ex.output:
+            out = Static(Text(escape_controls(ex.output.rstrip())))
+            self._before_status(Collapsible(out, title="output", collapsed=True))
+
+    def show(self, result: TurnResult) -> None:
+        if not self.parts:
+            self._before_status(self.answer)
+        self.answer.update(Text(escape_controls(result.answer)))  # checked, not the stream
+        if result.grounding.startswith("replaced"):
+            why = result.grounding.removeprefix("replaced: ")
+            note = Text(f"⚠ answer built from the results: the model's reply was not used ({why})")
+            note.stylize("yellow italic")
+            self._before_status(Static(note, classes="grounding"))
+        if result.refused:
+            self._before_status(Static(Text("⛔ refused by the intent gate", style="red")))
+        info = f"{result.model} · {result.mode} · {result.total_s:.1f} s"
+        if result.completion_tokens:
+            info += f" · {result.completion_tokens} tokens"
+        if result.error:
+            info += f" · {result.error}"
+        self.status.update(Text(info, style="dim red" if result.error else "dim"))
+        self.log.scroll_end(animate=False)
 
 
 class ChatScreen(ConsoleScreen):
@@ -60,7 +104,6 @@ class ChatScreen(ConsoleScreen):
 
     def on_mount(self) -> None:
         self._turn_lock = asyncio.Lock()
-        self._shown = asyncio.Event()
         services = self.app.services
         self.agent = Agent(
             services.gateway,
@@ -127,72 +170,19 @@ class ChatScreen(ConsoleScreen):
         try:
             async with self._turn_lock:
                 status.update(Text("thinking…", style="dim"))
-                self._status, self._answer, self._parts = status, Static("", classes="answer"), []
-                self._shown = asyncio.Event()
-
-                def on_event(kind: str, data) -> None:  # the agent's progress, as messages
-                    if kind == "command":
-                        self.post_message(CommandExecuted(data))
-                    elif kind in ("answer_token", "status"):
-                        self.post_message(ReplyTokenReceived(kind, str(data)))
-
+                view = TurnView(self.query_one("#chat-log", VerticalScroll), status)
                 try:
-                    result: TurnResult = await self.agent.turn(text, on_event)
+                    result: TurnResult = await self.agent.turn(text, view.on_event)
                 except EmbeddedModelError as exc:
                     status.update(Text(str(exc), style="red"))
                     return
-                self.app.post_message(TurnFinished(result, self.agent.model))
-                # the next turn takes over the chat's widgets once this one is shown
-                with contextlib.suppress(asyncio.TimeoutError):
-                    await asyncio.wait_for(self._shown.wait(), SHOWN_WAIT_S)
+                view.show(result)  # here, once; the broadcast is for the other screens
+                if result.started:
+                    self.follow(result)
+                self.app.post_message(TurnFinished(result, result.model))
         except asyncio.CancelledError:
             status.update(Text("canceled: nothing more was sent for this request", style="red"))
             raise
-
-    def _before_status(self, widget) -> None:
-        self.query_one("#chat-log").mount(widget, before=self._status)
-        self.query_one("#chat-log", VerticalScroll).scroll_end(animate=False)
-
-    def on_command_executed(self, msg: CommandExecuted) -> None:
-        ex: Execution = msg.execution
-        self._before_status(CommandView(ex))
-        if ex.output:
-            out = Static(Text(escape_controls(ex.output.rstrip())))
-            self._before_status(Collapsible(out, title="output", collapsed=True))
-
-    def on_reply_token_received(self, msg: ReplyTokenReceived) -> None:
-        if msg.kind == "status":
-            self._status.update(Text(msg.text, style="dim"))
-            return
-        if not self._parts:
-            self._before_status(self._answer)
-        self._parts.append(msg.text)
-        # dim until the turn ends: the shown answer is the checked one, not this stream
-        self._answer.update(Text(escape_controls("".join(self._parts)), style="dim italic"))
-
-    def on_turn_finished(self, msg: TurnFinished) -> None:
-        # after every token and command message of the turn: they were posted before it
-        result = msg.result
-        if not self._parts:
-            self._before_status(self._answer)
-        self._answer.update(Text(escape_controls(result.answer)))  # checked, not the stream
-        if result.grounding.startswith("replaced"):
-            why = result.grounding.removeprefix("replaced: ")
-            note = Text(f"⚠ answer built from the results: the model's reply was not used ({why})")
-            note.stylize("yellow italic")
-            self._before_status(Static(note, classes="grounding"))
-        if result.refused:
-            self._before_status(Static(Text("⛔ refused by the intent gate", style="red")))
-        if result.started:
-            self.follow(result)
-        info = f"{result.model} · {result.mode} · {result.total_s:.1f} s"
-        if result.completion_tokens:
-            info += f" · {result.completion_tokens} tokens"
-        if result.error:
-            info += f" · {result.error}"
-        self._status.update(Text(info, style="dim red" if result.error else "dim"))
-        self.query_one("#chat-log", VerticalScroll).scroll_end(animate=False)
-        self._shown.set()
 
     @work(group="follow", exit_on_error=False)
     async def follow(self, result: TurnResult) -> None:
