@@ -114,3 +114,20 @@ def goto(
         )
     if not data["reached"]:
         raise typer.Exit(1)
+
+
+@app.command("node")
+def node(
+    seed: int = typer.Option(0, min=0, max=2**32 - 1, help="Seed of the simulator."),
+    speed: float = typer.Option(
+        1.0, "--speed", min=0.1, max=20.0, help="Real-time factor of the robot (tests: > 1)."
+    ),
+) -> None:
+    """Run the simulated ASTIbot as real ROS 2 nodes on this machine's ROS domain, until Ctrl-C
+    or SIGTERM. It respects the ROS environment (ROS_DOMAIN_ID, ROS_AUTOMATIC_DISCOVERY_RANGE)."""
+    from astiop.sim_robots.ros2_node.run import NodeSetupError, serve
+
+    try:
+        serve(seed, speed, lambda line: typer.echo(line, err=True))
+    except NodeSetupError as exc:
+        fail(str(exc))

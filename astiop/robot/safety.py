@@ -98,18 +98,24 @@ class SafetyPolicy:
         return Review(True, "", out, self.confirm_actuation)
 
     def _clamp_twist(self, msg: dict, notes: list[str]) -> tuple[dict, list[str]]:
-        lin, ang = dict(msg["linear"]), dict(msg["angular"])
-        if lin["z"] or ang["x"] or ang["y"]:
-            notes.append("a ground robot ignores linear.z, angular.x and angular.y: set to 0")
-            lin["z"] = ang["x"] = ang["y"] = 0.0
-        speed = math.hypot(lin["x"], lin["y"])
-        if speed > self.max_linear:
-            s = self.max_linear / speed
-            notes.append(f"linear speed clamped {speed:.2f} -> {self.max_linear:.2f} m/s")
-            lin["x"], lin["y"] = lin["x"] * s, lin["y"] * s
-        if abs(ang["z"]) > self.max_angular:
-            notes.append(
-                f"angular speed clamped {abs(ang['z']):.2f} -> {self.max_angular:.2f} rad/s"
-            )
-            ang["z"] = math.copysign(self.max_angular, ang["z"])
-        return {"linear": lin, "angular": ang}, notes
+        twist, more = clamp_twist(msg, self.max_linear, self.max_angular)
+        return twist, notes + more
+
+
+def clamp_twist(msg: dict, max_linear: float, max_angular: float) -> tuple[dict, list[str]]:
+    """A ground robot's velocity within its limits: planar speed scaled down as a whole (the
+    direction kept), the turn rate clipped; returns what was changed, in words."""
+    notes: list[str] = []
+    lin, ang = dict(msg["linear"]), dict(msg["angular"])
+    if lin["z"] or ang["x"] or ang["y"]:
+        notes.append("a ground robot ignores linear.z, angular.x and angular.y: set to 0")
+        lin["z"] = ang["x"] = ang["y"] = 0.0
+    speed = math.hypot(lin["x"], lin["y"])
+    if speed > max_linear:
+        s = max_linear / speed
+        notes.append(f"linear speed clamped {speed:.2f} -> {max_linear:.2f} m/s")
+        lin["x"], lin["y"] = lin["x"] * s, lin["y"] * s
+    if abs(ang["z"]) > max_angular:
+        notes.append(f"angular speed clamped {abs(ang['z']):.2f} -> {max_angular:.2f} rad/s")
+        ang["z"] = math.copysign(max_angular, ang["z"])
+    return {"linear": lin, "angular": ang}, notes

@@ -18,6 +18,9 @@ class TopicSpec:
     description: str = ""
     # "state": the live state is built from it, and it is recorded; "record": recorded only
     role: str = ""
+    # the publisher's QoS, as a real driver sets it: "" reliable and volatile (depth 10),
+    # "sensor_data" (best effort, depth 5), "transient_local" (latched: the last one kept)
+    qos: str = ""
 
     @property
     def actuating(self) -> bool:
@@ -133,6 +136,7 @@ _TOPICS = [
         "",
         "360 beams, 25 m range",
         role="state",
+        qos="sensor_data",
     ),
     TopicSpec(
         "/obstacles",
@@ -180,7 +184,13 @@ _TOPICS = [
         role="record",
     ),
     TopicSpec(
-        "/tf_static", "tf2_msgs/msg/TFMessage", 0, "/astibot_base", "", "base_link -> laser, camera"
+        "/tf_static",
+        "tf2_msgs/msg/TFMessage",
+        0,
+        "/astibot_base",
+        "",
+        "base_link -> laser, camera",
+        qos="transient_local",
     ),
 ]
 

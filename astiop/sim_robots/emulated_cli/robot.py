@@ -10,7 +10,6 @@ from __future__ import annotations
 import collections
 import contextlib
 import json
-import math
 import os
 import socket
 import sys
@@ -18,7 +17,6 @@ import threading
 import uuid
 from pathlib import Path
 
-import numpy as np
 import yaml
 
 from astiop.robot.backends.sim import messages as sm
@@ -34,7 +32,6 @@ from astiop.sim_robots.emulated_cli.topics import HIDDEN_TOPICS, TopicVerbs
 from astiop.store import LocationError, Store
 
 MAP_TYPE = "nav_msgs/msg/OccupancyGrid"
-MAP_RESOLUTION = 0.2
 
 
 _PARAM_TYPES = {bool: "boolean", int: "integer", float: "double", str: "string"}
@@ -63,7 +60,7 @@ class EmulatedRobot(TopicVerbs):
             self.backend.params.setdefault((node, "use_sim_time"), False)
         self.cmd_vel_log: collections.deque = collections.deque(maxlen=2000)
         self._twist_seq = 0
-        self._map_msg = self._occupancy_grid()
+        self._map_msg = sm.occupancy_grid(self.sim.map)
 
     # -- the graph ---------------------------------------------------------------------------
     def topics(self) -> dict[str, str]:
@@ -79,30 +76,6 @@ class EmulatedRobot(TopicVerbs):
 
     def actions(self) -> dict[str, str]:
         return {n: a.type for n, a in sorted(self.catalog.actions.items()) if n not in self.missing}
-
-    def _occupancy_grid(self) -> dict:
-        x0, y0, x1, y1 = self.sim.map.bounds
-        w = int(math.ceil((x1 - x0) / MAP_RESOLUTION))
-        h = int(math.ceil((y1 - y0) / MAP_RESOLUTION))
-        cells = np.zeros((h, w), dtype=int)
-        for _kind, (rx0, ry0, rx1, ry1) in self.sim.map.static_rects:
-            c0, c1 = int((rx0 - x0) / MAP_RESOLUTION), int(math.ceil((rx1 - x0) / MAP_RESOLUTION))
-            r0, r1 = int((ry0 - y0) / MAP_RESOLUTION), int(math.ceil((ry1 - y0) / MAP_RESOLUTION))
-            cells[max(r0, 0) : r1, max(c0, 0) : c1] = 100
-        return {
-            "header": sm.stamp(0.0, "map"),
-            "info": {
-                "map_load_time": {"sec": 0, "nanosec": 0},
-                "resolution": MAP_RESOLUTION,
-                "width": w,
-                "height": h,
-                "origin": {
-                    "position": {"x": x0, "y": y0, "z": 0.0},
-                    "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
-                },
-            },
-            "data": cells.ravel().tolist(),
-        }
 
     # -- serving ----------------------------------------------------------------------------
     def serve(self, path: str) -> None:
@@ -173,7 +146,7 @@ class EmulatedRobot(TopicVerbs):
             call.wait(1e9)
         call.out(f"requester: making request: {python_repr(type_, request, 0)}\n\n")
         try:
-            response = self.backend._serve(name, request)
+            response = self.backend.serve(name, request)
         except (GoalError, LocationError) as exc:
             response = {"success": False, "message": str(exc)}
         call.out(f"response:\n{python_repr(type_, response, 1)}\n\n")

@@ -221,3 +221,32 @@ def tf_static(s: SimState) -> dict:
         }
 
     return {"transforms": [ts("laser", 0.0, 0.45), ts("camera", 0.45, 0.5)]}
+
+
+MAP_RESOLUTION = 0.2  # m per cell of the /map a robot serves
+
+
+def occupancy_grid(warehouse) -> dict:
+    """The warehouse's walls and racks as a nav_msgs/msg/OccupancyGrid (100: occupied)."""
+    x0, y0, x1, y1 = warehouse.bounds
+    w = int(math.ceil((x1 - x0) / MAP_RESOLUTION))
+    h = int(math.ceil((y1 - y0) / MAP_RESOLUTION))
+    cells = np.zeros((h, w), dtype=int)
+    for _kind, (rx0, ry0, rx1, ry1) in warehouse.static_rects:
+        c0, c1 = int((rx0 - x0) / MAP_RESOLUTION), int(math.ceil((rx1 - x0) / MAP_RESOLUTION))
+        r0, r1 = int((ry0 - y0) / MAP_RESOLUTION), int(math.ceil((ry1 - y0) / MAP_RESOLUTION))
+        cells[max(r0, 0) : r1, max(c0, 0) : c1] = 100
+    return {
+        "header": stamp(0.0, "map"),
+        "info": {
+            "map_load_time": {"sec": 0, "nanosec": 0},
+            "resolution": MAP_RESOLUTION,
+            "width": w,
+            "height": h,
+            "origin": {
+                "position": {"x": x0, "y": y0, "z": 0.0},
+                "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+            },
+        },
+        "data": cells.ravel().tolist(),
+    }

@@ -93,14 +93,14 @@ class SimVerbs:
 
     def _service_call(self, c: Checked, timeout: float):
         name, req = c.command.name, c.message
-        response = self._serve(name, req)
+        response = self.serve(name, req)
         text = (
             f"requester: making request: {python_repr(c.type, req, 0)}\n\n"
             f"response:\n{python_repr(c.type, response, 1)}\n\n"
         )
         return text, response
 
-    def _serve(self, name: str, req: dict) -> dict:
+    def serve(self, name: str, req: dict) -> dict:
         sim = self.sim
         if name == "/list_locations":
             locs = self.store.list_locations() if self.store else []
