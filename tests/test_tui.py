@@ -4,9 +4,13 @@ import math
 import re
 import threading
 
+import numpy as np
+from textual.app import App
 from textual.widgets import DataTable, Input
 
+from astiop.robot.state import OccupancyGrid, Pose2D, RobotState
 from astiop.sim.simulator import Simulator
+from astiop.widgets.map_view import Place, WarehouseMapView
 from tests.tui_helpers import ask, console, sim_of
 
 SIZE = (120, 40)
@@ -40,6 +44,53 @@ async def test_the_robot_line_keeps_its_words_apart(tmp_path):
         svg = app.export_screenshot()
         assert "CHARGING&#160;&#160;&#160;</text>" in svg
         assert not re.search(r">(&#160;)+mode&#160;auto", svg)
+
+
+def map_text(view) -> str:
+    return "\n".join(view.render_line(y).text for y in range(view.size.height))
+
+
+async def test_the_map_names_the_stations_and_says_what_its_colours_are(tmp_path):
+    app = console(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.pause()
+        text = map_text(app.screen.query_one(WarehouseMapView))
+        for name in ("charging_dock", "assembly_station", "cps_storage", "shipping"):
+            assert name in text
+        assert "inspection_zone_a" in text and "inspection_zone_b" in text
+        for what in ("robot", "heading", "path", "LiDAR hits", "obstacles seen", "walls"):
+            assert what in text
+        for what in ("racks", "stations", "zones", "locations"):
+            assert what in text
+
+
+class MapOnly(App):
+    def __init__(self, geometry, state: RobotState):
+        super().__init__()
+        self.geometry, self.state = geometry, state
+
+    def compose(self):
+        yield WarehouseMapView(self.geometry)
+
+    def on_mount(self) -> None:
+        view = self.query_one(WarehouseMapView)
+        view.set_locations([Place("bay_9", 12.5, 3.0), Place("far_away", 90.0, 12.0)])
+        view.show(self.state)
+
+
+async def test_the_map_names_stored_locations_on_a_robots_grid_and_with_no_map():
+    cells = np.zeros((250, 400), dtype=np.int8)  # 40 x 25 m at 0.1 m, walls all round
+    cells[:3, :] = cells[-3:, :] = cells[:, :3] = cells[:, -3:] = 100
+    grid = OccupancyGrid(0.1, 0.0, 0.0, 400, 250, cells)
+    robot = RobotState(t=0.0, pose=Pose2D(20.0, 12.0, 0.0))
+    for geometry, legend in ((grid, "occupied (/map)"), (None, "the view follows the robot")):
+        app = MapOnly(geometry, robot)
+        async with app.run_test(size=(72, 30)) as pilot:
+            await pilot.pause()
+            text = map_text(app.query_one(WarehouseMapView))
+            assert "bay_9" in text and legend in text and "locations" in text
+            assert "far_away" not in text  # off the view: not written at an edge
+            assert "racks" not in text  # nothing a grid cannot show
 
 
 async def test_chat_answers_and_logs_it(tmp_path):

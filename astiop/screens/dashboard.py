@@ -20,7 +20,7 @@ from astiop.robot.state import RobotState, TopicStat
 from astiop.screens.base import ConsoleScreen
 from astiop.screens.messages import RobotStateSampled, TurnFinished
 from astiop.widgets.gauges import BatteryGauge
-from astiop.widgets.map_view import WarehouseMapView
+from astiop.widgets.map_view import Place, WarehouseMapView
 
 STATE_COLOURS = {
     "idle": "green",
@@ -115,7 +115,7 @@ class DashboardScreen(ConsoleScreen):
         # on first show too; locations may have changed on the Locations screen, and events
         # may have come while another screen was shown
         self.query_one(WarehouseMapView).set_locations(
-            [(loc.x, loc.y) for loc in self.app.services.store.list_locations()]
+            [Place(loc.name, loc.x, loc.y) for loc in self.app.services.store.list_locations()]
         )
         self._show_events()
 

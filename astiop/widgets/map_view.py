@@ -1,12 +1,15 @@
 """The robot's map drawn with half blocks: two map pixels per terminal cell, one colour each.
 
 The geometry comes from the robot layer: the known warehouse layout, the robot's /map grid,
-or nothing, when the view follows the robot and shows what its scan sees.
+or nothing, when the view follows the robot and shows what its scan sees. Names are written
+over the map (the warehouse's stations and zones, the stored locations), and the last lines
+say what each colour is.
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from rich.segment import Segment
@@ -47,6 +50,40 @@ FREE, WALL, SHELF, STATION, ZONE, OBSTACLE, PLAN, LIDAR, ROBOT, HEADING, LABEL =
 _STYLES = {
     (t, b): Style(color=PALETTE[t], bgcolor=PALETTE[b]) for t in range(11) for b in range(11)
 }
+NAME_COLOUR = "#e5e7eb"
+_NAME_STYLES = {b: Style(color=NAME_COLOUR, bgcolor=PALETTE[b]) for b in (FREE, ZONE)}
+_LEGEND_TEXT = Style(color="#9ca3af", bgcolor=PALETTE[FREE])
+_BLANK = Style(bgcolor=PALETTE[FREE])
+_SWATCHES = [Style(color=c, bgcolor=PALETTE[FREE]) for c in PALETTE]
+
+
+class Place(NamedTuple):
+    """A named location, drawn as a marker with its name."""
+
+    name: str
+    x: float
+    y: float
+
+
+class _Name(NamedTuple):
+    """A name to write next to a box (metres): a station, a zone (written inside), a place."""
+
+    text: str
+    box: tuple[float, float, float, float]
+    inside: bool = False
+
+
+def legend_items(geometry, markers: bool) -> list[tuple[int, str]]:
+    """What the view draws, as (palette index, what it is): only what this geometry can show."""
+    items = [(ROBOT, "robot"), (HEADING, "heading"), (PLAN, "path"), (LIDAR, "LiDAR hits")]
+    items.append((OBSTACLE, "obstacles seen"))
+    if isinstance(geometry, WarehouseMap):
+        items += [(WALL, "walls"), (SHELF, "racks"), (STATION, "stations"), (ZONE, "zones")]
+    elif isinstance(geometry, OccupancyGrid):
+        items.append((WALL, "occupied (/map)"))
+    if markers:
+        items.append((LABEL, "locations"))
+    return items
 
 
 class WarehouseMapView(Widget):
@@ -56,20 +93,28 @@ class WarehouseMapView(Widget):
         super().__init__(**kwargs)
         self.geometry = geometry
         self.robot_state: RobotState | None = None
-        self.locations: list[tuple[float, float]] = []  # named locations, drawn as markers
+        self.places: list[Place] = []  # named locations, drawn as markers with their names
+        self.locations: list[tuple[float, float]] = []  # every marker, named or not
         self._base: np.ndarray | None = None
         self._pixels: np.ndarray | None = None
         self._raster_size = (0, 0)
+        self._names: dict[int, dict[int, str]] = {}  # cell row -> {column: character}
+        self._legend: list[list[Segment]] = []
+        self._legend_width = -1
 
-    def set_locations(self, points: list[tuple[float, float]]) -> None:
-        self.locations = list(points)
-        self._pixels = None
+    def set_locations(self, locations: list[Place] | list[tuple[float, float]]) -> None:
+        """Markers: `Place`s are written with their name, bare (x, y) points are not."""
+        self.places = [p for p in locations if isinstance(p, Place)]
+        self.locations = [(p.x, p.y) if isinstance(p, Place) else tuple(p) for p in locations]
+        self._base = self._pixels = None
+        self._legend_width = -1
         self.refresh()
 
     def set_geometry(self, geometry) -> None:
         if geometry is not self.geometry:
             self.geometry = geometry
             self._base = self._pixels = None
+            self._legend_width = -1
             self.refresh()
 
     @property
@@ -85,7 +130,7 @@ class WarehouseMapView(Widget):
         self.robot_state = state
         if self.geometry is None:
             self._base = None  # the view moves with the robot
-        w, h = self.size.width, self.size.height
+        w, h = self.size.width, self._map_rows()
         if w <= 0 or h <= 0:
             return
         pixels = self._raster(w, 2 * h)
@@ -99,6 +144,35 @@ class WarehouseMapView(Widget):
         if len(rows):
             y0, y1 = int(rows.min()) // 2, int(rows.max()) // 2
             self.refresh(Region(0, y0, w, y1 - y0 + 1))
+
+    # -- the legend -----------------------------------------------------------------------
+    def _legend_lines(self, w: int) -> list[list[Segment]]:
+        if self._legend_width != w:
+            self._legend_width = w
+            self._legend = []
+            if self.geometry is None:
+                note = "no map: the view follows the robot"
+                self._legend.append([Segment(note[:w], _LEGEND_TEXT)])
+            line: list[Segment] = []
+            used = 0
+            for value, what in legend_items(self.geometry, bool(self.locations)):
+                cells = len(what) + 4  # swatch, space, name, two spaces
+                if line and used + cells - 2 > w:
+                    self._legend.append(line)
+                    line, used = [], 0
+                # the space goes with the swatch: a text run starting with spaces loses them in
+                # some SVG viewers (the snapshots)
+                line += [Segment("█ ", _SWATCHES[value]), Segment(f"{what}  ", _LEGEND_TEXT)]
+                used += cells
+            if line:
+                self._legend.append(line)
+        return self._legend
+
+    def _map_rows(self) -> int:
+        """Rows left for the map under the legend; a small view gives up the legend first."""
+        h = self.size.height
+        legend = len(self._legend_lines(self.size.width))
+        return h - legend if h - legend >= 6 else h
 
     # -- rasterising ----------------------------------------------------------------------
     def _scale(self, w: int, h: int) -> tuple[float, float, float]:
@@ -137,6 +211,10 @@ class WarehouseMapView(Widget):
             xs = geo.origin_x + (cols + 0.5) * geo.resolution
             ys = geo.origin_y + (rows + 0.5) * geo.resolution
             self._plot(px, xs, ys, WALL, s, x0, y0)
+        if self.locations:
+            xs, ys = zip(*self.locations)
+            self._plot(px, xs, ys, LABEL, s, x0, y0)
+        self._names = self._place_names(px, s, x0, y0)
         return px
 
     def _plot(self, px, xs, ys, value, s, x0, y0) -> None:
@@ -152,9 +230,6 @@ class WarehouseMapView(Widget):
             self._base, self._raster_size = self._base_layer(w, h), (w, h)
         px = self._base.copy()
         s, x0, y0 = self._scale(w, h)
-        if self.locations:
-            xs, ys = zip(*self.locations)
-            self._plot(px, xs, ys, LABEL, s, x0, y0)
         st = self.robot_state
         if st is None or st.pose is None or not math.isfinite(st.pose.x):
             return px  # no pose reported: the map alone
@@ -179,19 +254,98 @@ class WarehouseMapView(Widget):
         self._plot(px, [x + 0.8 * math.cos(th)], [y + 0.8 * math.sin(th)], HEADING, s, x0, y0)
         return px
 
+    # -- names ----------------------------------------------------------------------------
+    def _names_to_write(self) -> list[_Name]:
+        names: list[_Name] = []
+        geo = self.geometry
+        if isinstance(geo, WarehouseMap):
+            names += [_Name(st.name, st.rect) for st in geo.stations]
+            names += [_Name(z.name, z.rect, inside=True) for z in geo.zones]
+        written = {n.text for n in names}
+        names += [_Name(p.name, (p.x, p.y, p.x, p.y)) for p in self.places if p.name not in written]
+        return names
+
+    def _place_names(self, px: np.ndarray, s: float, x0: float, y0: float) -> dict:
+        """Each name where it covers the fewest drawn cells and no other name; one that fits
+        nowhere is left out."""
+        rows, w = px.shape[0] // 2, px.shape[1]
+        top = self._top(px, s)
+        drawn = (px[0::2] != FREE) & (px[0::2] != ZONE) | (px[1::2] != FREE) & (px[1::2] != ZONE)
+        markers = (px[0::2] == LABEL) | (px[1::2] == LABEL)
+        taken = np.zeros((rows, w), dtype=bool)
+        out: dict[int, dict[int, str]] = {}
+
+        def cell(x: float, y: float) -> tuple[int, int]:
+            return (top - 1 - math.floor((y - y0) * s)) // 2, math.floor((x - x0) * s)
+
+        for name in self._names_to_write():
+            n = len(name.text)
+            if n > w:
+                continue
+            r0, c0 = cell(name.box[0], name.box[3])
+            r1, c1 = cell(name.box[2], name.box[1])
+            if r1 < 0 or r0 >= rows or c1 < 0 or c0 >= w:
+                continue  # out of view: not written at an edge
+            mid_r, mid_c = (r0 + r1) // 2, (c0 + c1) // 2
+            candidates = [(mid_r, mid_c - n // 2)] if name.inside else []
+            candidates += [
+                (mid_r, c1 + 2),
+                (mid_r, c0 - 1 - n),
+                (r1 + 1, mid_c - n // 2),
+                (r0 - 1, mid_c - n // 2),
+                (mid_r + 1, c1 + 2),
+                (mid_r - 1, c1 + 2),
+                (mid_r + 1, c0 - 1 - n),
+                (mid_r - 1, c0 - 1 - n),
+            ]
+            best = None
+            for order, (r, c) in enumerate(candidates):
+                c = min(max(c, 0), w - n)
+                if not 0 <= r < rows or taken[r, max(c - 2, 0) : c + n + 2].any():
+                    continue
+                cost = (
+                    int(drawn[r, c : c + n].sum()) + 4 * int(markers[r, c : c + n].sum()),
+                    order,
+                )
+                if best is None or cost < best[0]:
+                    best = (cost, r, c)
+            if best is None:
+                continue
+            _, r, c = best
+            taken[r, c : c + n] = True
+            out.setdefault(r, {}).update({c + i: ch for i, ch in enumerate(name.text)})
+        return out
+
     # -- Textual's line API ---------------------------------------------------------------
     def render_line(self, y: int) -> Strip:
-        w, h = self.size.width, self.size.height
+        w, h = self.size.width, self._map_rows()
         if w <= 0 or h <= 0:
             return Strip.blank(w)
+        if y >= h:
+            legend = self._legend_lines(w)
+            i = y - h
+            line = legend[i] if i < len(legend) else []
+            return Strip(line).adjust_cell_length(w, _BLANK)
         if self._pixels is None or self._pixels.shape != (2 * h, w):
             self._pixels = self._raster(w, 2 * h)
         top, bottom = self._pixels[2 * y], self._pixels[2 * y + 1]
+        names = self._names.get(y, {})
         segments = []
-        run_start = 0
-        for x in range(1, w + 1):
-            if x == w or top[x] != top[run_start] or bottom[x] != bottom[run_start]:
-                style = _STYLES[(int(top[run_start]), int(bottom[run_start]))]
-                segments.append(Segment("▀" * (x - run_start), style))
-                run_start = x
+        run: list[str] = []
+        run_style = None
+        for x in range(w):
+            t, b = int(top[x]), int(bottom[x])
+            ch = names.get(x)
+            if ch is not None and not ({t, b} & {ROBOT, HEADING}):
+                # a name over a zone keeps the zone's colour; elsewhere it is written on the floor
+                style = _NAME_STYLES[ZONE if t == b == ZONE else FREE]
+            else:
+                ch, style = "▀", _STYLES[(t, b)]
+            if style is not run_style and run:
+                segments.append(Segment("".join(run), run_style))
+                run = []
+            run.append(ch)
+            run_style = style
+        if run:
+            segments.append(Segment("".join(run), run_style))
         return Strip(segments, w)
