@@ -7,7 +7,7 @@ import math
 import pytest
 
 from astiop.agent.turn import TurnResult
-from astiop.bench import runner, scoring, suites
+from astiop.bench import library, runner, scoring
 from astiop.bench.report import load_report, to_csv, to_markdown
 from astiop.bench.stage2 import build_sim, check_answer, score_case
 from astiop.config import load_settings
@@ -70,7 +70,7 @@ def test_quality_formula():
 
 # -- stage-2 checks against the simulator's ground truth -----------------------------------
 def _case(cid):
-    return next(c for c in suites.stage2() if c.id == cid)
+    return next(c for c in library.builtin("astiop-stage2").cases if c.id == cid)
 
 
 def _turn(answer, commands=()):
@@ -136,7 +136,7 @@ def test_full_stage2_run_with_rules(store, tmp_path):
     asyncio.run(runner.run(store, _settings(tmp_path), config, run_id))
     rep = load_report(store, run_id)
     (result,) = rep.results
-    cases = suites.stage2()
+    cases = runner.suite_of(store, config).cases  # the suite the run ran
     assert result.cases == len(cases) >= 90  # each request and its paraphrases
     assert {c.base for c in cases if c.id.endswith(".p2")} == {
         c.id for c in cases if not c.base or c.id == c.base
@@ -165,8 +165,8 @@ def test_interrupted_run_keeps_results_and_resumes(store, tmp_path):
     assert again == 3 and load_report(store, run_id).results[0].cases == 6
 
 
-def test_suites_meet_the_brief():
-    _, knowledge = suites.stage1()
+def test_suites_meet_the_brief(tmp_path):
+    knowledge = library.load_suite("astiop-stage1", tmp_path).cases
     levels = [c.level for c in knowledge]
     assert len(knowledge) >= 40
     for level, least in [
@@ -177,7 +177,7 @@ def test_suites_meet_the_brief():
         ("troubleshooting", 3),
     ]:
         assert levels.count(level) >= least
-    assert len(suites.stage2()) >= 30
+    assert len(library.load_suite("astiop-stage2", tmp_path).cases) >= 30
 
 
 def test_stage2_runs_in_its_own_world_and_records_each_case(tmp_path):

@@ -18,7 +18,6 @@ class TurnResult:
     ttft_s: float | None = None
     total_s: float = 0.0
     llm_s: float = 0.0
-    exec_s: float = 0.0
     prompt_tokens: int = 0
     completion_tokens: int = 0
     error: str = ""

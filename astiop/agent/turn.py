@@ -261,11 +261,9 @@ class Agent:
 
     async def _execute(self, commands: list[str], result: TurnResult, emit) -> None:
         for seq, cmd in enumerate(commands):
-            t0 = time.perf_counter()
             ex = await asyncio.to_thread(
                 self.gateway.run, cmd, self.confirm, review=self._reviews.get(cmd)
             )
-            result.exec_s += time.perf_counter() - t0
             result.commands.append(ex)
             await self.recorder.command(result, seq, ex)
             emit("command", ex)
@@ -275,14 +273,12 @@ class Agent:
                 continue
             if seq + 1 < len(commands):
                 emit("status", "waiting for the robot to arrive")
-                t1 = time.perf_counter()
                 outcome = await asyncio.to_thread(self.gateway.wait_until_idle, self.nav_wait_s)
                 if outcome is None:  # a robot that reports none: its pose says
                     target = goals.target_of(ex, self.places())
                     outcome = await asyncio.to_thread(
                         goals.outcome_at, self.gateway, target, goals.goal_name(ex)
                     )
-                result.exec_s += time.perf_counter() - t1
                 result.waited[seq] = outcome
             else:
                 result.started = await asyncio.to_thread(goals.started_text, self.gateway, ex)

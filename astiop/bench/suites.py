@@ -1,4 +1,5 @@
-"""The benchmark suites in `prompts/bench/`, loaded and checked."""
+"""What a benchmark suite is made of: its cases, their levels, and its error (`library` loads
+and checks the suites)."""
 
 from __future__ import annotations
 
@@ -36,18 +37,3 @@ class RobotCase:
     @property
     def level(self) -> str:
         return "multi-step" if len(self.expect) > 1 else "single"
-
-
-def stage1() -> tuple[str, tuple[KnowledgeCase, ...]]:
-    """The built-in stage-1 suite: its system prompt and cases."""
-    from astiop.bench.library import builtin
-
-    suite = builtin("astiop-stage1")
-    return suite.system, suite.cases
-
-
-def stage2() -> tuple[RobotCase, ...]:
-    """The built-in stage-2 cases, each paraphrase a case of its own (ID.p1, ID.p2, ...)."""
-    from astiop.bench.library import builtin
-
-    return builtin("astiop-stage2").cases

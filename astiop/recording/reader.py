@@ -139,13 +139,6 @@ class Recording:
                 out[topic] = ch.message(i)
         return out
 
-    def between(self, topic: str, t0_ns: int, t1_ns: int) -> list[tuple[int, dict]]:
-        """(log time, message) of a topic with t0 < log time <= t1."""
-        ch = self.channels.get(topic)
-        if ch is None:
-            return []
-        return [(ch.times[i], ch.message(i)) for i in range(*self._span(ch, t0_ns, t1_ns))]
-
     def count_between(self, topic: str, t0_ns: int, t1_ns: int) -> int:
         """How many messages of a topic have t0 < log time <= t1 (none is decoded)."""
         ch = self.channels.get(topic)
