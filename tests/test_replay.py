@@ -4,6 +4,7 @@ nothing is ever sent to a robot."""
 import pytest
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
+from mcap_ros2.writer import Writer
 
 from astiop.app import make_app
 from astiop.config import load_settings
@@ -42,6 +43,73 @@ def test_the_replayed_pose_is_the_recorded_one_wherever_the_cursor_is(trip):
     assert backend.state().state_word == "idle"  # it arrived
     battery = independent(trip, "/battery_status")[-1][1]
     assert backend.state().battery.percentage == pytest.approx(battery.percentage)
+
+
+OCCUPANCY_GRID = """std_msgs/Header header
+nav_msgs/MapMetaData info
+int8[] data
+================================================================================
+MSG: std_msgs/Header
+builtin_interfaces/Time stamp
+string frame_id
+================================================================================
+MSG: builtin_interfaces/Time
+int32 sec
+uint32 nanosec
+================================================================================
+MSG: nav_msgs/MapMetaData
+builtin_interfaces/Time map_load_time
+float32 resolution
+uint32 width
+uint32 height
+geometry_msgs/Pose origin
+================================================================================
+MSG: geometry_msgs/Pose
+geometry_msgs/Point position
+geometry_msgs/Quaternion orientation
+================================================================================
+MSG: geometry_msgs/Point
+float64 x
+float64 y
+float64 z
+================================================================================
+MSG: geometry_msgs/Quaternion
+float64 x
+float64 y
+float64 z
+float64 w
+"""
+
+
+def slam_bag(path):
+    """A robot's /map as a ros2 bag holds it: 3 x 2 cells at 0.5 m, all free at 0 s, one
+    cell occupied from 2 s."""
+    with open(path, "wb") as fh:
+        writer = Writer(fh)
+        schema = writer.register_msgdef("nav_msgs/msg/OccupancyGrid", OCCUPANCY_GRID)
+        for t_s, data in ((0, [0] * 6), (2, [0, 0, 100, 0, 0, 0])):
+            stamp = {"sec": t_s, "nanosec": 0}
+            origin = {"position": {"x": -1.0, "y": 0.0, "z": 0.0}, "orientation": {"w": 1.0}}
+            info = {"map_load_time": stamp, "resolution": 0.5, "width": 3, "height": 2}
+            info["origin"] = origin
+            msg = {"header": {"stamp": stamp, "frame_id": "map"}, "info": info, "data": data}
+            t_ns = (1_000 + t_s) * 10**9
+            writer.write_message("/map", schema, msg, log_time=t_ns, publish_time=t_ns)
+        writer.finish()
+    return path
+
+
+def test_the_recorded_map_is_decoded_once_per_message(tmp_path):
+    backend = open_replay(slam_bag(tmp_path / "slam.mcap"), paused=True)
+    first = backend.map_geometry()
+    assert first.bounds == (-1.0, 0.0, 0.5, 1.0) and not (first.cells >= 50).any()
+    assert backend.map_geometry() is first  # the same object: the map view keeps its pixels
+    backend.playback.seek(2.5)  # the robot's map grew
+    second = backend.map_geometry()
+    assert second is not first and (second.cells >= 50).sum() == 1
+    assert backend.map_geometry() is second
+    backend.playback.seek(0.5)
+    assert not (backend.map_geometry().cells >= 50).any()
 
 
 def test_the_clock_pauses_steps_and_changes_speed(trip):

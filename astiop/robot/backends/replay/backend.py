@@ -102,6 +102,8 @@ class ReplayBackend(RobotBackend):
         self.playback = Playback(recording.start_ns, recording.end_ns, speed, not paused)
         self._turns = recording.channels.get("/astiop/interactions")
         self._turns_shown = 0
+        self._map_index = -1  # which recorded /map message self._map was decoded from
+        self._map = None
         self._events: list[RobotEvent] = []
         if recording.cut:
             cut = (
@@ -188,12 +190,19 @@ class ReplayBackend(RobotBackend):
         return stats
 
     def map_geometry(self):
-        if "/map" in self.recording.channels:  # e.g. a bag recorded with ros2 bag
+        ch = self.recording.channels.get("/map")  # e.g. a bag recorded with ros2 bag
+        if ch is None or not ch.times:
+            return default_map() if self.recording.backend == "sim" else None
+        # the /map at the cursor (the first one before it comes), decoded once per message: the
+        # map view redraws from scratch whenever it is handed a different object
+        index = max(ch.index_at(self.playback.now_ns()), 0)
+        if index != self._map_index:
             try:
-                return grid_from_message(self.recording.channels["/map"].message(0))
+                grid = grid_from_message(ch.message(index))
             except (KeyError, TypeError, ValueError):
-                return None
-        return default_map() if self.recording.backend == "sim" else None
+                grid = None
+            self._map_index, self._map = index, grid
+        return self._map
 
     # -- the recorded turns into the replay's store ----------------------------------------------
     def _show_turns(self, t_ns: int) -> None:
