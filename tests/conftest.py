@@ -1,10 +1,25 @@
 from __future__ import annotations
 
 import gc
+import os
 
 import pytest
 
 from astiop.store import Store
+
+
+def _dds_on_the_loopback() -> None:
+    """Set before anything in this worker starts rclpy: DDS stays on 127.0.0.1, and each xdist
+    worker has its own domain, so parallel tests never see each other's robots."""
+    worker = os.environ.get("PYTEST_XDIST_WORKER", "gw0")
+    index = int(worker[2:]) if worker[2:].isdigit() else 0
+    base = int(os.environ.get("ASTIOP_TEST_ROS_DOMAIN", "40"))
+    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    os.environ["ROS_LOCALHOST_ONLY"] = "1"
+    os.environ["ROS_DOMAIN_ID"] = str(base + index)
+
+
+_dds_on_the_loopback()
 
 
 @pytest.fixture

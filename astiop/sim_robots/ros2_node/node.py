@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 import threading
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -251,8 +252,9 @@ class SimRobotNodes:
         for param in params:
             if param.name in self.limits:
                 self.limits[param.name] = float(param.value)
-                if param.name == "max_linear_speed":
-                    self.sim.gains.v_max = float(param.value)
+                if param.name == "max_linear_speed":  # goals drive no faster either
+                    with self.sim.lock:
+                        self.sim.gains = replace(self.sim.gains, v_max=float(param.value))
         return SetParametersResult(successful=True)
 
 

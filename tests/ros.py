@@ -1,0 +1,154 @@
+"""Real ROS 2 for tests: the simulator as ROS 2 nodes in its own process, and a test's own rclpy
+node. DDS stays on the loopback (tests/conftest.py sets the environment for each worker)."""
+
+from __future__ import annotations
+
+import contextlib
+import importlib
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable
+
+import pytest
+
+
+def ros_available() -> str:
+    """Why ROS 2 tests cannot run here ("" when they can)."""
+    for module in ("rclpy", "astiop_msgs.msg", "nav2_msgs.action", "tf2_msgs.msg"):
+        try:
+            importlib.import_module(module)
+        except ImportError as exc:
+            return f"{module} not importable ({exc}); pip install -e '.[test,ros]' && astiop ros2 build-interfaces"
+    return ""
+
+
+def require_ros() -> None:
+    """Skip without ROS 2, unless CI demands it (ASTIOP_REQUIRE_ROS=1): then fail."""
+    why = ros_available()
+    if why and os.environ.get("ASTIOP_REQUIRE_ROS") == "1":
+        pytest.fail(why)
+    if why:
+        pytest.skip(why)
+
+
+def until(predicate: Callable[[], object], timeout: float, step: float = 0.05):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        value = predicate()
+        if value:
+            return value
+        time.sleep(step)
+    return predicate()
+
+
+class SimNode:
+    """`astiop sim node` in a process of its own; stderr is kept for the failure report."""
+
+    def __init__(self, *, seed: int = 0, speed: float = 4.0):
+        argv = [sys.executable, "-m", "astiop", "sim", "node", "--seed", str(seed)]
+        argv += ["--speed", str(speed)]
+        self.proc = subprocess.Popen(
+            argv, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True
+        )
+        self.lines: list[str] = []
+        self.ready = threading.Event()
+        threading.Thread(target=self._drain, daemon=True).start()
+
+    def _drain(self) -> None:
+        for line in self.proc.stderr:
+            self.lines.append(line.rstrip("\n"))
+            if "up as ROS 2 nodes" in line:
+                self.ready.set()
+
+    def wait_ready(self, timeout: float = 60.0) -> None:
+        if not self.ready.wait(timeout):
+            self.kill()
+            raise AssertionError("astiop sim node did not start:\n" + "\n".join(self.lines))
+
+    def stop(self, timeout: float = 15.0) -> int:
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+        try:
+            return self.proc.wait(timeout)
+        except subprocess.TimeoutExpired:
+            self.kill()
+            raise AssertionError("astiop sim node did not stop on SIGTERM") from None
+
+    def kill(self) -> None:
+        with contextlib.suppress(ProcessLookupError):
+            self.proc.kill()
+        self.proc.wait(10)
+
+
+@contextlib.contextmanager
+def sim_node(**kw):
+    node = SimNode(**kw)
+    try:
+        node.wait_ready()
+        yield node
+    finally:
+        node.stop()
+
+
+class RosClient:
+    """A test's own rclpy node, in its own context, spun on a thread."""
+
+    def __init__(self, name: str = "astiop_test"):
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.node import Node
+
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context)
+        self.node = Node(name, context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self._halt = threading.Event()
+        self._thread = threading.Thread(target=self._spin, daemon=True)
+        self._thread.start()
+
+    def _spin(self) -> None:
+        while not self._halt.is_set():
+            self.executor.spin_once(timeout_sec=0.05)
+
+    def close(self) -> None:
+        import rclpy
+
+        self._halt.set()
+        self._thread.join(5)
+        self.executor.shutdown()
+        self.node.destroy_node()
+        rclpy.shutdown(context=self.context)
+
+    def result(self, future, timeout: float = 30.0):
+        assert until(future.done, timeout), "no answer in time"
+        return future.result()
+
+    def call(self, srv_type, name: str, request, timeout: float = 15.0):
+        client = self.node.create_client(srv_type, name)
+        try:
+            assert client.wait_for_service(timeout_sec=timeout), f"{name} is not served"
+            return self.result(client.call_async(request), timeout)
+        finally:
+            self.node.destroy_client(client)
+
+    def collect(self, msg_type, topic: str, qos=10) -> list:
+        """Every message that arrives on `topic` from now on, with its receive time."""
+        got: list = []
+        self.node.create_subscription(
+            msg_type, topic, lambda m: got.append((time.monotonic(), m)), qos
+        )
+        return got
+
+
+@contextlib.contextmanager
+def ros_client(name: str = "astiop_test"):
+    client = RosClient(name)
+    try:
+        yield client
+    finally:
+        client.close()
