@@ -99,7 +99,7 @@ def test_a_hostile_command_is_refused_with_a_short_reason(text, why):
     assert len(checked.reason) < 400  # never the whole hostile value back
 
 
-def test_a_goal_heading_of_1e308_is_read_without_overflow():
+def test_a_goal_heading_of_1e308_is_refused_without_overflow():
     gateway = RobotGateway(SimBackend(Simulator(seed=0), None), SafetyPolicy())
     goal = (
         "ros2 action send_goal /navigate_to_pose nav2_msgs/action/NavigateToPose "
@@ -107,7 +107,7 @@ def test_a_goal_heading_of_1e308_is_read_without_overflow():
         'orientation: {z: 1.0e+308, w: 1.0e+308}}}}"'
     )
     r = gateway.run(goal, confirm=lambda c: True)
-    assert r.executed and not r.error
+    assert not r.executed and "not a unit quaternion" in r.reason  # issue 26: refused, not sent
 
 
 @pytest.mark.parametrize(

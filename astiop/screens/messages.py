@@ -5,7 +5,6 @@ from __future__ import annotations
 from textual.message import Message
 
 from astiop.agent.result import TurnResult
-from astiop.robot.backend import Execution
 from astiop.robot.state import RobotEvent, RobotState, TopicStat
 
 
@@ -25,19 +24,6 @@ class RobotStateSampled(Message, bubble=False):
         return (
             isinstance(message, RobotStateSampled) and not message.events and message.stats is None
         )
-
-
-class ReplyTokenReceived(Message):
-    def __init__(self, kind: str, text: str):
-        super().__init__()
-        self.kind = kind  # plan_token | answer_token
-        self.text = text
-
-
-class CommandExecuted(Message):
-    def __init__(self, execution: Execution):
-        super().__init__()
-        self.execution = execution
 
 
 class TurnFinished(Message, bubble=False):
