@@ -14,7 +14,7 @@ from astiop.robot.gateway import RobotGateway
 from astiop.store import Store
 from tests.cli_runner import run_cli
 from tests.recordings import GOTO, record_trip
-from tests.tui_helpers import ask
+from tests.tui_helpers import ask, wait_for
 
 
 @pytest.fixture(scope="module")
@@ -187,21 +187,20 @@ async def test_the_replay_console_shows_the_recording_and_refuses_commands(trip,
     gateway = RobotGateway(open_replay(trip, store=store, paused=True), store=store)
     app = make_app(settings, store, gateway=gateway, sample_hz=20)
     async with app.run_test(size=(120, 40)) as pilot:
-        await pilot.pause(0.3)
         bar = app.screen.query_one("#replay-bar")
-        assert "⏸" in str(bar.render()) and "00:00.0" in str(bar.render())
+        await wait_for(pilot, lambda: "⏸" in str(bar.render()) and "00:00.0" in str(bar.render()))
         assert "replay of trip.mcap" in app.sub_title
         await pilot.press("right", "right", "right")
-        await pilot.pause(0.4)
-        assert "00:03.0" in str(bar.render())
+        await wait_for(pilot, lambda: "00:03.0" in str(bar.render()))
+        cursor_s = gateway.playback.now_ns() / 1e9  # paused there: the sampler catches up
+        await wait_for(pilot, lambda: abs(app.robot_state.t - cursor_s) < 1e-3)
         x_at_3 = app.robot_state.pose.x
         await pilot.press("shift+right")
-        await pilot.pause(0.4)
-        assert app.robot_state.pose.x > x_at_3 + 1.0  # the recorded robot moved on
+        # the recorded robot moved on
+        await wait_for(pilot, lambda: app.robot_state.pose.x > x_at_3 + 1.0)
         await pilot.press("right_square_bracket", "space")
-        await pilot.pause(0.3)
         assert gateway.playback.playing and gateway.playback.speed == 2.0
-        assert "▶ 2×" in str(app.screen.query_one("#replay-bar").render())
+        await wait_for(pilot, lambda: "▶ 2×" in str(bar.render()))
         text = await ask(app, pilot, "send the robot to shipping")
         assert "replay is read-only" in text
         assert app.screen.query_one("#replay-bar") is not None

@@ -11,7 +11,7 @@ from textual.widgets import DataTable, Input
 from astiop.robot.state import OccupancyGrid, Pose2D, RobotState
 from astiop.sim.simulator import Simulator
 from astiop.widgets.map_view import Place, WarehouseMapView
-from tests.tui_helpers import ask, console, sim_of
+from tests.tui_helpers import ask, console, sim_of, wait_for
 
 SIZE = (120, 40)
 
@@ -117,11 +117,7 @@ async def test_chat_actuation_waits_for_the_operator(tmp_path):
         await pilot.pause()
         app.screen.query_one(Input).value = "send the robot to shipping"
         await pilot.press("enter")
-        for _ in range(400):  # until it holds: generous under load
-            await pilot.pause(0.05)
-            if type(app.screen).__name__ == "ConfirmModal":
-                break
-        assert type(app.screen).__name__ == "ConfirmModal"
+        await wait_for(pilot, lambda: type(app.screen).__name__ == "ConfirmModal")
         assert sim_of(app).goal is None  # nothing moved yet
         await pilot.press("y")
         await app.workers.wait_for_complete()  # the turn, then its follow-up (fast sim time)
@@ -131,11 +127,11 @@ async def test_chat_actuation_waits_for_the_operator(tmp_path):
         assert "↳ arrived: shipping (x 37." in log and "(for: send the robot to shipping)" in log
         await pilot.press("f1")  # the goal's event came while Chat was shown
         table = app.screen.query_one("#events", DataTable)
-        for _ in range(400):  # until it holds: generous under load
-            if any("accepted" in str(table.get_row_at(i)) for i in range(table.row_count)):
-                break
-            await pilot.pause(0.05)
-        assert any("accepted" in str(table.get_row_at(i)) for i in range(table.row_count))
+        await wait_for(
+            pilot,
+            lambda: any("accepted" in str(table.get_row_at(i)) for i in range(table.row_count)),
+            what="the goal's 'accepted' event in the dashboard's events",
+        )
 
 
 async def test_an_unanswered_confirmation_closes_and_says_so(tmp_path):
@@ -359,11 +355,8 @@ async def test_the_command_palette_offers_the_consoles_own_commands(tmp_path):
         assert app.services.endpoint.spec.raw == "embedded"
         go = next(c for c in app.get_system_commands(app.screen) if c.title == "Go to shipping")
         go.callback()
-        for _ in range(400):  # until it holds: generous under load
-            await pilot.pause(0.05)
-            if type(app.screen).__name__ == "ConfirmModal":
-                break
-        assert type(app.screen).__name__ == "ConfirmModal" and sim_of(app).goal is None
+        await wait_for(pilot, lambda: type(app.screen).__name__ == "ConfirmModal")
+        assert sim_of(app).goal is None
         await pilot.press("n")
         await app.workers.wait_for_complete()
         assert sim_of(app).goal is None
@@ -377,7 +370,8 @@ async def test_the_console_records_the_session_and_stops_from_the_palette(tmp_pa
     async with app.run_test(size=SIZE) as pilot:
         assert app.recorder is not None and "REC" in app.sub_title
         sim_of(app).step(2.0)  # the robot's clock moves on: new messages to record
-        await pilot.pause(0.3)
+        recorder = app.recorder
+        await wait_for(pilot, lambda: {"/robot_pose", "/battery_status"} <= recorder.counts.keys())
         stop = next(c for c in app.get_system_commands(app.screen) if c.title == "Stop recording")
         stop.callback()
         assert app.recorder is None

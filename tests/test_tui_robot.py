@@ -3,8 +3,6 @@ end the app: markup in stored text, a collision fault, an E-STOP during a confir
 
 from __future__ import annotations
 
-import time
-
 import pytest
 from rich.text import Text
 from textual.widgets import DataTable, Input
@@ -14,18 +12,9 @@ from astiop.config import load_settings
 from astiop.sim.simulator import Simulator
 from astiop.store import Store
 from tests.emulator import ARMED_ESTOP, emulated_robot, on_path, ros2_calls
-from tests.tui_helpers import console, sim_of
+from tests.tui_helpers import console, sim_of, wait_for
 
 SIZE = (120, 40)
-
-
-async def wait_for(pilot, predicate, timeout: float = 30.0) -> bool:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        await pilot.pause(0.05)
-    return False
 
 
 def ros2_console(tmp_path):
@@ -48,15 +37,15 @@ async def test_ros2_dashboard_and_estop_during_a_confirmation(tmp_path, monkeypa
                 return str(app.screen.query_one(widget_id).render())
 
             # what the operator sees, once the screen has taken the robot's first messages
-            assert await wait_for(pilot, lambda: "85." in shown("#battery"))
-            assert await wait_for(pilot, lambda: "CHARGING" in shown("#robot"))
+            await wait_for(pilot, lambda: "85." in shown("#battery"))
+            await wait_for(pilot, lambda: "CHARGING" in shown("#robot"))
             # each topic comes on its own stream: the pose may follow the status
-            assert await wait_for(pilot, lambda: "x   1.15 m" in shown("#robot"))
+            await wait_for(pilot, lambda: "x   1.15 m" in shown("#robot"))
             await pilot.press("f2")
             await pilot.pause()
             app.screen.query_one(Input).value = "send the robot to shipping"
             await pilot.press("enter")
-            assert await wait_for(pilot, lambda: type(app.screen).__name__ == "ConfirmModal")
+            await wait_for(pilot, lambda: type(app.screen).__name__ == "ConfirmModal")
             await pilot.press("ctrl+e")  # E-STOP while the operator is being asked
             await pilot.pause()
             await pilot.press("y")  # too late: the E-STOP answered "no"
@@ -80,13 +69,13 @@ async def test_ros2_teleop_moves_the_robot(tmp_path, monkeypatch):
                 st = app.robot_state
                 return st.pose is not None and st.status is not None and st.status.state == "idle"
 
-            assert await wait_for(pilot, idle)
+            await wait_for(pilot, idle)
             x0 = app.robot_state.pose.x
             await pilot.press("f5")
             for _ in range(6):  # each key press is waited on until the app is idle
                 await pilot.press("s")  # it faces west: backwards is +x
                 await pilot.pause(0.1)
-            assert await wait_for(pilot, lambda: app.robot_state.pose.x > x0 + 0.2)
+            await wait_for(pilot, lambda: app.robot_state.pose.x > x0 + 0.2)
             assert type(app.screen).__name__ == "TeleopScreen"
 
 

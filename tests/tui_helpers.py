@@ -1,5 +1,10 @@
 """A console built as the CLI builds it, but on a seeded, paused simulator and a temp store."""
 
+import inspect
+import time
+
+import pytest
+
 from astiop.app import make_app
 from astiop.config import load_settings
 from astiop.sim.simulator import Simulator
@@ -30,3 +35,18 @@ async def ask(app, pilot, request: str) -> str:
     await app.workers.wait_for_complete()
     await pilot.pause()
     return " ".join(str(w.render()) for w in app.screen.query(".answer"))
+
+
+async def wait_for(pilot, predicate, timeout: float = 30.0, what: str = "") -> None:
+    """Until `predicate()` holds, letting the app run between checks (generous: a loaded
+    machine is slow, and a passing test waits no longer than it must)."""
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        if time.monotonic() > deadline:
+            if not what:
+                try:
+                    what = inspect.getsource(predicate).strip()
+                except (OSError, TypeError):
+                    what = repr(predicate)
+            pytest.fail(f"still not so after {timeout:g} s: {what}", pytrace=False)
+        await pilot.pause(0.05)
