@@ -51,6 +51,9 @@ class RobotSettings(_Section):
     # a safety switch takes only true or false (not "no", 0 or "off")
     confirm_actuation: StrictBool = True
     ros2_executable: str = "ros2"
+    # rclpy in process, or the `ros2` executable; auto: rclpy when it and the robot's message
+    # packages import, else the CLI
+    ros2_transport: Literal["auto", "rclpy", "cli"] = "auto"
     ros2_timeout_s: float = Field(10.0, gt=0, le=3600, allow_inf_nan=False)
 
 

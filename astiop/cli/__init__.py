@@ -63,6 +63,12 @@ def main(
         help="LLM spec: embedded, rules, ollama:NAME, openai:NAME@URL, dmr:NAME, gguf:PATH.",
     ),
     robot: str | None = typer.Option(None, "--robot", help="Robot backend: sim (default) or ros2."),
+    ros2_transport: str | None = typer.Option(
+        None,
+        "--ros2-transport",
+        help="How --robot ros2 talks: rclpy (in process), cli (the ros2 executable) or auto "
+        "(rclpy where it and the robot's message packages import).",
+    ),
     record: str | None = typer.Option(
         None,
         "--record",
@@ -80,6 +86,8 @@ def main(
         overrides.setdefault("llm", {})["model"] = model
     if robot is not None:
         overrides.setdefault("robot", {})["backend"] = robot
+    if ros2_transport is not None:
+        overrides.setdefault("robot", {})["ros2_transport"] = ros2_transport
     ctx.obj = CliState(overrides=overrides)
     if ctx.invoked_subcommand is None:
         from astiop.cli.console import run_console

@@ -89,6 +89,7 @@ def chat(
         if result.started and wait:
             if not as_json:
                 typer.echo(f"\n... {result.started}; waiting for it to end", err=True)
+            gateway.start()  # the robot's state, to see how the goal ends
             follow = await agent.follow_up(result)
         return result, follow
 

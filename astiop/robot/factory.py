@@ -40,13 +40,35 @@ def make_sim_gateway(
     return RobotGateway(backend, make_safety(settings, store), store=store, who=who)
 
 
+def ros2_transport(settings: Settings) -> tuple[str, str]:
+    """("rclpy" or "cli", why the CLI when it is the CLI); BackendError if rclpy is asked for
+    and cannot run here."""
+    from astiop.robot.backend import BackendError
+    from astiop.robot.backends.rclpy.available import rclpy_missing
+
+    wanted = settings.robot.ros2_transport
+    if wanted == "cli":
+        return "cli", "as set (robot.ros2_transport)"
+    missing = rclpy_missing()
+    if wanted == "rclpy" and missing:
+        raise BackendError(f"--ros2-transport rclpy: {missing}")
+    return ("cli", missing) if missing else ("rclpy", "")
+
+
 def make_robot_gateway(
     settings: Settings, store: Store | None, *, realtime: bool = False, who: str = "astiop"
 ) -> RobotGateway:
     if settings.robot.backend == "ros2":
-        from astiop.robot.backends.ros2cli.backend import Ros2Backend
+        transport, why = ros2_transport(settings)
+        if transport == "rclpy":
+            from astiop.robot.backends.rclpy.backend import RclpyBackend
 
-        backend = Ros2Backend(settings.robot.ros2_executable, settings.robot.ros2_timeout_s)
+            backend = RclpyBackend(settings.robot.ros2_timeout_s)
+        else:
+            from astiop.robot.backends.ros2cli.backend import Ros2Backend
+
+            backend = Ros2Backend(settings.robot.ros2_executable, settings.robot.ros2_timeout_s)
+            backend.label = f"ros2 via the CLI: {why}"
         return RobotGateway(
             backend,
             make_safety(settings, store),

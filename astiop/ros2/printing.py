@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import sys
 from typing import Any
 
 import yaml
@@ -64,3 +65,16 @@ def indent_yaml(message: dict[str, Any], spaces: int = 4) -> str:
     text = yaml.dump(message, Dumper=DUMPER, sort_keys=False, default_flow_style=False, width=1000)
     pad = " " * spaces
     return "".join(pad + line + "\n" for line in text.splitlines())
+
+
+def ros2cli_yaml(values: Any) -> str:
+    """As rosidl_runtime_py's message_to_yaml prints a message or a field: block style, whole
+    length (send_goal's goal and result, echo --field)."""
+    return yaml.dump(
+        _prepare(values, False, None),
+        Dumper=DUMPER,
+        sort_keys=False,
+        default_flow_style=False,
+        allow_unicode=True,
+        width=sys.maxsize,
+    )

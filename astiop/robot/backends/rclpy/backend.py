@@ -1,0 +1,319 @@
+"""ROS 2 in process through rclpy: live state by subscription, teleop and E-STOP by an in-process
+publisher, every checked command executed here and printed as ros2cli prints it."""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections import deque
+from typing import Any
+
+from astiop.robot.backend import BackendError, RobotBackend
+from astiop.robot.backends.live_catalog import describe_graph
+from astiop.robot.backends.rclpy.graph import read_lists, read_params
+from astiop.robot.backends.rclpy.node import ros_process
+from astiop.robot.backends.rclpy.verbs import RclpyVerbs
+from astiop.robot.backends.rclpy.watch import TopicWatch, watch
+from astiop.robot.state import (
+    OccupancyGrid,
+    RobotEvent,
+    RobotState,
+    TopicStat,
+    from_messages,
+    grid_from_message,
+)
+from astiop.ros2.catalog import Catalog
+from astiop.ros2.grammar import current_distro
+from astiop.ros2.message_objects import interface_class, to_dict, to_message
+from astiop.ros2.render import stamped_now, velocity_message, zero_twist
+
+MOVING = {"navigating", "docking", "undocking", "blocked"}
+GRAPH_POLL_S = 1.0
+PARAMS_REFRESH_S = 30.0
+SILENT_S = 3.0  # no message from the robot for this long: it is said to be gone
+TELEOP_HZ = 10.0
+LAPSE_S = 0.5
+ESTOP_BURST_S = 1.0
+
+
+class RclpyBackend(RclpyVerbs, RobotBackend):
+    name = "ros2"
+    capabilities = frozenset({"commands", "teleop"})
+
+    def __init__(self, timeout_s: float = 10.0, *, discovery_s: float = 3.0):
+        self.timeout_s = timeout_s
+        self.distro = current_distro()
+        self.proc = ros_process()
+        self.label = f"ros2 via rclpy, {self.distro}, domain {self.proc.domain_id}"
+        self._lock = threading.Lock()
+        self._refresh_lock = threading.Lock()
+        self._events: deque[RobotEvent] = deque(maxlen=500)
+        self._event_seq = 0
+        self._watches: dict[str, TopicWatch] = {}
+        self._map_watch: TopicWatch | None = None
+        self._map: OccupancyGrid | None = None
+        self._goals: list[Any] = []  # goal handles this process sent and that have not ended
+        self._last_outcome: str | None = None
+        self._e_stopped = False
+        self._closed = threading.Event()
+        self._cmd_vel: tuple[Any, Any, str] | None = None  # publisher, class, type
+        self._hold: dict | None = None
+        self._hold_until = 0.0
+        self._silent = False
+        self._status_word: str | None = None
+        self._fault = ""
+        self.t0 = time.monotonic()
+        self._lists = self._discover(discovery_s)
+        self._params: list[tuple[str, str]] = []  # read by start(), or when a command needs them
+        self.catalog: Catalog = describe_graph({**self._lists, "param": self._params})
+        self.refreshed_at = 0.0  # the parameters are not read yet
+
+    def _discover(self, settle_s: float) -> dict:
+        """Discovery is under way in a new process: read until the graph stops growing."""
+        deadline = time.monotonic() + settle_s
+        lists, stable_since = read_lists(self.proc), time.monotonic()
+        while time.monotonic() < deadline:
+            time.sleep(0.2)
+            now = read_lists(self.proc)
+            if now != lists:
+                lists, stable_since = now, time.monotonic()
+            elif lists["node"] and time.monotonic() - stable_since > 0.6:
+                break
+        return lists
+
+    # -- the live graph --------------------------------------------------------------------
+    def refresh(self) -> bool:
+        """Read the graph again, and the parameters when the nodes changed or 30 s passed."""
+        with self._refresh_lock:
+            return self._refresh()
+
+    def _refresh(self) -> bool:
+        lists = read_lists(self.proc)
+        nodes = [n for n, _ in lists["node"]]
+        if nodes != [n for n, _ in self._lists["node"]] or (
+            time.monotonic() - self.refreshed_at > PARAMS_REFRESH_S
+        ):
+            self._params = read_params(self.proc, nodes, min(self.timeout_s, 2.0))
+        self._lists = lists
+        self.catalog = describe_graph({**lists, "param": self._params})
+        self.refreshed_at = time.monotonic()
+        self._watch_state_topics()
+        return True
+
+    def _graph_loop(self) -> None:
+        while not self._closed.wait(GRAPH_POLL_S):
+            try:
+                if read_lists(self.proc) != self._lists:
+                    self.refresh()
+                self._check_silence()
+            except Exception as exc:  # noqa: BLE001 - the loop must outlive one bad read
+                self._event("graph", "warning", f"reading the robot's graph failed: {exc}")
+
+    def _check_silence(self) -> None:
+        now = time.monotonic()
+        ages = [w.age(now) for w in self._watches.values()]
+        silent = bool(ages) and min(ages) > SILENT_S
+        if silent and not self._silent:
+            self._event("robot", "error", f"no message from the robot for {SILENT_S:g} s")
+        elif self._silent and not silent:
+            self._event("robot", "info", "the robot is publishing again")
+        self._silent = silent
+
+    # -- lifecycle ---------------------------------------------------------------------------
+    def start(self) -> None:
+        self._watch_state_topics()
+        threading.Thread(target=self._graph_loop, name="rclpy-graph", daemon=True).start()
+        threading.Thread(target=self.refresh, name="rclpy-params", daemon=True).start()
+        threading.Thread(target=self._teleop_loop, name="rclpy-teleop", daemon=True).start()
+
+    def _watch_state_topics(self) -> None:
+        for name in self.catalog.state_topics() + ["/map"]:
+            spec = self.catalog.topics.get(name)
+            if spec is None or name in self._watches or (name == "/map" and self._map_watch):
+                continue
+            if not self.proc.node.get_publishers_info_by_topic(name):
+                continue  # subscribed when a publisher appears, with its QoS
+            if name == "/map":
+                self._map_watch = watch(self.proc, name, spec.type, self._on_map)
+                continue
+            w = watch(self.proc, name, spec.type, self._on_message)
+            if w is not None:
+                self._watches[name] = w
+
+    def close(self) -> None:
+        self._closed.set()
+        for w in [*self._watches.values(), *([self._map_watch] if self._map_watch else [])]:
+            w.close()
+        self._watches.clear()
+        for handle in list(self._goals):
+            handle.cancel_goal_async()  # as ros2cli's send_goal does on the way out
+        if self._cmd_vel is not None:
+            self.proc.node.destroy_publisher(self._cmd_vel[0])
+            self._cmd_vel = None
+
+    # -- live state --------------------------------------------------------------------------
+    def _event(self, kind: str, severity: str, message: str) -> None:
+        with self._lock:
+            self._event_seq += 1
+            t = time.monotonic() - self.t0
+            self._events.append(RobotEvent(self._event_seq, t, kind, severity, message))
+
+    def _on_message(self, name: str, msg: Any) -> None:
+        if name != "/robot_status":
+            return
+        before, after, fault = self._status_word, msg.state, msg.fault
+        if before is not None and before != after:
+            severity = "error" if after in ("fault", "e_stopped") else "info"
+            self._event("state", severity, f"{before} -> {after}")
+        if fault and fault != self._fault:
+            self._event("fault", "error", fault)
+        self._status_word, self._fault = after, fault
+
+    def _on_map(self, _name: str, msg: Any) -> None:
+        try:
+            self._map = grid_from_message(to_dict(msg))
+        except (KeyError, TypeError, ValueError) as exc:
+            self._event("map", "warning", f"/map could not be read: {exc}")
+
+    def _fresh(self, now: float) -> dict[str, dict[str, Any]]:
+        """The latest message of each state topic that is not stale: older than three of its
+        topic's periods (at least SILENT_S), it is no longer the robot's state."""
+        out = {}
+        for name, w in self._watches.items():
+            spec = self.catalog.topics.get(name)
+            period = 1.0 / spec.rate_hz if spec and spec.rate_hz else math.inf
+            if w.age(now) <= max(3 * period, SILENT_S):
+                msg = w.latest()
+                if msg is not None:
+                    out[name] = msg
+        return out
+
+    def state(self) -> RobotState:
+        now = time.monotonic()
+        messages = self._fresh(now)
+        status = messages.get("/robot_status") or {}
+        if status.get("state") not in MOVING:
+            messages.pop("/plan", None)  # the last plan of a finished goal
+        with self._lock:
+            seq = self._event_seq
+        return from_messages(now - self.t0, messages, e_stopped=self._e_stopped, event_seq=seq)
+
+    def messages(self, names) -> dict[str, dict[str, Any]]:
+        out = {}
+        for n in names:
+            w = self._watches.get(n)
+            msg = w.latest() if w else None
+            if msg is not None:
+                out[n] = msg
+        return out
+
+    def message_times(self, names) -> dict[str, float]:
+        out = {}
+        for n in names:
+            w = self._watches.get(n)
+            received = w.received() if w else None
+            if received is not None:
+                out[n] = received - self.t0
+        return out
+
+    def events_since(self, seq: int) -> list[RobotEvent]:
+        with self._lock:
+            return [e for e in self._events if e.seq > seq]
+
+    def topic_stats(self) -> list[TopicStat]:
+        now = time.monotonic()
+        stats = []
+        for name, spec in sorted(self.catalog.topics.items()):
+            w = self._watches.get(name)
+            if w is None:
+                stats.append(TopicStat(name, spec.type, spec.rate_hz, math.nan, math.nan, 0))
+            else:
+                stats.append(
+                    TopicStat(name, spec.type, spec.rate_hz, w.rate(now), w.age(now), w.count)
+                )
+        return stats
+
+    def map_geometry(self):
+        return self._map
+
+    def wait_until_idle(self, timeout_s: float) -> str | None:
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            status = self._watches.get("/robot_status")
+            state = (status.latest() or {}).get("state") if status else None
+            if not self._goals and state not in MOVING:
+                return self._last_outcome
+            time.sleep(0.1)
+        return None
+
+    # -- teleop and the E-STOP ------------------------------------------------------------------
+    def _publisher(self) -> tuple[Any, Any, str]:
+        if self._cmd_vel is None:
+            spec = self.catalog.topics.get("/cmd_vel")
+            if spec is None:
+                raise BackendError("the robot has no /cmd_vel")
+            cls = interface_class(spec.type)
+            self._cmd_vel = (self.proc.node.create_publisher(cls, "/cmd_vel", 10), cls, spec.type)
+        return self._cmd_vel
+
+    def _send_twist(self, twist: dict) -> None:
+        pub, cls, type_ = self._publisher()
+        pub.publish(to_message(cls, stamped_now(type_, velocity_message(type_, twist))))
+
+    def drive(self, twist: dict) -> None:
+        if self._e_stopped:
+            raise BackendError("the E-STOP is engaged")
+        with self._lock:
+            self._hold, self._hold_until = twist, time.monotonic() + LAPSE_S
+        self._send_twist(twist)  # now, not at the next tick
+
+    def _teleop_loop(self) -> None:
+        """Repeat the held velocity at 10 Hz; when the keys stop, one zero Twist."""
+        while not self._closed.wait(1.0 / TELEOP_HZ):
+            with self._lock:
+                twist, until = self._hold, self._hold_until
+                lapsed = twist is not None and time.monotonic() > until
+                if lapsed:
+                    self._hold = None
+            try:
+                if lapsed:
+                    self._send_twist(zero_twist())
+                elif twist is not None and not self._e_stopped:
+                    self._send_twist(twist)
+            except Exception as exc:  # noqa: BLE001
+                self._event("teleop", "error", f"/cmd_vel: {exc}")
+
+    @property
+    def e_stopped(self) -> bool:
+        return self._e_stopped
+
+    def estop(self) -> list[str]:
+        """The zero Twist now, /stop called and every goal of this process canceled, none
+        waiting on another; failures that come later arrive as events."""
+        self._e_stopped = True
+        with self._lock:
+            self._hold = None
+        failures: list[str] = []
+        try:
+            self._send_twist(zero_twist())
+            threading.Thread(target=self._zero_burst, name="estop-zero", daemon=True).start()
+        except BackendError as exc:
+            failures.append(f"{exc}: no zero Twist was sent")
+        if "/stop" in self.catalog.services:
+            self._call_async("/stop", self.catalog.services["/stop"].type, {}, "E-STOP /stop")
+        else:
+            failures.append("the robot has no /stop service: goals were canceled directly")
+        self._cancel_goals()
+        for f in failures:
+            self._event("estop", "error", f)
+        return failures
+
+    def _zero_burst(self) -> None:
+        end = time.monotonic() + ESTOP_BURST_S
+        while time.monotonic() < end and self._e_stopped and not self._closed.is_set():
+            time.sleep(1.0 / TELEOP_HZ)
+            self._send_twist(zero_twist())
+
+    def release_estop(self) -> None:
+        self._e_stopped = False

@@ -1,0 +1,105 @@
+"""The robot's graph through rclpy's graph API, as `ros2 ... list` would list it, and the QoS
+to read a topic with, matched to its publishers (as ros2topic's echo chooses it)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from rclpy.action import get_action_names_and_types
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+from astiop.robot.backends.live_catalog import GraphLists
+from astiop.robot.backends.rclpy.node import RosProcess
+
+# rcl_interfaces/msg/ParameterType -> `ros2 param list --param-type` (ros2param/api/__init__.py)
+PARAM_TYPES = {
+    1: "boolean",
+    2: "integer",
+    3: "double",
+    4: "string",
+    5: "byte array",
+    6: "boolean array",
+    7: "integer array",
+    8: "double array",
+    9: "string array",
+}
+
+
+def hidden(name: str) -> bool:
+    """rclpy's topic_or_service_is_hidden: a name part that starts with an underscore."""
+    return any(part.startswith("_") for part in name.split("/"))
+
+
+def full_name(namespace: str, name: str) -> str:
+    return f"{namespace.rstrip('/')}/{name}"
+
+
+def read_lists(proc: RosProcess) -> GraphLists:
+    """Topics, services, actions and nodes from this process's DDS discovery cache (no call)."""
+    node = proc.node
+    me = full_name(node.get_namespace(), node.get_name())
+    mine = me + "/"  # this process's own services (type description) are not the robot's
+    return {
+        "topic": sorted(
+            (n, t[0]) for n, t in node.get_topic_names_and_types() if t and not hidden(n)
+        ),
+        "service": sorted(
+            (n, t[0])
+            for n, t in node.get_service_names_and_types()
+            if t and not hidden(n) and not n.startswith(mine)
+        ),
+        "action": sorted((n, t[0]) for n, t in get_action_names_and_types(node) if t),
+        "node": sorted(
+            (full_name(ns, n), "")
+            for n, ns in node.get_node_names_and_namespaces()
+            if not n.startswith("_") and full_name(ns, n) != me
+        ),
+    }
+
+
+def read_params(proc: RosProcess, nodes: list[str], timeout: float) -> list[tuple[str, str]]:
+    """("/node name", type) of each node's parameters, through its parameter services."""
+    from rcl_interfaces.srv import GetParameterTypes, ListParameters
+
+    listed: list[tuple[str, str]] = []
+    for node_name in nodes:
+        try:
+            names = _call(
+                proc, ListParameters, f"{node_name}/list_parameters", ListParameters.Request(),
+                timeout,
+            ).result.names  # fmt: skip
+            types = _call(
+                proc,
+                GetParameterTypes,
+                f"{node_name}/get_parameter_types",
+                GetParameterTypes.Request(names=list(names)),
+                timeout,
+            ).types
+        except Exception:  # noqa: BLE001 - a node without parameter services lists none
+            continue
+        listed += [(f"{node_name} {n}", PARAM_TYPES.get(t, "")) for n, t in zip(names, types)]
+    return sorted(listed)
+
+
+def _call(proc: RosProcess, srv_type: Any, name: str, request: Any, timeout: float) -> Any:
+    client = proc.node.create_client(srv_type, name)
+    try:
+        if not client.wait_for_service(timeout_sec=timeout):
+            raise TimeoutError(f"{name} is not served")
+        return proc.wait(client.call_async(request), timeout, name)
+    finally:
+        proc.node.destroy_client(client)
+
+
+def matched_qos(proc: RosProcess, topic: str, depth: int = 10) -> QoSProfile:
+    """Best effort if any publisher is, transient local if every publisher is."""
+    infos = proc.node.get_publishers_info_by_topic(topic)
+    best_effort = any(i.qos_profile.reliability == ReliabilityPolicy.BEST_EFFORT for i in infos)
+    latched = bool(infos) and all(
+        i.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL for i in infos
+    )
+    return QoSProfile(
+        depth=depth,
+        reliability=ReliabilityPolicy.BEST_EFFORT if best_effort else ReliabilityPolicy.RELIABLE,
+        durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE,
+    )

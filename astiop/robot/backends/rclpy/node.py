@@ -1,0 +1,101 @@
+"""One rclpy context per process, with one node, spun by its executor on a thread of its own.
+
+Every rclpy backend in the process (the console's, a test's, `astiop estop`'s) shares it; it
+shuts down at exit. Only API that Humble's rclpy has (rclpy's humble branch: __init__.py
+`init(context=, domain_id=)`, executors.py `spin_once`/`wake`/`shutdown`, node.py's graph calls).
+"""
+
+from __future__ import annotations
+
+import atexit
+import contextlib
+import os
+import threading
+import time
+from typing import Any
+
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+
+_lock = threading.Lock()
+_shared: RosProcess | None = None
+
+
+class RosTimeout(Exception):
+    pass
+
+
+class RosProcess:
+    def __init__(self) -> None:
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context)  # a non-default context installs no signal handlers
+        # no parameter services: a console has no parameters to offer the robot's graph
+        self.node = Node(
+            f"astiop_{os.getpid()}", context=self.context, start_parameter_services=False
+        )
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self._halt = threading.Event()
+        self._thread = threading.Thread(target=self._spin, name="rclpy", daemon=True)
+        self._thread.start()
+
+    @property
+    def domain_id(self) -> int:
+        return self.context.get_domain_id()
+
+    def _spin(self) -> None:
+        while not self._halt.is_set():
+            try:
+                self.executor.spin_once(timeout_sec=0.1)
+            except Exception:  # noqa: BLE001 - a callback's failure must not stop the robot's state
+                if not self.context.ok():
+                    return
+
+    def wait(self, future: Any, timeout: float, what: str) -> Any:
+        """The future's result, spun by the executor thread; RosTimeout after `timeout` s."""
+        done = threading.Event()
+        future.add_done_callback(lambda _f: done.set())
+        if not done.wait(timeout):
+            future.cancel()
+            raise RosTimeout(f"{what}: no answer within {timeout:g} s")
+        return future.result()
+
+    def close(self) -> None:
+        self._halt.set()
+        with contextlib.suppress(Exception):
+            self.executor.wake()
+        self._thread.join(2.0)
+        with contextlib.suppress(Exception):
+            self.executor.shutdown(timeout_sec=1.0)
+            self.node.destroy_node()
+        if self.context.ok():
+            with contextlib.suppress(Exception):
+                rclpy.shutdown(context=self.context)
+
+
+def ros_process() -> RosProcess:
+    """The process's rclpy context and node, started on first use."""
+    global _shared
+    with _lock:
+        if _shared is None:
+            _shared = RosProcess()
+            atexit.register(_close)
+        return _shared
+
+
+def _close() -> None:
+    global _shared
+    with _lock:
+        proc, _shared = _shared, None
+    if proc is not None:
+        proc.close()
+
+
+def until(predicate, timeout: float, step: float = 0.02) -> bool:
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(step)
+    return True

@@ -1,0 +1,359 @@
+"""The ros2 verbs executed in process through rclpy, each printed as ros2cli prints it (jazzy
+branch: ros2topic/verb/{list,info,echo,pub,hz}.py, ros2service/verb/call.py,
+ros2action/verb/send_goal.py, ros2node/api, ros2param/verb/{get,set}.py), with the same
+structured values the CLI transport returns."""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+from rclpy.action import ActionClient
+from rclpy.qos import qos_profile_sensor_data
+
+from astiop.robot.backend import BackendError
+from astiop.robot.backends.rclpy.graph import full_name, hidden, matched_qos
+from astiop.robot.backends.rclpy.node import RosTimeout
+from astiop.ros2.interfaces import interface_show
+from astiop.ros2.message_objects import MessageTypeError, interface_class, to_dict, to_message
+from astiop.ros2.printing import echo_text, ros2cli_yaml
+from astiop.ros2.render import STAMPED
+from astiop.ros2.validation import Checked
+
+# action_msgs/msg/GoalStatus -> send_goal.py's _goal_status_to_string
+STATUS = {
+    1: "ACCEPTED",
+    2: "EXECUTING",
+    3: "CANCELING",
+    4: "SUCCEEDED",
+    5: "CANCELED",
+    6: "ABORTED",
+}
+PARAM_WORDS = {
+    1: "Boolean value is:",
+    2: "Integer value is:",
+    3: "Double value is:",
+    4: "String value is:",
+}
+PARAM_FIELDS = {1: "bool_value", 2: "integer_value", 3: "double_value", 4: "string_value"}
+
+
+class RclpyVerbs:
+    """Mixed into RclpyBackend: uses its proc, catalog, watches, goals and events."""
+
+    def execute(self, checked: Checked, timeout: float) -> tuple[str, Any]:
+        cmd = checked.command
+        if checked.kind == "actuate" and self._e_stopped and cmd.name != "/stop":
+            raise BackendError("the E-STOP is engaged: nothing was sent")
+        handler = getattr(self, f"_{cmd.verb}_{cmd.sub}", None)
+        if handler is None:
+            raise BackendError(f"ros2 {cmd.verb} {cmd.sub} is not served through rclpy")
+        try:
+            return handler(checked, timeout)
+        except RosTimeout as exc:
+            raise BackendError(str(exc)) from None
+        except MessageTypeError as exc:
+            raise BackendError(str(exc)) from None
+
+    # -- listings ---------------------------------------------------------------------------
+    def _listing(self, kind: str, c: Checked) -> tuple[str, list[str]]:
+        pairs = self._lists[kind]
+        names = [n for n, _ in pairs]
+        if "count_topics" in c.command.flags or "count_services" in c.command.flags:
+            return f"{len(names)}\n", names
+        if "show_types" in c.command.flags:
+            return "".join(f"{n} [{t}]\n" for n, t in pairs), names
+        return "".join(f"{n}\n" for n in names), names
+
+    def _topic_list(self, c: Checked, timeout: float):
+        return self._listing("topic", c)
+
+    def _service_list(self, c: Checked, timeout: float):
+        return self._listing("service", c)
+
+    def _action_list(self, c: Checked, timeout: float):
+        return self._listing("action", c)
+
+    def _node_list(self, c: Checked, timeout: float):
+        names = [n for n, _ in self._lists["node"]]
+        return "".join(f"{n}\n" for n in names), names
+
+    def _topic_type(self, c: Checked, timeout: float):
+        return c.type + "\n", c.type
+
+    _service_type = _topic_type
+
+    def _topic_info(self, c: Checked, timeout: float):
+        node, name = self.proc.node, c.command.name
+        pubs, subs = node.count_publishers(name), node.count_subscribers(name)
+        text = f"Type: {c.type}\nPublisher count: {pubs}\nSubscription count: {subs}\n"
+        return text, {"type": c.type, "publishers": pubs, "subscribers": subs}
+
+    def _action_info(self, c: Checked, timeout: float):
+        from rclpy.action import get_action_server_names_and_types_by_node
+
+        servers = [
+            full_name(ns, n)
+            for n, ns in self.proc.node.get_node_names_and_namespaces()
+            if any(
+                a == c.command.name
+                for a, _ in get_action_server_names_and_types_by_node(self.proc.node, n, ns)
+            )
+        ]
+        lines = [
+            f"Action: {c.command.name}",
+            "Action clients: 0",
+            f"Action servers: {len(servers)}",
+        ]
+        return "\n".join(lines + [f"    {s}" for s in servers]) + "\n", {"servers": servers}
+
+    def _node_info(self, c: Checked, timeout: float):
+        from rclpy.action import (
+            get_action_client_names_and_types_by_node,
+            get_action_server_names_and_types_by_node,
+        )
+
+        node, target = self.proc.node, c.command.name
+        ns, _, leaf = target.rpartition("/")
+        ns = ns or "/"
+        sections = {
+            "Subscribers": node.get_subscriber_names_and_types_by_node(leaf, ns),
+            "Publishers": node.get_publisher_names_and_types_by_node(leaf, ns),
+            "Service Servers": node.get_service_names_and_types_by_node(leaf, ns),
+            "Service Clients": node.get_client_names_and_types_by_node(leaf, ns),
+            "Action Servers": get_action_server_names_and_types_by_node(node, leaf, ns),
+            "Action Clients": get_action_client_names_and_types_by_node(node, leaf, ns),
+        }
+        info = {
+            k: sorted((n, ", ".join(t)) for n, t in v if not hidden(n)) for k, v in sections.items()
+        }
+        lines = [target]
+        for section, items in info.items():
+            lines.append(f"  {section}:")
+            lines += [f"    {n}: {t}" for n, t in items]
+        return "\n".join(lines) + "\n", info
+
+    def _interface_show(self, c: Checked, timeout: float):
+        return interface_show(c.command.args["type"]), None
+
+    # -- topics -----------------------------------------------------------------------------
+    def _topic_echo(self, c: Checked, timeout: float):
+        name = c.command.name
+        timeout = c.command.options.get("timeout", timeout)
+        w = self._watches.get(name)
+        if w is not None:
+            msg = w.next_message(timeout)
+        else:
+            msg = self._one_message(name, c.type, timeout)
+        if msg is None:
+            raise BackendError(f"no message on {name} within {timeout:g} s")
+        values = to_dict(msg)
+        field = c.command.options.get("field")
+        if field:
+            for part in field.split("."):
+                values = values[part]
+            return ros2cli_yaml(values) + "---\n", values
+        return echo_text(values, c.command), values
+
+    def _one_message(self, name: str, type_: str, timeout: float) -> Any:
+        from astiop.robot.backends.rclpy.watch import TopicWatch
+
+        w = TopicWatch(self.proc, name, type_)
+        try:
+            return w.next_message(timeout) or w.latest_object()
+        finally:
+            w.close()
+
+    def _topic_hz(self, c: Checked, timeout: float):
+        name, windows = c.command.name, 2
+        times: list[float] = []
+        sub = self.proc.node.create_subscription(
+            interface_class(c.type), name, lambda _m: times.append(time.monotonic()),
+            qos_profile_sensor_data,
+        )  # fmt: skip
+        lines, rates = [], []
+        deadline = time.monotonic() + timeout
+        try:
+            printed_at = None
+            while len(rates) < windows and time.monotonic() < deadline:
+                time.sleep(0.05)
+                if len(times) < 2:
+                    continue
+                if printed_at is None:
+                    printed_at = times[-1]
+                    continue
+                if times[-1] < printed_at + 1.0:
+                    continue
+                deltas = [b - a for a, b in zip(times, times[1:])]
+                mean = sum(deltas) / len(deltas)
+                std = math.sqrt(sum((d - mean) ** 2 for d in deltas) / len(deltas))
+                rate = 1.0 / mean if mean > 0 else 0.0
+                rates.append(rate)
+                lines.append(
+                    f"average rate: {rate:.3f}\n\tmin: {min(deltas):.3f}s max: {max(deltas):.3f}s "
+                    f"std dev: {std:.5f}s window: {len(deltas)}"
+                )
+                printed_at = times[-1]
+        finally:
+            self.proc.node.destroy_subscription(sub)
+        if not rates:
+            raise BackendError(f"{name} is not being published (no rate within {timeout:g} s)")
+        return "\n".join(lines) + "\n", {"average_rate": round(rates[-1], 3), "windows": len(rates)}
+
+    def _topic_pub(self, c: Checked, timeout: float):
+        cmd = c.command
+        name, times = cmd.name, 1 if "once" in cmd.flags else cmd.options.get("times", 1)
+        rate = cmd.options.get("rate", 1.0)
+        message = c.message
+        if name == "/cmd_vel":
+            pub, cls, type_ = self._publisher()
+            twist = message["twist"] if type_ == STAMPED else message
+            with self._lock:
+                self._hold = None  # a command replaces what teleop held
+        else:
+            cls = interface_class(c.type)
+            pub = self.proc.node.create_publisher(cls, name, matched_qos(self.proc, name))
+        lines = []
+        try:
+            if pub.get_subscription_count() < 1:
+                lines.append("Waiting for at least 1 matching subscription(s)...")
+                deadline = time.monotonic() + timeout
+                while pub.get_subscription_count() < 1:
+                    if time.monotonic() > deadline:
+                        raise BackendError(f"no subscriber on {name} within {timeout:g} s")
+                    time.sleep(0.1)
+            lines.append("publisher: beginning loop")
+            for i in range(times):
+                if i:
+                    time.sleep(1.0 / rate)
+                if self._e_stopped and name == "/cmd_vel":
+                    raise BackendError("the E-STOP is engaged: publishing stopped")
+                msg = to_message(cls, message)
+                pub.publish(msg)
+                lines += [f"publishing #{i + 1}: {msg!r}", ""]
+        finally:
+            if name != "/cmd_vel":
+                self.proc.node.destroy_publisher(pub)
+        values: dict[str, Any] = {"published": times}
+        if name == "/cmd_vel":
+            values["twist"] = twist
+        return "\n".join(lines) + "\n", values
+
+    # -- services -----------------------------------------------------------------------------
+    def _service_call(self, c: Checked, timeout: float):
+        name = c.command.name
+        srv = interface_class(c.type)
+        request = to_message(srv.Request, c.message or {})
+        client = self.proc.node.create_client(srv, name)
+        try:
+            lines = []
+            if not client.service_is_ready():
+                lines.append("waiting for service to become available...")
+                if not client.wait_for_service(timeout_sec=timeout):
+                    raise BackendError(f"service {name} is not available (waited {timeout:g} s)")
+            lines.append(f"requester: making request: {request!r}\n")
+            response = self.proc.wait(client.call_async(request), timeout, f"service {name}")
+            lines.append(f"response:\n{response!r}\n")
+        finally:
+            self.proc.node.destroy_client(client)
+        if name == "/stop":
+            self._cancel_goals()
+        return "\n".join(lines) + "\n", to_dict(response)
+
+    def _call_async(self, name: str, type_: str, values: dict, what: str) -> None:
+        """Call without waiting; a failure arrives as an event."""
+        srv = interface_class(type_)
+        client = self.proc.node.create_client(srv, name)
+        future = client.call_async(to_message(srv.Request, values))
+
+        def done(f) -> None:
+            ok = f.exception() is None and f.result() is not None
+            if not ok:
+                self._event("estop", "error", f"{what}: {f.exception() or 'no response'}")
+            self.proc.node.destroy_client(client)
+
+        future.add_done_callback(done)
+
+    # -- the action ----------------------------------------------------------------------------
+    def _action_send_goal(self, c: Checked, timeout: float):
+        """Return at acceptance; the goal is followed to its end in the background."""
+        action = interface_class(c.type)
+        goal = to_message(action.Goal, c.message or {})
+        client = ActionClient(self.proc.node, action, c.command.name)
+        lines = ["Waiting for an action server to become available..."]
+        if not client.wait_for_server(timeout_sec=timeout):
+            client.destroy()
+            raise BackendError(f"no action server for {c.command.name} within {timeout:g} s")
+        lines.append(f"Sending goal:\n     {ros2cli_yaml(to_dict(goal))}")
+        future = client.send_goal_async(goal)  # its feedback is not shown: it returns here
+        handle = self.proc.wait(future, timeout, f"{c.command.name} goal")
+        if not handle.accepted:
+            client.destroy()
+            lines.append("Goal was rejected.")
+            return "\n".join(lines) + "\n", {"accepted": False, "status": "REJECTED"}
+        goal_id = bytes(handle.goal_id.uuid).hex()
+        lines.append(f"Goal accepted with ID: {goal_id}\n")
+        self._goals.append(handle)
+        self._last_outcome = None
+        handle.get_result_async().add_done_callback(lambda f: self._goal_ended(handle, client, f))
+        return "\n".join(lines) + "\n", {"accepted": True, "goal_id": goal_id, "status": "ACCEPTED"}
+
+    def _goal_ended(self, handle: Any, client: Any, future: Any) -> None:
+        if handle in self._goals:
+            self._goals.remove(handle)
+        result = future.result()
+        status = STATUS.get(result.status, "UNKNOWN") if result is not None else "UNKNOWN"
+        self._last_outcome = status.lower()
+        why = getattr(result.result, "error_msg", "") if result is not None else ""
+        severity = "info" if status == "SUCCEEDED" else "warning"
+        self._event("goal", severity, f"goal finished: {status}" + (f" ({why})" if why else ""))
+        client.destroy()
+
+    def _cancel_goals(self) -> None:
+        for handle in list(self._goals):
+            handle.cancel_goal_async()
+
+    # -- parameters ----------------------------------------------------------------------------
+    def _param_get(self, c: Checked, timeout: float):
+        from rcl_interfaces.srv import GetParameters
+
+        node, param = c.command.args["node"], c.command.args["param"]
+        response = self._param_call(
+            GetParameters, f"{node}/get_parameters", GetParameters.Request(names=[param]), timeout
+        )
+        if not response.values or response.values[0].type == 0:
+            raise BackendError(f"parameter {param} is not set on {node}")
+        value = response.values[0]
+        if value.type not in PARAM_WORDS:
+            raise BackendError(f"parameter {param} has a type astiop does not read ({value.type})")
+        v = getattr(value, PARAM_FIELDS[value.type])
+        return f"{PARAM_WORDS[value.type]} {v}\n", {"value": v}
+
+    def _param_set(self, c: Checked, timeout: float):
+        from rcl_interfaces.msg import Parameter, ParameterValue
+        from rcl_interfaces.srv import SetParameters
+
+        node, param = c.command.args["node"], c.command.args["param"]
+        value = c.message["value"]
+        kind = {bool: 1, int: 2, float: 3, str: 4}[type(value)]
+        pv = ParameterValue(type=kind, **{PARAM_FIELDS[kind]: value})
+        request = SetParameters.Request(parameters=[Parameter(name=param, value=pv)])
+        response = self._param_call(SetParameters, f"{node}/set_parameters", request, timeout)
+        result = response.results[0]
+        if not result.successful:  # ros2cli prints this and exits 0: it did not happen
+            raise BackendError(
+                "Setting parameter failed" + (f": {result.reason}" if result.reason else "")
+            )
+        return "Set parameter successful" + (
+            f": {result.reason}" if result.reason else ""
+        ) + "\n", {"value": value}
+
+    def _param_call(self, srv: Any, name: str, request: Any, timeout: float) -> Any:
+        client = self.proc.node.create_client(srv, name)
+        try:
+            if not client.wait_for_service(timeout_sec=timeout):
+                raise BackendError(f"{name.rsplit('/', 1)[0]}: node not found")
+            return self.proc.wait(client.call_async(request), timeout, name)
+        finally:
+            self.proc.node.destroy_client(client)
