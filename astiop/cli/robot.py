@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+import time
+
 import typer
 
 from astiop.cli.common import fail, interactive, print_json, state
 from astiop.robot.backend import BackendError
 from astiop.ros2.validation import Checked
+
+ESTOP_LINGER_S = 1.0  # the zero-Twist burst's length
 
 
 def exec_command(
@@ -74,4 +78,45 @@ def exec_command(
     if result.error:
         if not as_json:
             typer.echo(f"astiop: {result.error}", err=True)
+        raise typer.Exit(1)
+
+
+def estop(
+    ctx: typer.Context,
+    release: bool = typer.Option(
+        False, "--release", help="Release the E-STOP (asks first; --yes does not ask)."
+    ),
+    yes: bool = typer.Option(False, "--yes", "-y", help="Release without asking."),
+) -> None:
+    """E-STOP from a second shell or a script: stop the robot on the configured backend and
+    latch it in the database, as the console's ctrl+e does; every astiop process on that
+    database then refuses motion until it is released."""
+    from astiop.robot.factory import make_robot_gateway
+
+    st = state(ctx)
+    if release:
+        latch = st.store.estop_latch()
+        if latch is None:
+            typer.echo("the E-STOP is not engaged")
+            return
+        if not yes:
+            if not interactive():
+                fail("releasing the E-STOP needs a person to confirm it (or --yes)")
+            if not typer.confirm("release the E-STOP (the robot may move again)?", err=True):
+                fail("not released", code=1)
+        st.store.release_estop("estop --release")
+        typer.echo("E-STOP released")
+        return
+    try:
+        gateway = make_robot_gateway(st.settings, st.store, who="estop")
+    except BackendError as exc:
+        st.store.latch_estop("estop")  # no robot reached: still hold every other process
+        fail(f"E-STOP latched in the database, but the robot was not reached: {exc}", code=1)
+    failures = gateway.estop()
+    time.sleep(ESTOP_LINGER_S)  # let the zero Twist burst and /stop go out before exiting
+    gateway.close()
+    for failure in failures:
+        typer.echo(f"astiop: {failure}", err=True)
+    typer.echo("E-STOP engaged and latched" + (" (with failures above)" if failures else ""))
+    if failures:
         raise typer.Exit(1)

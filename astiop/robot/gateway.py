@@ -42,7 +42,8 @@ class RobotGateway:
         self._last_drive: tuple[float, float, float] | None = None
         self._journaled = 0  # the last event kept in the store
         self._journal_lock = threading.Lock()
-        if self.latched and not backend.e_stopped:
+        self._latch_seen = self.latched
+        if self._latch_seen and not backend.e_stopped:
             backend.estop()  # a restart keeps the E-STOP until it is released
 
     @property
@@ -64,6 +65,7 @@ class RobotGateway:
         if self.store is not None:
             try:
                 self.store.latch_estop(self.who)
+                self._latch_seen = True
             except Exception as exc:  # noqa: BLE001 - reported, the stop itself went out
                 failures.append(f"the E-STOP is not latched for other processes: {exc}")
         return failures
@@ -71,6 +73,7 @@ class RobotGateway:
     def release_estop(self) -> None:
         if self.store is not None:
             self.store.release_estop(self.who)
+            self._latch_seen = False
         self.backend.release_estop()
 
     # -- live state ------------------------------------------------------------------------
@@ -81,7 +84,20 @@ class RobotGateway:
         self.backend.close()
 
     def state(self) -> RobotState:
-        return self.backend.state().with_e_stop(self.latched)
+        latched = self.follow_latch()  # first: the backend may follow another process
+        return self.backend.state().with_e_stop(latched)
+
+    def follow_latch(self) -> bool:
+        """Whether the E-STOP is latched; when another process (a second console, `astiop
+        estop`) latched or released it since the last look, this process's robot follows."""
+        latched = self.latched
+        if self.store is not None and latched != self._latch_seen:
+            self._latch_seen = latched
+            if latched and not self.backend.e_stopped:
+                self.backend.estop()
+            elif not latched and self.backend.e_stopped:
+                self.backend.release_estop()
+        return latched
 
     def events_since(self, seq: int) -> list[RobotEvent]:
         """The robot's events after `seq`. Each is kept in the store the first time any reader

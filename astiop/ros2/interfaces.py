@@ -272,6 +272,8 @@ def python_repr(type_name: str, value: dict[str, Any], part: int = 0) -> str:
         v = value.get(f.name)
         if isinstance(v, dict) and f.type not in PRIMITIVES:
             items.append(f"{f.name}={python_repr(f.type, v)}")
+        elif f.is_array and f.type not in PRIMITIVES and isinstance(v, list):
+            items.append(f"{f.name}=[{', '.join(python_repr(f.type, item) for item in v)}]")
         else:
             items.append(f"{f.name}={v!r}")
     return f"{dotted}({', '.join(items)})"

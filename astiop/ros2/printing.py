@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import sys
 from typing import Any
 
 import yaml
@@ -76,5 +75,5 @@ def ros2cli_yaml(values: Any) -> str:
         sort_keys=False,
         default_flow_style=False,
         allow_unicode=True,
-        width=sys.maxsize,
+        width=2**31 - 1,  # rosidl passes sys.maxsize; libyaml takes a C int
     )

@@ -1,0 +1,216 @@
+"""`--robot ros2 --ros2-transport rclpy` against `astiop sim node` on real DDS (loopback only):
+live state, reads that agree, a goal followed to arrival, teleop, the E-STOP from another
+process, and the console on it; and the same commands printing the same text as the CLI
+transport on the emulated robot."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+import time
+
+import pytest
+
+from astiop.config import load_settings
+from astiop.robot.factory import make_robot_gateway
+from astiop.store import Store
+from tests.ros import require_ros, sim_node, until
+
+pytestmark = [pytest.mark.slow, pytest.mark.ros]
+YES = lambda _c: True  # noqa: E731
+ZONE_A = (15.0, 3.5)
+
+
+def settings(tmp_path, transport: str = "rclpy"):
+    return load_settings(
+        {"llm": {"model": "rules"}, "robot": {"backend": "ros2", "ros2_transport": transport}},
+        env={},
+        path=tmp_path / "none.toml",
+    )
+
+
+@pytest.fixture
+def robot_gateway(tmp_path):
+    require_ros()
+    with sim_node(speed=8.0):
+        store = Store(tmp_path / "rclpy.db")
+        gateway = make_robot_gateway(settings(tmp_path), store)
+        gateway.start()
+        try:
+            yield gateway
+        finally:
+            gateway.close()
+            store.close()
+
+
+def undocked(gateway) -> None:
+    gateway.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=YES)
+
+    def idle() -> bool:
+        st = gateway.state()
+        return st.status is not None and st.status.state == "idle" and not st.status.docked
+
+    assert until(idle, 30), gateway.state().status
+
+
+def test_live_state_comes_by_subscription_and_reads_agree(robot_gateway):
+    gateway = robot_gateway
+    assert gateway.backend.label.startswith("ros2 via rclpy, jazzy")
+    assert until(lambda: gateway.state().pose and gateway.state().battery, 15)
+    r = gateway.run("ros2 topic echo /robot_pose --once")
+    assert r.executed and not r.error, r.reason or r.error
+    pose = gateway.state().pose
+    assert abs(r.values["x"] - pose.x) < 0.01 and abs(r.values["y"] - pose.y) < 0.01
+    assert r.output.startswith("x: ") and r.output.endswith("---\n")
+    stats = {s.name: s for s in gateway.topic_stats()}
+    assert until(lambda: {s.name: s for s in gateway.topic_stats()}["/scan"].measured_hz > 7, 10)
+    assert math.isnan(stats["/cmd_vel"].measured_hz), "nothing publishes /cmd_vel: absent"
+    hz = gateway.run("ros2 topic hz /scan", timeout=15)
+    assert hz.executed and 8.0 <= hz.values["average_rate"] <= 12.0, hz.output
+    assert "average rate:" in hz.output and "window:" in hz.output
+
+
+def test_a_chat_read_agrees_with_the_robot_and_a_goal_is_followed_to_arrival(robot_gateway):
+    import asyncio
+
+    from astiop.agent.specs import open_endpoint
+    from astiop.agent.turn import Agent
+
+    gateway = robot_gateway
+    agent = Agent(gateway, open_endpoint("rules"), gateway.store, confirm=YES)
+
+    async def ask(text: str):
+        result = await agent.turn(text, lambda *_: None)
+        follow = await agent.follow_up(result, 90) if result.started else ""
+        return result, follow
+
+    result, _ = asyncio.run(ask("where is the robot?"))
+    echo = gateway.run("ros2 topic echo /robot_pose --once").values
+    assert f"x {echo['x']:.2f} m" in result.answer, result.answer
+    undocked(gateway)
+    result, follow = asyncio.run(ask("send the robot to inspection zone a"))
+    assert result.started.startswith("goal accepted: inspection_zone_a"), result.answer
+    assert follow.startswith("arrived: inspection_zone_a"), follow
+    pose = gateway.state().pose
+    assert math.dist((pose.x, pose.y), ZONE_A) < 0.3
+
+
+def test_a_send_goal_returns_at_acceptance_and_stop_cancels_it(robot_gateway):
+    gateway = robot_gateway
+    undocked(gateway)
+    r = gateway.run(
+        "ros2 action send_goal /navigate_to_pose nav2_msgs/action/NavigateToPose "
+        '"{pose: {pose: {position: {x: 37.6, y: 4.0}, orientation: {w: 1.0}}}}"',
+        confirm=YES,
+    )
+    assert r.executed and r.values["accepted"], r.output
+    assert "Goal accepted with ID:" in r.output and r.output.startswith(
+        "Waiting for an action server to become available...\nSending goal:\n     pose:"
+    )
+    assert until(lambda: gateway.state().state_word == "navigating", 10)
+    stop = gateway.run("ros2 service call /stop std_srvs/srv/Trigger", confirm=YES)
+    assert stop.values["success"], stop.output
+    assert gateway.wait_until_idle(15) in ("aborted", "canceled")
+    assert any("goal finished" in e.message for e in gateway.events_since(0))
+
+
+def test_teleop_moves_the_robot_and_the_lapse_stops_it(robot_gateway):
+    gateway = robot_gateway
+    undocked(gateway)
+    x0 = gateway.state().pose.x
+    for _ in range(10):
+        assert gateway.drive(-0.3, 0.0, 0.0).executed  # it faces west: backwards is +x
+        time.sleep(0.1)
+    assert until(lambda: gateway.state().pose.x > x0 + 0.2, 5), gateway.state().pose
+    assert until(lambda: abs(gateway.state().velocity[0]) < 1e-3, 5), "the lapse stops it"
+
+
+def test_estop_from_another_process_stops_a_moving_robot_and_holds(robot_gateway, tmp_path):
+    gateway = robot_gateway
+    undocked(gateway)
+    r = gateway.run(
+        'ros2 service call /goto_position astiop_msgs/srv/GotoPosition "{name: shipping}"',
+        confirm=YES,
+    )
+    assert r.values["success"], r.output
+    assert until(lambda: (gateway.state().status.speed or 0) > 0.1, 10)
+    db = str(tmp_path / "rclpy.db")
+    cli = [sys.executable, "-m", "astiop", "--db", db, "--robot", "ros2"]
+    out = subprocess.run(
+        [*cli, "--ros2-transport", "rclpy", "estop"], capture_output=True, text=True, timeout=60
+    )
+    assert out.returncode == 0 and "E-STOP engaged" in out.stdout, out.stderr
+    assert until(lambda: gateway.state().status.speed == 0.0, 5), gateway.state().status
+    assert gateway.state().e_stopped
+    held = gateway.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=YES)
+    assert not held.executed and "E-STOP" in held.reason
+    out = subprocess.run([*cli, "estop", "--release", "--yes"], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert not gateway.state().e_stopped
+    moved = gateway.run("ros2 service call /stop std_srvs/srv/Trigger", confirm=YES)
+    assert moved.executed and moved.values["success"]
+
+
+def test_the_console_runs_on_the_rclpy_transport(tmp_path):
+    require_ros()
+    import asyncio
+
+    from astiop.app import make_app
+    from tests.tui_helpers import wait_for
+
+    async def run() -> None:
+        app = make_app(settings(tmp_path), Store(tmp_path / "console.db"))
+        async with app.run_test(size=(120, 40)) as pilot:
+
+            def shown(widget_id: str) -> str:
+                return str(app.screen.query_one(widget_id).render())
+
+            await wait_for(pilot, lambda: "85." in shown("#battery"))
+            await wait_for(pilot, lambda: "x   1.15 m" in shown("#robot"))
+            assert "rclpy" in app.sub_title
+            await pilot.press("ctrl+e")
+            await wait_for(pilot, lambda: app.services.gateway.e_stopped)
+
+    with sim_node(speed=4.0):
+        asyncio.run(run())
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        "ros2 service call /list_locations astiop_msgs/srv/ListLocations",
+        "ros2 param get /astibot_base max_linear_speed",
+        "ros2 topic type /scan",
+        "ros2 service type /goto_position",
+        "ros2 interface show astiop_msgs/srv/GotoPosition",
+        "ros2 topic echo /tf_static --once --no-arr",
+    ],
+)
+def test_a_command_prints_the_same_text_on_both_transports(tmp_path, monkeypatch, command):
+    """The same robot (the simulator, seed 0) behind both transports: the CLI transport through
+    the emulated `ros2`, the rclpy transport on `astiop sim node`."""
+    require_ros()
+    from tests.emulator import emulated_robot, on_path
+
+    def text(transport: str) -> str:
+        store = Store(tmp_path / f"{transport}.db")
+        gateway = make_robot_gateway(settings(tmp_path, transport), store)
+        try:
+            r = gateway.run(command)
+            assert r.executed and not r.error, r.reason or r.error
+            return r.output
+        finally:
+            gateway.close()
+            store.close()
+
+    with sim_node():
+        rclpy_text = text("rclpy")
+    with emulated_robot() as robot:
+        on_path(monkeypatch, robot)
+        cli_text = text("cli")
+    if "tf_static" in command:  # the stamps are each robot's own clock
+        import re
+
+        cli_text, rclpy_text = (re.sub(r"sec: \d+", "sec: S", t) for t in (cli_text, rclpy_text))
+    assert rclpy_text == cli_text
