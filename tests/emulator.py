@@ -112,3 +112,5 @@ def cmd_vel_received(folder: Path) -> list[dict]:
 def on_path(monkeypatch, folder: Path, distro: str = "jazzy") -> None:
     monkeypatch.setenv("PATH", f"{folder}{os.pathsep}{os.environ['PATH']}")
     monkeypatch.setenv("ROS_DISTRO", distro)
+    # the emulated robot answers only its `ros2` (rclpy would find no robot on DDS)
+    monkeypatch.setenv("ASTIOP_ROBOT__ROS2_TRANSPORT", "cli")

@@ -19,7 +19,7 @@ SIZE = (120, 40)
 
 def ros2_console(tmp_path):
     cfg = load_settings(
-        {"llm": {"model": "rules"}, "robot": {"backend": "ros2"}},
+        {"llm": {"model": "rules"}, "robot": {"backend": "ros2", "ros2_transport": "cli"}},
         env={},
         path=tmp_path / "none.toml",
     )
