@@ -171,6 +171,18 @@ def _check_robot(settings, add) -> None:
         wmap = default_map()
         add("ok", "robot", f"simulator: {wmap.name}, {len(wmap.stations)} stations")
         return
+    from astiop.robot.backend import BackendError
+    from astiop.robot.factory import ros2_transport
+
+    try:
+        transport, why = ros2_transport(settings)
+    except BackendError as exc:
+        add("FAIL", "robot", str(exc))
+        return
+    if transport == "rclpy":
+        _check_rclpy(settings, add)
+        return
+    add("ok", "ros2 transport", f"ros2 via the CLI: {why}")
     exe = shutil.which(settings.robot.ros2_executable)
     if exe is None:
         add("FAIL", "robot", f"ros2 backend: '{settings.robot.ros2_executable}' is not on PATH")
@@ -193,6 +205,23 @@ def _check_robot(settings, add) -> None:
             add("ok" if lines else "FAIL", name, f"{len(lines)} topics")
         else:
             add("ok", name, lines[0][:120] if lines else "running")
+
+
+def _check_rclpy(settings, add) -> None:
+    from astiop.robot.backend import BackendError
+    from astiop.robot.backends.rclpy.backend import RclpyBackend
+
+    try:
+        backend = RclpyBackend(settings.robot.ros2_timeout_s)
+    except BackendError as exc:
+        add("FAIL", "robot", f"ros2 via rclpy: {exc}")
+        return
+    add("ok", "ros2 transport", backend.label)
+    cat = backend.catalog
+    nodes = len(backend.robot_nodes)
+    detail = f"{nodes} nodes, {len(cat.topics)} topics, {len(cat.services)} services"
+    add("ok" if nodes else "FAIL", "ros2 graph", detail + ("" if nodes else ": no robot found"))
+    backend.close()
 
 
 def _finish(rows: list[dict], as_json: bool) -> None:

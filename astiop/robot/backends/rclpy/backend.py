@@ -83,6 +83,11 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         return lists
 
     # -- the live graph --------------------------------------------------------------------
+    @property
+    def robot_nodes(self) -> list[str]:
+        """The nodes discovered on the robot's domain (not this process's own)."""
+        return [n for n, _ in self._lists["node"]]
+
     def refresh(self) -> bool:
         """Read the graph again, and the parameters when the nodes changed or 30 s passed."""
         with self._refresh_lock:
