@@ -29,7 +29,9 @@ class RosTimeout(Exception):
 class RosProcess:
     def __init__(self) -> None:
         self.context = rclpy.Context()
-        rclpy.init(context=self.context)  # a non-default context installs no signal handlers
+        # No signal handlers on a non-default context. No log lines on stderr: that is the
+        # console's screen (rcl's own warnings, such as ROS_LOCALHOST_ONLY's, included).
+        rclpy.init(args=["--ros-args", "--disable-stdout-logs"], context=self.context)
         # no parameter services: a console has no parameters to offer the robot's graph
         self.node = Node(
             f"astiop_{os.getpid()}", context=self.context, start_parameter_services=False
