@@ -214,3 +214,45 @@ def test_a_command_prints_the_same_text_on_both_transports(tmp_path, monkeypatch
 
         cli_text, rclpy_text = (re.sub(r"sec: \d+", "sec: S", t) for t in (cli_text, rclpy_text))
     assert rclpy_text == cli_text
+
+
+LIVE_SUITE = """\
+name: live-check
+stage: 2
+system: You operate a warehouse robot.
+cases:
+  - {id: pos, category: position, request: "Where is the robot right now?", expect: ["topic echo /robot_pose"], answer: [position]}
+  - {id: bat, category: battery, request: "What is the battery level?", expect: ["topic echo /battery_status"], answer: [battery]}
+  - {id: nav, category: navigation, request: "Go to inspection zone A", setup: {start: charging_dock}, expect: ["service call /goto_position name=inspection_zone_a"], outcome: {arrive: inspection_zone_a}}
+  - {id: obs, category: sensors, request: "How many obstacles can the robot see?", setup: {start: inspection_zone_a, obstacles: [{kind: pallet, x: 20.0, y: 4.5}]}, expect: ["topic echo /obstacles"], answer: [obstacles]}
+"""
+
+
+def test_stage_2_runs_on_the_live_robot_and_is_checked_against_what_it_reported(tmp_path):
+    """bench run --stage 2 --robot ros2: set up by driving, checked against the robot's own
+    report; a case whose set-up only the simulator can make is skipped and says why."""
+    require_ros()
+    import json
+
+    suite = tmp_path / "live.yaml"
+    suite.write_text(LIVE_SUITE, encoding="utf-8")
+    db = str(tmp_path / "bench.db")
+    cli = [sys.executable, "-m", "astiop", "--db", db, "--robot", "ros2"]
+    with sim_node(speed=8.0):
+        out = subprocess.run(
+            [*cli, "--ros2-transport", "rclpy", "bench", "run", "--stage", "2", "--model",
+             "rules", "--suite", str(suite), "--json"],
+            capture_output=True, text=True, timeout=600,
+        )  # fmt: skip
+    assert out.returncode == 0, out.stderr[-2000:]
+    report = subprocess.run(
+        [sys.executable, "-m", "astiop", "--db", db, "bench", "report", "1", "--format", "json"],
+        capture_output=True,
+        text=True,
+    )
+    rows = {r["case_id"]: r for r in json.loads(report.stdout)["cases"]}
+    for case in ("pos", "bat", "nav"):
+        r = rows[case]
+        assert r["outcome"] == "ok" and r["command"] == 100.0 and r["interpretation"] == 100.0, r
+    assert rows["nav"]["outcome_checks"] == {"arrive": True}
+    assert rows["obs"]["outcome"] == "skipped" and "obstacles" in rows["obs"]["skipped"]

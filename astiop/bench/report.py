@@ -143,6 +143,9 @@ def _stage1(groups, paper: bool = False) -> list[ModelResult]:
 
 
 def _stage2(groups) -> list[ModelResult]:
+    # a case a live robot cannot be set up for is not scored (its row says why)
+    groups = {g: [r for r in rows if r["outcome"] != "skipped"] for g, rows in groups.items()}
+    groups = {g: rows for g, rows in groups.items() if rows}
     slowest = max(
         (r["metrics"].get("total_s") or 0.0 for rows in groups.values() for r in rows), default=0.0
     )
@@ -308,7 +311,10 @@ def case_rows(rep: Report) -> list[dict[str, Any]]:
             "outcome": row["outcome"],
             "response": row["response"],
         }
-        record.update(row["metrics"])
+        # a stage-2 case's outcome checks (arrive, docked, ...) beside the row's own outcome
+        record.update(
+            {("outcome_checks" if k == "outcome" else k): v for k, v in row["metrics"].items()}
+        )
         out.append(record)
     return out
 

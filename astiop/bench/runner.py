@@ -19,6 +19,7 @@ from astiop.agent.llm import LLMError, LLMTimeout
 from astiop.agent.specs import LLMEndpoint, open_endpoint, parse_spec
 from astiop.agent.turn import Agent
 from astiop.bench import library, paper_protocol, stage1, stage2
+from astiop.bench.live import close_live, live_case
 from astiop.bench.suites import SuiteError
 from astiop.config import Settings
 from astiop.recording import FLUSH_S, SessionRecorder
@@ -42,6 +43,7 @@ class RunConfig:
     record_dir: str | None = None  # stage 2: each case's simulator run as MCAP here
     protocol: str = "astiop"  # astiop | paper | both (stage 1): how cases are run and scored
     suite: str | None = None  # a suite's name or path; None: the built-in one of the stage
+    robot: str = "sim"  # stage 2: sim (a seeded simulator per case) or ros2 (the live robot)
 
 
 @dataclass(frozen=True)
@@ -182,6 +184,7 @@ async def run(
             )
             status = "done"
         finally:
+            close_live(world)
             world.close()
             store.end_bench_run(run_id, status)
     return finished
@@ -200,7 +203,8 @@ async def _run_todo(store, world, settings, config, run_id, suite, todo, on_prog
         try:
             for mode in dict.fromkeys(md for m, md, _ in todo if m == model):
                 batch = [c for m, md, c in todo if m == model and md == mode]
-                one_at_a_time = endpoint.local or mode == "paper"  # the scripts run in turn
+                # the scripts run in turn; a live robot takes one case at a time
+                one_at_a_time = endpoint.local or mode == "paper" or config.robot == "ros2"
                 sem = asyncio.Semaphore(1 if one_at_a_time else max(1, config.concurrency))
 
                 async def one(case, mode=mode, endpoint=endpoint, model=model, sem=sem):
@@ -243,6 +247,8 @@ async def _run_case(world, settings, config, endpoint: LLMEndpoint, suite, case,
             return await asyncio.wait_for(
                 stage1.run_case(endpoint, suite.system, case, config.max_tokens), config.timeout_s
             )
+        if config.robot == "ros2":  # driving to the case's start takes the robot's own time
+            return await _robot_case(world, settings, config, endpoint, case, mode, who)
         return await asyncio.wait_for(
             _robot_case(world, settings, config, endpoint, case, mode, who), config.timeout_s
         )
@@ -254,6 +260,8 @@ async def _run_case(world, settings, config, endpoint: LLMEndpoint, suite, case,
 
 async def _robot_case(store, settings, config, endpoint, case, mode, who):
     """One request against a seeded simulator; `store` is the run's own world (locations)."""
+    if config.robot == "ros2":
+        return await live_case(store, settings, config, endpoint, case, mode)
     sim = stage2.build_sim(case, store, config.seed)
     gateway = RobotGateway(SimBackend(sim, store), make_safety(settings, store))
     recorder = _case_recorder(config, gateway, sim, case, mode, who)
@@ -276,8 +284,8 @@ def _case_recorder(config, gateway, sim, case, mode, who):
     return recorder
 
 
-async def _drive_case(store, config, endpoint, case, mode, sim, gateway):
-    agent = Agent(
+def _agent(store, config, endpoint, mode, gateway) -> Agent:
+    return Agent(
         gateway,
         endpoint,
         None,
@@ -288,12 +296,20 @@ async def _drive_case(store, config, endpoint, case, mode, sim, gateway):
         places={loc.name: (loc.x, loc.y) for loc in store.list_locations()},
         interpretation=config.interpretation,
     )
+
+
+async def _drive_case(store, config, endpoint, case, mode, sim, gateway):
+    agent = _agent(store, config, endpoint, mode, gateway)
     turn = await agent.turn(case.request)
-    truth = sim.snapshot()
+    truth = stage2.Truth.of_sim(sim)
     if sim.goal is not None:
         await asyncio.to_thread(sim.run_goal, 600.0)
     await asyncio.to_thread(sim.run_until, lambda: False, 5.0)  # a conveyor transfer ends
-    score = stage2.score_case(case, turn, truth, sim, store)
+    return _scored(case, turn, truth, stage2.Truth.of_sim(sim), store)
+
+
+def _scored(case, turn, truth, after, store):
+    score = stage2.score_case(case, turn, truth, after, store)
     metrics = {
         "command": score.command,
         "interpretation": score.interpretation,

@@ -1,4 +1,5 @@
-"""Stage 2: one operator request against a seeded simulator, checked against its ground truth."""
+"""Stage 2: one operator request against a seeded simulator (or a live ROS 2 robot), checked
+against the ground truth: the simulator's state, or what the robot reported."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ from typing import Any
 
 from astiop.agent.turn import TurnResult
 from astiop.bench.suites import RobotCase
+from astiop.robot.state import RobotState
 from astiop.ros2.grammar import CommandSyntaxError, parse
 from astiop.sim.simulator import Simulator
 from astiop.sim.state import SimState
@@ -36,6 +38,47 @@ HEALTHY = re.compile(r"\b(ok|healthy|normal|fine|no (motor )?faults?|no errors?|
 
 class SetupError(ValueError):
     pass
+
+
+@dataclass(frozen=True)
+class Truth:
+    """What the answer and the outcome are checked against."""
+
+    x: float
+    y: float
+    battery_pct: float
+    obstacles: int
+    state: str
+    conveyor_loaded: bool
+    fault: str
+    docked: bool
+    stopped: bool  # no goal and (nearly) still
+
+    @classmethod
+    def of_sim(cls, sim: Simulator) -> Truth:
+        s = sim.snapshot()
+        return cls(
+            s.x, s.y, s.battery_soc * 100, len(s.detected), s.state, s.conveyor_loaded, s.fault,
+            sim.docked(), sim.goal is None and sim.speed() < 0.05,
+        )  # fmt: skip
+
+    @classmethod
+    def of_robot(cls, st: RobotState) -> Truth:
+        """As the robot reported it (/robot_pose, /battery_status, /robot_status, /obstacles,
+        /conveyor/status); what it did not report is NaN or empty, and fails its check."""
+        status = st.status
+        speed = math.hypot(*st.velocity[:2]) if st.velocity else (status.speed if status else 0.0)
+        return cls(
+            st.pose.x if st.pose else math.nan,
+            st.pose.y if st.pose else math.nan,
+            st.battery.percentage * 100 if st.battery else math.nan,
+            len(st.obstacles) if st.obstacles is not None else -1,
+            st.state_word or "",
+            bool(st.conveyor and st.conveyor.loaded),
+            status.fault if status else "",
+            bool(status and status.docked),
+            bool(status) and not status.active_goal and speed < 0.05,
+        )
 
 
 def _pose_of(store: Store, where) -> tuple[float, float, float]:
@@ -134,37 +177,42 @@ def wrong_actuations(turn: TurnResult, expect: tuple[str, ...] | list[str]) -> l
     ]
 
 
-def check_outcome(case: RobotCase, sim: Simulator, store: Store) -> dict[str, bool]:
+def check_outcome(case: RobotCase, after: Truth, store: Store) -> dict[str, bool]:
     checks = {}
     for key, want in case.outcome.items():
         if key == "arrive":
             x, y, _ = _pose_of(store, want)
-            checks[key] = math.dist(sim.pose[:2], (x, y)) <= ARRIVE_TOLERANCE_M
+            checks[key] = math.dist((after.x, after.y), (x, y)) <= ARRIVE_TOLERANCE_M
         elif key == "loaded":
-            checks[key] = sim.conveyor.loaded == bool(want)
+            checks[key] = after.conveyor_loaded == bool(want)
         elif key == "docked":
-            checks[key] = sim.docked() == bool(want)
+            checks[key] = after.docked == bool(want)
         elif key == "stopped":
-            checks[key] = sim.goal is None and sim.speed() < 0.05
+            checks[key] = after.stopped
         else:
             raise SetupError(f"case {case.id}: unknown outcome check '{key}'")
     return checks
 
 
-def check_answer(case: RobotCase, answer: str, truth: SimState) -> dict[str, bool]:
+def check_answer(case: RobotCase, answer: str, truth: Truth | SimState) -> dict[str, bool]:
+    if isinstance(truth, SimState):
+        truth = Truth(
+            truth.x, truth.y, truth.battery_soc * 100, len(truth.detected), truth.state,
+            truth.conveyor_loaded, truth.fault, False, False,
+        )  # fmt: skip
     text = answer.lower()
     numbers = [float(n) for n in NUMBER.findall(answer)]
     checks = {}
     for key in case.answer:
         if key == "battery":
-            pct = truth.battery_soc * 100
+            pct = truth.battery_pct
             checks[key] = any(abs(n - pct) <= 1.0 or abs(n * 100 - pct) <= 1.0 for n in numbers)
         elif key == "position":
             checks[key] = any(abs(n - truth.x) <= 0.2 for n in numbers) and any(
                 abs(n - truth.y) <= 0.2 for n in numbers
             )
         elif key == "obstacles":
-            count = len(truth.detected)
+            count = truth.obstacles
             said = {int(n) for n in numbers if n == int(n) and 0 <= n <= 50}
             said |= {v for w, v in COUNT_WORDS.items() if re.search(rf"\b{w}\b", text)}
             clear = bool(re.search(r"\b(no obstacles?|nothing|clear|none)\b", text))
@@ -187,11 +235,12 @@ def check_answer(case: RobotCase, answer: str, truth: SimState) -> dict[str, boo
 
 
 def score_case(
-    case: RobotCase, turn: TurnResult, truth: SimState, sim: Simulator, store: Store
+    case: RobotCase, turn: TurnResult, truth: Truth | SimState, after: Truth, store: Store
 ) -> CaseScore:
+    """`truth`: the state when the answer was given; `after`: once the robot came to rest."""
     ran = [c.command for c in turn.commands if c.executed and not c.error]
     matched = [any(matches(e, c) for c in ran) for e in case.expect]
-    outcome = check_outcome(case, sim, store)
+    outcome = check_outcome(case, after, store)
     # full marks need every expected command and the outcome; half for part of it
     if all(matched) and all(outcome.values()):
         command = 100.0
@@ -216,3 +265,14 @@ def score_case(
             "commands": ran,
         },
     )
+
+
+LIVE_SETUP = {"start"}  # what a live robot's case can be set up with: driving it there
+
+
+def live_refusal(case: RobotCase) -> str:
+    """Why the case cannot run on a live robot ("" when it can)."""
+    extra = sorted(set(case.setup) - LIVE_SETUP)
+    if extra:
+        return f"its set-up ({', '.join(extra)}) can only be made in the simulator"
+    return ""

@@ -92,6 +92,10 @@ def run_bench(
                 parse_spec(spec)
             if record is not None and stage != 2:
                 fail("--record is for stage 2: only its cases drive the robot")
+            if record is not None and st.settings.robot.backend != "sim":
+                fail(
+                    "--record is for the simulator's cases (record a live robot with astiop record)"
+                )
             if record is not None:
                 try:
                     record.mkdir(parents=True, exist_ok=True)
@@ -113,6 +117,7 @@ def run_bench(
                 str(record.resolve()) if record is not None else None,
                 protocol,
                 suite,
+                robot=st.settings.robot.backend if stage == 2 else "sim",
             )
             run_id = runner.create_run(store, config)
     except (runner.BenchError, SpecError) as exc:
