@@ -1,6 +1,7 @@
 from __future__ import annotations
 
 import gc
+import hashlib
 import os
 
 import pytest
@@ -10,13 +11,16 @@ from astiop.store import Store
 
 def _dds_on_the_loopback() -> None:
     """Set before anything in this worker starts rclpy: DDS stays on 127.0.0.1, and each xdist
-    worker has its own domain, so parallel tests never see each other's robots."""
+    worker has its own domain, so parallel tests never see each other's robots. The base is
+    drawn from the run's id, so two test runs on one machine rarely share domains."""
     worker = os.environ.get("PYTEST_XDIST_WORKER", "gw0")
     index = int(worker[2:]) if worker[2:].isdigit() else 0
-    base = int(os.environ.get("ASTIOP_TEST_ROS_DOMAIN", "40"))
+    run = os.environ.get("PYTEST_XDIST_TESTRUNUID", str(os.getpid()))
+    default = 1 + int(hashlib.sha256(run.encode()).hexdigest(), 16) % 22 * 4  # 1..85
+    base = int(os.environ.get("TEST_ROS_DOMAIN_BASE", default))
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     os.environ["ROS_LOCALHOST_ONLY"] = "1"
-    os.environ["ROS_DOMAIN_ID"] = str(base + index)
+    os.environ["ROS_DOMAIN_ID"] = str(min(base + index, 101))  # 101: the last valid one
 
 
 _dds_on_the_loopback()

@@ -27,9 +27,9 @@ def ros_available() -> str:
 
 
 def require_ros() -> None:
-    """Skip without ROS 2, unless CI demands it (ASTIOP_REQUIRE_ROS=1): then fail."""
+    """Skip without ROS 2, unless CI demands it (REQUIRE_ROS_TESTS=1): then fail."""
     why = ros_available()
-    if why and os.environ.get("ASTIOP_REQUIRE_ROS") == "1":
+    if why and os.environ.get("REQUIRE_ROS_TESTS") == "1":
         pytest.fail(why)
     if why:
         pytest.skip(why)

@@ -265,3 +265,27 @@ def test_a_killed_node_leaves_nothing_behind_for_the_next():
         time.sleep(1.0)
         listed = names()
         assert sorted(listed) == sorted(set(listed)) and "astibot_base" in listed, listed
+
+
+def test_a_goal_running_when_the_node_stops_is_aborted_and_the_client_told(client):
+    from action_msgs.msg import GoalStatus
+    from nav2_msgs.action import NavigateToPose
+    from rclpy.action import ActionClient
+
+    from tests.ros import SimNode
+
+    node = SimNode(speed=2.0)
+    node.wait_ready()
+    try:
+        action = ActionClient(client.node, NavigateToPose, "/navigate_to_pose")
+        assert action.wait_for_server(timeout_sec=15)
+        handle = client.result(action.send_goal_async(_goal(*SHIPPING)))
+        assert handle.accepted
+        result = handle.get_result_async()  # asked at once, as ros2cli's send_goal asks
+        time.sleep(1.0)
+        assert node.stop() == 0  # SIGTERM mid-goal: still a clean exit
+        ended = client.result(result, 10)
+        assert ended.status == GoalStatus.STATUS_ABORTED and "shut down" in ended.result.error_msg
+        assert not any("Traceback" in line for line in node.lines), "\n".join(node.lines)
+    finally:
+        node.kill()

@@ -70,6 +70,7 @@ class RobotBackend(ABC):
     read_only: str = ""  # why commands are refused, when they are
     playback: Playback | None = None  # a replay's clock
     refreshed_at: float = 0.0  # time.monotonic() of the last read of the robot's graph
+    refresh_every_s: float = 5.0  # a missing name reads the graph again at most this often
 
     def refresh(self) -> bool:
         """Read the robot's graph again; False if nothing was read."""

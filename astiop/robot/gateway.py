@@ -146,7 +146,7 @@ class RobotGateway:
         return self.safety.review(checked, self.e_stopped)
 
     def _refresh(self) -> bool:
-        if time.monotonic() - self.backend.refreshed_at < 5.0:
+        if time.monotonic() - self.backend.refreshed_at < self.backend.refresh_every_s:
             return False
         return self.backend.refresh()
 

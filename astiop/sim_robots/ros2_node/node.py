@@ -32,7 +32,8 @@ from astiop.ros2.message_objects import interface_class, to_dict, to_message
 from astiop.sim.simulator import GoalError, Simulator
 from astiop.store import Store
 
-LAPSE_S = 0.5  # the base stops when /cmd_vel stops for this long
+LAPSE_S = 0.5  # the base stops when /cmd_vel stops for this long (wall time)
+GOAL_ABORT_S = 1.5  # at shutdown: how long running goals have to be aborted
 FEEDBACK_HZ = 5.0
 ABORTED = 9000  # nav2_msgs' UNKNOWN error code (kilted names it; jazzy has the field)
 MAP_TYPE = "nav_msgs/msg/OccupancyGrid"
@@ -63,6 +64,8 @@ class SimRobotNodes:
 
     def __init__(self, *, seed: int, speed: float, locations_db: Path):
         self.sim = Simulator(seed=seed)
+        self.speed = speed  # sim seconds per wall second
+        self._goals_running = 0
         self.store = Store(locations_db)  # the robot's own named locations
         self.backend = SimBackend(self.sim, self.store, realtime=True, speed=speed)
         self.catalog = astibot_catalog()
@@ -113,10 +116,17 @@ class SimRobotNodes:
             self._executor.add_node(node)
 
     def spin(self) -> None:
-        """Serve until `stop()` (from a signal handler or another thread)."""
+        """Serve until `stop()` (from a signal handler or another thread); then a little longer,
+        so a goal still running is aborted and its client told so before the nodes go."""
         assert self._executor is not None
         while not self._stopped.is_set() and self.context.ok():
             self._executor.spin_once(timeout_sec=0.1)
+        deadline = time.monotonic() + GOAL_ABORT_S
+        while self._goals_running and time.monotonic() < deadline and self.context.ok():
+            self._executor.spin_once(timeout_sec=0.05)
+        end = time.monotonic() + 0.2  # the result's response goes out
+        while time.monotonic() < end and self.context.ok():
+            self._executor.spin_once(timeout_sec=0.05)
 
     def stop(self) -> None:
         self._stopped.set()
@@ -162,7 +172,10 @@ class SimRobotNodes:
         )
         try:
             self.sim.set_cmd_vel(
-                twist["linear"]["x"], twist["linear"]["y"], twist["angular"]["z"], timeout=LAPSE_S
+                twist["linear"]["x"],
+                twist["linear"]["y"],
+                twist["angular"]["z"],
+                timeout=LAPSE_S * self.speed,  # the sim's clock runs `speed` times the wall's
             )
         except GoalError as exc:  # e-stopped or faulted: the base does not move
             self.nodes["/astibot_base"].get_logger().warn(
@@ -178,6 +191,13 @@ class SimRobotNodes:
 
     # -- the action ---------------------------------------------------------------------------
     def _navigate(self, goal_handle: Any) -> Any:
+        self._goals_running += 1
+        try:
+            return self._navigate_goal(goal_handle)
+        finally:
+            self._goals_running -= 1
+
+    def _navigate_goal(self, goal_handle: Any) -> Any:
         action = interface_class(self.catalog.actions["/navigate_to_pose"].type)
         request = to_dict(goal_handle.request)
         pose = request["pose"]
@@ -209,8 +229,10 @@ class SimRobotNodes:
         s = self.sim.snapshot()
         elapsed = time.monotonic() - start
         now = clock.now().to_msg()
-        speed = max(self.sim.speed(), 0.05)
-        remaining = s.distance_remaining / speed
+        wall_speed = self.sim.speed() * self.speed
+        # as nav2's bt_navigator estimates it: 0 when (nearly) still or (nearly) there
+        slow = wall_speed < 0.01 or s.distance_remaining < 0.1
+        remaining = 0.0 if slow else s.distance_remaining / wall_speed
         return to_message(
             action.Feedback,
             {

@@ -30,6 +30,8 @@ from astiop.ros2.render import stamped_now, velocity_message, zero_twist
 
 MOVING = {"navigating", "docking", "undocking", "blocked"}
 GRAPH_POLL_S = 1.0
+DISCOVERY_QUIET_S = 1.0  # no change in the graph for this long: discovery has settled
+DISCOVERY_YOUNG_S = 10.0  # a process this young may not have discovered the whole robot
 PARAMS_REFRESH_S = 30.0
 SILENT_S = 3.0  # no message from the robot for this long: it is said to be gone
 TELEOP_HZ = 10.0
@@ -40,6 +42,7 @@ ESTOP_BURST_S = 1.0
 class RclpyBackend(RclpyVerbs, RobotBackend):
     name = "ros2"
     capabilities = frozenset({"commands", "teleop"})
+    refresh_every_s = 0.0  # the graph is this process's discovery cache: reading it is free
 
     def __init__(self, timeout_s: float = 10.0, *, discovery_s: float = 3.0):
         self.timeout_s = timeout_s
@@ -70,15 +73,16 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         self.refreshed_at = 0.0  # the parameters are not read yet
 
     def _discover(self, settle_s: float) -> dict:
-        """Discovery is under way in a new process: read until the graph stops growing."""
+        """Discovery is under way in a new process: read until the graph stops growing (Fast
+        DDS announces a participant's endpoints in rounds, so a pause is not the end)."""
         deadline = time.monotonic() + settle_s
         lists, stable_since = read_lists(self.proc), time.monotonic()
         while time.monotonic() < deadline:
-            time.sleep(0.2)
+            time.sleep(0.1)
             now = read_lists(self.proc)
             if now != lists:
                 lists, stable_since = now, time.monotonic()
-            elif lists["node"] and time.monotonic() - stable_since > 0.6:
+            elif lists["node"] and time.monotonic() - stable_since > DISCOVERY_QUIET_S:
                 break
         return lists
 
@@ -94,7 +98,8 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
             return self._refresh()
 
     def _refresh(self) -> bool:
-        lists = read_lists(self.proc)
+        young = time.monotonic() - self.t0 < DISCOVERY_YOUNG_S  # discovery may still be going
+        lists = self._discover(DISCOVERY_QUIET_S * 3) if young else read_lists(self.proc)
         nodes = [n for n, _ in lists["node"]]
         if nodes != [n for n, _ in self._lists["node"]] or (
             time.monotonic() - self.refreshed_at > PARAMS_REFRESH_S
