@@ -13,6 +13,7 @@ from pathlib import Path
 import sqlite_utils
 
 from astiop.bounded import one_line
+from astiop.store.approvals import ApprovalTables
 from astiop.store.bench import BenchTables
 from astiop.store.journal import JournalTables
 from astiop.store.locations import LocationTables
@@ -52,7 +53,7 @@ def _writable(path: Path) -> bool:
     return os.access(folder, os.W_OK | os.X_OK)
 
 
-class Store(LocationTables, JournalTables, BenchTables):
+class Store(LocationTables, JournalTables, BenchTables, ApprovalTables):
     """One connection per thread, all to the same file."""
 
     def __init__(self, path: Path | str, bounds: Rect | None = None):

@@ -122,8 +122,26 @@ def _migrate_v4(db: sqlite_utils.Database) -> None:
     )
 
 
+def _migrate_v5(db: sqlite_utils.Database) -> None:
+    # An outside agent's actuation waits for a person in an open console (astiop mcp); the
+    # consoles say they are open by a heartbeat.
+    db.conn.executescript(
+        """
+        CREATE TABLE approvals (
+            id INTEGER PRIMARY KEY,
+            client TEXT NOT NULL, command TEXT NOT NULL, detail TEXT NOT NULL DEFAULT '',
+            requested_at REAL NOT NULL, expires_at REAL NOT NULL,
+            status TEXT NOT NULL DEFAULT 'pending', decided_at REAL, decided_by TEXT
+        );
+        CREATE TABLE consoles (
+            pid INTEGER PRIMARY KEY, started_at REAL NOT NULL, seen_at REAL NOT NULL
+        );
+        """
+    )
+
+
 # Ordered; the database's PRAGMA user_version counts how many have run.
-MIGRATIONS = [_migrate_v1, _migrate_v2, _migrate_v3, _migrate_v4]
+MIGRATIONS = [_migrate_v1, _migrate_v2, _migrate_v3, _migrate_v4, _migrate_v5]
 SCHEMA_VERSION = len(MIGRATIONS)
 _OUR_TABLES = {
     "locations",
@@ -133,6 +151,8 @@ _OUR_TABLES = {
     "bench_runs",
     "bench_results",
     "estop",
+    "approvals",
+    "consoles",
 }
 
 
