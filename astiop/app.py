@@ -27,6 +27,7 @@ from astiop.robot.sampler import StateSampler
 from astiop.robot.state import RobotState, TopicStat
 from astiop.ros2.render import goto_command, sent_text
 from astiop.ros2.validation import Checked
+from astiop.screens.approvals import ApprovalDesk
 from astiop.screens.bench import BenchScreen
 from astiop.screens.chat import ChatScreen
 from astiop.screens.dashboard import DashboardScreen
@@ -96,6 +97,7 @@ class AstiopApp(App):
         self.topic_stats: list[TopicStat] = []
         self.listeners: list[Any] = []  # screens that take broadcasts
         last = self.recent_events[-1].seq if self.recent_events else 0
+        self._approvals = ApprovalDesk(self)  # outside agents' actuations, asked here
         self._sampler = StateSampler(
             services.gateway, self._state_sampled, self._sampler_failed, sample_hz, last
         )
@@ -107,6 +109,8 @@ class AstiopApp(App):
         self.topic_stats = gateway.topic_stats()
         self.switch_mode("dashboard")
         self._sampler.start()
+        if self.services.gateway.playback is None:  # a replay moves no robot
+            self._approvals.start()
         if self.record_path is not None:
             self.start_recording(self.record_path)
         if not self.services.settings.robot.confirm_actuation:
@@ -119,7 +123,10 @@ class AstiopApp(App):
 
     def on_unmount(self) -> None:
         self._sampler.halt.set()
+        self._approvals.halt.set()
         self._sampler.join(2.0)
+        if self._approvals.is_alive():
+            self._approvals.join(2.0)
         if self.recorder is not None:
             self.recorder.stop()
         self.services.gateway.close()

@@ -1,0 +1,74 @@
+"""The console as the approver of outside agents' actuations (astiop mcp): a heartbeat that says
+a console is open on this database, and each pending request asked as the confirmation dialog
+asks, y/n. No answer before the request's bound closes the dialog; the server refuses it."""
+
+from __future__ import annotations
+
+import contextlib
+import threading
+import time
+
+from astiop.screens.modals import ConfirmModal
+from astiop.store import StoreError
+
+POLL_S = 0.5
+
+
+class ApprovalDesk(threading.Thread):
+    def __init__(self, app):
+        super().__init__(name="astiop-approvals", daemon=True)
+        self.app = app
+        self.halt = threading.Event()
+        self._asked: set[int] = set()
+
+    def run(self) -> None:
+        store = self.app.services.store
+        try:
+            while not self.halt.wait(POLL_S):
+                try:
+                    store.console_heartbeat()
+                    pending = store.pending_approvals()
+                except StoreError:
+                    continue  # a read-only database cannot approve: the server refuses
+                for request in pending:
+                    if request["id"] not in self._asked:
+                        self._asked.add(request["id"])
+                        self.app.call_from_thread(self._ask, request)
+        finally:
+            with contextlib.suppress(StoreError):
+                store.console_closed()
+            store.close()
+
+    def _ask(self, request: dict) -> None:  # the UI thread
+        left = max(0.0, request["expires_at"] - time.time())
+        detail = f"\n{request['detail']}" if request["detail"] else ""
+        modal = ConfirmModal(
+            f"{request['client']} (an outside agent, through MCP) asks to run a command that "
+            f"moves the robot:\n\n{request['command']}{detail}\n\n"
+            f"Allow it? Without an answer in {left:.0f} s it is refused."
+        )
+
+        def done(ok: bool | None) -> None:
+            self.app.run_worker(
+                lambda: self._decide(request["id"], bool(ok)),
+                thread=True,
+                group="approvals",
+                exit_on_error=False,
+            )
+
+        def expire() -> None:
+            if modal in self.app.screen_stack:
+                modal.dismiss(False)  # too late: the server has refused it already
+
+        self.app.push_screen(modal, done)
+        self.app.set_timer(left, expire)
+
+    def _decide(self, approval_id: int, approved: bool) -> None:
+        store = self.app.services.store
+        try:
+            if not store.decide_approval(approval_id, approved, "console"):
+                return  # no longer pending: expired or answered elsewhere
+        finally:
+            store.close()  # this worker thread's connection
+        word = "allowed" if approved else "refused"
+        self.app.call_from_thread(self.app.notify, f"MCP request {approval_id} {word}.")

@@ -1,0 +1,50 @@
+"""The console approves or refuses an outside agent's actuation (astiop mcp asks through the
+store): it says it is open, shows each request as the confirmation dialog does, and answers."""
+
+from __future__ import annotations
+
+import asyncio
+
+from astiop.store import Store
+from tests.tui_helpers import console, wait_for
+
+SIZE = (120, 40)
+GOTO = 'ros2 service call /goto_position astiop_msgs/srv/GotoPosition "{name: shipping}"'
+
+
+async def test_an_open_console_is_asked_and_its_answer_goes_back(tmp_path):
+    app = console(tmp_path)
+    server = Store(tmp_path / "console.db")  # the MCP server's own connection, as a process has
+    async with app.run_test(size=SIZE) as pilot:
+        await wait_for(pilot, server.console_open, what="the console's heartbeat")
+        first = await asyncio.to_thread(server.request_approval, "claude-desktop", GOTO, "", 30)
+        await wait_for(pilot, lambda: type(app.screen).__name__ == "ConfirmModal")
+        question = str(app.screen.query_one("Static").render())
+        assert (
+            "claude-desktop" in question and "/goto_position" in question and "shipping" in question
+        )
+        await pilot.press("y")
+        await wait_for(pilot, lambda: server.approval(first)["status"] == "approved")
+        second = await asyncio.to_thread(server.request_approval, "cursor", GOTO, "", 30)
+        await wait_for(pilot, lambda: type(app.screen).__name__ == "ConfirmModal")
+        await pilot.press("n")
+        await wait_for(pilot, lambda: server.approval(second)["status"] == "denied")
+        assert app.services.gateway.backend.sim.goal is None, "the console itself sent nothing"
+    assert not server.console_open(), "a closed console says so"
+    server.close()
+
+
+async def test_a_request_nobody_answers_closes_and_the_estop_answers_no(tmp_path):
+    app = console(tmp_path)
+    server = Store(tmp_path / "console.db")
+    async with app.run_test(size=SIZE) as pilot:
+        await wait_for(pilot, server.console_open, what="the console's heartbeat")
+        late = await asyncio.to_thread(server.request_approval, "agent", GOTO, "", 1.0)
+        await wait_for(pilot, lambda: type(app.screen).__name__ == "ConfirmModal")
+        await wait_for(pilot, lambda: type(app.screen).__name__ != "ConfirmModal", timeout=10)
+        assert server.expire_approval(late) and server.approval(late)["status"] == "expired"
+        held = await asyncio.to_thread(server.request_approval, "agent", GOTO, "", 30)
+        await wait_for(pilot, lambda: type(app.screen).__name__ == "ConfirmModal")
+        await pilot.press("ctrl+e")  # the E-STOP answers any open question with "no"
+        await wait_for(pilot, lambda: server.approval(held)["status"] == "denied")
+    server.close()
