@@ -20,10 +20,9 @@ class RobotStateSampled(Message, bubble=False):
         self.stats = stats  # every second or so; None in between
 
     def can_replace(self, message: Message) -> bool:
-        # a burst collapses to the newest, unless the older one carries events or stats
-        return (
-            isinstance(message, RobotStateSampled) and not message.events and message.stats is None
-        )
+        # Textual asks the older message whether the newer `message` may supersede it: a burst
+        # collapses to the newest, unless this older one carries events or stats
+        return isinstance(message, RobotStateSampled) and not self.events and self.stats is None
 
 
 class TurnFinished(Message, bubble=False):
