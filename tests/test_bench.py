@@ -9,7 +9,7 @@ import pytest
 from astiop.agent.turn import TurnResult
 from astiop.bench import library, runner, scoring
 from astiop.bench.report import load_report, to_csv, to_markdown
-from astiop.bench.stage2 import build_sim, check_answer, score_case
+from astiop.bench.stage2 import Truth, build_sim, check_answer, score_case
 from astiop.config import load_settings
 from astiop.robot.backend import Execution
 from astiop.store import Store
@@ -113,7 +113,7 @@ def test_claimed_arrival_that_did_not_happen_fails(store):
         case,
         _turn("The robot has arrived at the assembly station.", [goto]),
         sim.snapshot(),
-        sim,
+        Truth.of_sim(sim),
         store,
     )
     assert score.details["outcome"] == {"arrive": False} and not score.c_valid
