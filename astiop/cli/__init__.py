@@ -17,6 +17,7 @@ from astiop.cli import (
     emulate,
     export,
     locations,
+    mcp,
     record,
     robot,
     ros2,
@@ -44,6 +45,7 @@ app.command("emulate-ros2")(emulate.emulate_ros2)
 app.command("doctor")(doctor.doctor)
 app.command("record")(record.record)
 app.command("replay")(console.replay)
+app.command("mcp")(mcp.mcp)
 
 
 def _version(value: bool) -> None:

@@ -1,0 +1,89 @@
+"""`astiop mcp`: serve the robot to MCP clients (Claude, Cursor, any agent) through the one door."""
+
+from __future__ import annotations
+
+import ipaddress
+import sys
+
+import typer
+
+from astiop.cli.common import fail, state
+from astiop.robot.backend import BackendError
+
+
+def parse_http(value: str) -> tuple[str, int]:
+    """`[HOST:]PORT` -> (host, port); the host is 127.0.0.1 when omitted."""
+    host, _, port = value.rpartition(":")
+    host = host.strip("[]") or "127.0.0.1"
+    if not port.isdigit() or not 0 < int(port) < 65536:
+        fail(f"--http wants [HOST:]PORT with a port from 1 to 65535, not {value!r}")
+    return host, int(port)
+
+
+def loopback(host: str) -> bool:
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def mcp(
+    ctx: typer.Context,
+    http: str | None = typer.Option(
+        None, "--http", metavar="[HOST:]PORT", help="Serve streamable HTTP (default: stdio)."
+    ),
+    token: str | None = typer.Option(
+        None, "--token", help="Require 'Authorization: Bearer TOKEN' (needed off the loopback)."
+    ),
+    read_only: bool = typer.Option(
+        False, "--read-only", help="Register no tool that acts on the robot."
+    ),
+    approve_actuation: bool = typer.Option(
+        False,
+        "--approve-actuation",
+        help="Allow actuation without a console's approval (still clamped, geofenced, logged).",
+    ),
+    approval_timeout: float = typer.Option(
+        60.0, "--approval-timeout", min=1.0, max=3600.0, help="Seconds a console has to answer."
+    ),
+) -> None:
+    """Serve the robot to MCP clients: reads freely; each actuation approved in a console."""
+    host, port = parse_http(http) if http is not None else ("", 0)
+    if http is not None and not loopback(host) and not token:
+        fail(f"--http on {host} (not the loopback) needs --token TOKEN: anyone who reaches it "
+             "could ask the robot to move")  # fmt: skip
+    if token is not None and http is None:
+        fail("--token goes with --http (stdio needs none)")
+    if token is not None and (len(token) < 16 or any(c.isspace() for c in token)):
+        fail("--token wants at least 16 characters and no spaces")
+
+    from astiop.mcp.approval import Policy
+    from astiop.mcp.server import AstiopMCP, serve_http, serve_stdio
+    from astiop.mcp.tools import RobotTools
+    from astiop.robot.factory import make_robot_gateway
+
+    st = state(ctx)
+    try:
+        gateway = make_robot_gateway(st.settings, st.store, realtime=True, who="astiop mcp")
+    except BackendError as exc:
+        fail(str(exc))
+    policy = Policy(approve_actuation=approve_actuation, timeout_s=approval_timeout)
+    server = AstiopMCP(RobotTools(gateway, st.store, policy), read_only=read_only)
+    if read_only:
+        mode = "read-only"
+    elif approve_actuation:
+        mode = "actuation allowed by the operator (--approve-actuation)"
+    else:
+        mode = "actuation needs a console's approval"
+    where = f"http://{host}:{port}/mcp" if http else "stdio"
+    print(f"astiop mcp: serving on {where}; robot {gateway.backend.name}; {mode}", file=sys.stderr)
+    gateway.start()
+    try:
+        if http is not None:
+            serve_http(server, host, port, token)
+        else:
+            serve_stdio(server)
+    finally:
+        gateway.close()

@@ -1,0 +1,298 @@
+"""`astiop mcp` driven by the SDK's own client, over stdio and streamable HTTP, on the simulator.
+
+A thread that beats the console heartbeat and answers approvals stands in for the console."""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+import subprocess
+import sys
+import threading
+import time
+
+import httpx
+import pytest
+from mcp import Client, StdioServerParameters
+from mcp.types import Implementation
+
+from astiop.config import load_settings
+from astiop.mcp.approval import NO_CONSOLE
+from astiop.mcp.server import AstiopMCP
+from astiop.mcp.tools import TOOL_CLASSES, RobotTools
+from astiop.robot.factory import make_sim_gateway
+from astiop.robot.gateway import ESTOP_REASON
+from astiop.store import Store
+
+ENV = {**os.environ, "ASTIOP_SIM__SPEED": "20", "ASTIOP_LLM__THREADS": "1"}
+ME = Implementation(name="pytest", version="1")
+
+
+def stdio(db, *flags: str) -> Client:
+    args = ["-m", "astiop", "--db", str(db), "mcp", *flags]
+    return Client(StdioServerParameters(command=sys.executable, args=args, env=ENV), client_info=ME)
+
+
+async def call(client: Client, name: str, args: dict | None = None) -> tuple[bool, str]:
+    result = await client.call_tool(name, args or {})
+    return result.is_error, "\n".join(c.text for c in result.content)
+
+
+def unclassified(tools) -> list[str]:
+    """Registered tools with no class in the one table, or a class it does not say."""
+    return [
+        t.name
+        for t in tools
+        if TOOL_CLASSES.get(t.name) not in ("read", "actuate")
+        or (t.meta or {}).get("astiop/class") != TOOL_CLASSES[t.name]
+    ]
+
+
+# -- the table --------------------------------------------------------------------------------
+async def test_every_tool_has_a_class_and_read_only_registers_no_actuation(store):
+    gateway = make_sim_gateway(load_settings({}), store)
+    robot = RobotTools(gateway, store, policy=None)
+    full = await AstiopMCP(robot).list_tools()
+    assert {t.name for t in full} == set(TOOL_CLASSES)
+    assert unclassified(full) == []
+    reads = await AstiopMCP(robot, read_only=True).list_tools()
+    assert {t.name for t in reads} == {n for n, c in TOOL_CLASSES.items() if c == "read"}
+    assert all(t.annotations.read_only_hint for t in reads)
+    server = AstiopMCP(robot)
+    server.add_tool(lambda: "x", name="sneaky", description="no class")
+    assert unclassified(await server.list_tools()) == ["sneaky"]
+
+
+# -- stdio: reads, refusals, hostile clients, the record ------------------------------------
+HOSTILE = [
+    ("move", {"vx": "abc"}),
+    ("move", {"vx": "inf", "seconds": 1}),
+    ("move", {"vx": float("nan"), "seconds": 1}),
+    ("move", {"vx": 0.2, "seconds": 100}),
+    ("go_to_pose", {"x": "nan", "y": 0, "theta_deg": 0}),
+    ("go_to_pose", {"x": 1e308, "y": 1, "theta_deg": 0}),
+    ("go_to_location", {}),
+    ("go_to_location", {"name": ["shipping"]}),
+    ("go_to_location", {"name": "'; DROP TABLE locations; --"}),
+    ("go_to_location", {"name": "x" * 200_000}),
+    ("read_topic", {"topic": "/odom --once; rm -rf /"}),
+    ("read_topic", {"topic": "/no_such_topic"}),
+    ("ros2_command", {"command": "rm -rf /"}),
+    ("ros2_command", {"command": "ros2 " + "a" * 10_000}),
+    ("ros2_command", {"command": "ros2 topic pub /cmd_vel geometry_msgs/msg/Twist \x1b[2J"}),
+    ("ros2_query", {"command": "ros2 service call /dock std_srvs/srv/Trigger"}),
+    ("no_such_tool", {"x": 1}),
+]
+
+
+@pytest.mark.slow
+async def test_stdio_reads_refusals_and_hostile_arguments(tmp_path):
+    db = tmp_path / "mcp.db"
+    async with stdio(db) as client:
+        tools = (await client.list_tools()).tools
+        assert unclassified(tools) == [] and {t.name for t in tools} == set(TOOL_CLASSES)
+
+        error, text = await call(client, "robot_state")
+        state = json.loads(text)
+        assert not error and state["robot"] == "sim"
+        for part in ("pose", "battery", "status", "faults"):
+            assert 0 <= state[part]["age_s"] < 5, part
+        error, text = await call(client, "read_topic", {"topic": "/battery_status"})
+        assert not error and "percentage:" in text
+        error, text = await call(client, "list_locations")
+        assert not error and "shipping" in text
+        catalog = await client.read_resource("astiop://catalog")
+        assert "/goto_position" in catalog.contents[0].text
+        interfaces = await client.read_resource("astiop://interfaces")
+        assert "float64 theta" in interfaces.contents[0].text
+
+        # no console open: refused with the way out
+        assert await call(client, "go_to_location", {"name": "shipping"}) == (True, NO_CONSOLE)
+
+        for name, args in HOSTILE:
+            error, text = await call(client, name, args)
+            assert error and text and "\n" not in text and len(text) <= 500, (name, text)
+
+        # a flood: every call answered (a result or one line), and the server still serves
+        import anyio
+
+        answers: list[tuple[bool, str]] = []
+
+        async def one() -> None:
+            answers.append(await call(client, "robot_state"))
+
+        async with anyio.create_task_group() as tg:
+            for _ in range(40):
+                tg.start_soon(one)
+        assert len(answers) == 40
+        assert all(not e or "\n" not in t for e, t in answers)
+        assert not (await call(client, "list_locations"))[0]
+
+        # the E-STOP latched by another process: refused with that reason; stop still works
+        Store(db).latch_estop("test")
+        assert await call(client, "go_to_location", {"name": "shipping"}) == (True, ESTOP_REASON)
+        error, text = await call(client, "stop")
+        assert not error and text.startswith("stop sent")
+
+    with Store(db).db.conn as conn:
+        rows = conn.execute("SELECT model, mode, session, status FROM interactions").fetchall()
+        sent = conn.execute(
+            "SELECT command FROM commands WHERE source = 'mcp' AND executed = 1 "
+            "AND kind = 'actuate'"
+        ).fetchall()
+    assert rows and all(r[:3] == ("mcp:pytest", "mcp", "mcp") for r in rows)
+    assert {r[3] for r in rows} == {"done", "error"}
+    assert [c for (c,) in sent] == ["ros2 service call /stop std_srvs/srv/Trigger"]
+
+
+@pytest.mark.slow
+async def test_read_only_lists_no_actuating_tool(tmp_path):
+    async with stdio(tmp_path / "mcp.db", "--read-only") as client:
+        names = {t.name for t in (await client.list_tools()).tools}
+        assert names == {n for n, c in TOOL_CLASSES.items() if c == "read"}
+        error, text = await call(client, "go_to_location", {"name": "shipping"})
+        assert error and "Unknown tool" in text
+
+
+@pytest.mark.slow
+async def test_approve_actuation_goes_to_a_location_on_the_sim(tmp_path):
+    async with stdio(tmp_path / "mcp.db", "--approve-actuation") as client:
+        error, text = await call(client, "go_to_location", {"name": "inspection_zone_a"})
+        assert not error and text.startswith("goal accepted: inspection_zone_a"), text
+        assert "arrived" not in text
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline:
+            goal = json.loads((await call(client, "robot_state"))[1])["last_goal"]
+            if goal["outcome"] != "still going":
+                break
+            time.sleep(0.3)
+        assert goal["outcome"].startswith("arrived: inspection_zone_a"), goal
+
+
+class Console(threading.Thread):
+    """Stands in for an open console: beats its heartbeat and answers each request in turn
+    (None: leaves it unanswered)."""
+
+    def __init__(self, db, answers: list[bool | None]):
+        super().__init__(daemon=True)
+        self.db, self.answers, self.seen = db, list(answers), []
+        self.done = threading.Event()
+
+    def run(self) -> None:
+        store = Store(self.db)
+        while not self.done.is_set():
+            store.console_heartbeat()
+            for request in store.pending_approvals():
+                if request["id"] in {r["id"] for r in self.seen}:
+                    continue
+                self.seen.append(request)
+                answer = self.answers.pop(0) if self.answers else None
+                if answer is not None:
+                    store.decide_approval(request["id"], answer, "test console")
+            time.sleep(0.1)
+        store.console_closed()
+
+
+@pytest.mark.slow
+async def test_a_console_approves_denies_or_lets_expire(tmp_path):
+    db = tmp_path / "mcp.db"
+    Store(db).close()
+    console = Console(db, [True, True, False, None])
+    console.start()
+    try:
+        async with stdio(db, "--approval-timeout", "2") as client:
+            error, text = await call(client, "move", {"vx": -3.0, "seconds": 0.3})
+            assert not error and "commanded vx -0.8 m/s" in text and "measured: moved" in text
+            error, text = await call(client, "go_to_location", {"name": "shipping"})
+            assert not error and text.startswith("goal accepted: shipping"), text
+            error, text = await call(client, "go_to_pose", {"x": 10, "y": 5, "theta_deg": 90})
+            assert (error, text) == (True, "denied by the operator")
+            error, text = await call(client, "dock")
+            assert (error, text) == (True, "no answer from the operator within 2 s")
+    finally:
+        console.done.set()
+        console.join(5)
+    first = console.seen[0]
+    assert first["client"] == "pytest"
+    assert first["command"].startswith("ros2 topic pub -t 3 -r 10 /cmd_vel")
+    assert "x: -0.8" in first["command"]  # as it is sent: clamped
+    assert "clamped" in first["detail"]
+    assert console.seen[1]["command"].startswith(
+        "ros2 service call /goto_position astiop_msgs/srv/GotoPosition '{name: shipping,"
+    )
+    statuses = [Store(db).approval(r["id"])["status"] for r in console.seen]
+    assert statuses == ["approved", "approved", "denied", "expired"]
+
+
+# -- HTTP -------------------------------------------------------------------------------------
+def free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+def http_server(db, port: int, *flags: str) -> subprocess.Popen:
+    args = [sys.executable, "-m", "astiop", "--db", str(db), "mcp", "--http", *flags]
+    proc = subprocess.Popen(args, env=ENV, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL)
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:
+        try:
+            socket.create_connection(("127.0.0.1", port), 0.2).close()
+            return proc
+        except OSError:
+            assert proc.poll() is None, proc.stderr.read().decode()
+            time.sleep(0.1)
+    proc.kill()
+    raise AssertionError("the HTTP server did not start")
+
+
+@pytest.mark.slow
+async def test_http_loopback_serves_and_a_token_is_required_when_given(tmp_path):
+    port = free_port()
+    proc = http_server(tmp_path / "a.db", port, f"127.0.0.1:{port}")
+    try:
+        async with Client(f"http://127.0.0.1:{port}/mcp", client_info=ME) as client:
+            assert unclassified((await client.list_tools()).tools) == []
+            error, text = await call(client, "robot_state")
+            assert not error and json.loads(text)["pose"]["age_s"] is not None
+            error, text = await call(client, "go_to_location", {"name": "shipping"})
+            assert (error, text) == (True, NO_CONSOLE)
+    finally:
+        proc.terminate()
+        proc.wait(10)
+
+    token = "s3cret-token-0123456789"
+    port = free_port()
+    proc = http_server(tmp_path / "b.db", port, f"127.0.0.1:{port}", "--token", token)
+    try:
+        hello = {"jsonrpc": "2.0", "id": 1, "method": "ping"}
+        refused = httpx.post(f"http://127.0.0.1:{port}/mcp", json=hello)
+        assert refused.status_code == 401
+        import httpx2
+        from mcp.client.streamable_http import streamable_http_client
+
+        headers = {"Authorization": f"Bearer {token}"}
+        async with (
+            httpx2.AsyncClient(headers=headers) as http,
+            Client(
+                streamable_http_client(f"http://127.0.0.1:{port}/mcp", http_client=http),
+                client_info=ME,
+            ) as client,
+        ):
+            assert not (await call(client, "list_locations"))[0]
+    finally:
+        proc.terminate()
+        proc.wait(10)
+
+
+def test_http_off_the_loopback_needs_a_token(tmp_path):
+    args = [sys.executable, "-m", "astiop", "--db", str(tmp_path / "c.db"), "mcp"]
+    out = subprocess.run(
+        [*args, "--http", "0.0.0.0:9"], env=ENV, capture_output=True, text=True, timeout=30
+    )
+    assert out.returncode == 2
+    assert out.stderr.strip().splitlines() == [
+        "astiop: --http on 0.0.0.0 (not the loopback) needs --token TOKEN: anyone who reaches "
+        "it could ask the robot to move"
+    ]
