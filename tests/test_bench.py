@@ -120,7 +120,8 @@ def test_claimed_arrival_that_did_not_happen_fails(store):
     # when it really drives there, the same command scores full marks
     sim.goto(8.0, 22.6, math.pi / 2)
     sim.run_goal(300)
-    score = score_case(case, _turn("On its way.", [goto]), sim.snapshot(), sim, store)
+    after = Truth.of_sim(sim)
+    score = score_case(case, _turn("On its way.", [goto]), sim.snapshot(), after, store)
     assert score.c_valid and score.command == 100
 
 
