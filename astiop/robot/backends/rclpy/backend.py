@@ -132,6 +132,8 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
 
     # -- lifecycle ---------------------------------------------------------------------------
     def start(self) -> None:
+        if "/cmd_vel" in self.catalog.topics:
+            self._publisher()  # matched now, so the first key and the E-STOP do not wait for it
         self._watch_state_topics()
         threading.Thread(target=self._graph_loop, name="rclpy-graph", daemon=True).start()
         threading.Thread(target=self.refresh, name="rclpy-params", daemon=True).start()
@@ -147,7 +149,8 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
             if name == "/map":
                 self._map_watch = watch(self.proc, name, spec.type, self._on_map)
                 continue
-            w = watch(self.proc, name, spec.type, self._on_message)
+            on_message = self._on_message if name == "/robot_status" else None  # its events
+            w = watch(self.proc, name, spec.type, on_message)
             if w is not None:
                 self._watches[name] = w
 

@@ -142,7 +142,12 @@ class RclpyVerbs:
         name = c.command.name
         timeout = c.command.options.get("timeout", timeout)
         w = self._watches.get(name)
-        if w is not None:
+        spec = self.catalog.topics.get(name)
+        if w is not None and spec is not None and spec.rate_hz > 0:
+            # the robot's last publication, if it came within one period, is the message
+            # `ros2 topic echo --once` would print next (one period newer at most)
+            msg = w.current(1.0 / spec.rate_hz) or w.next_message(timeout)
+        elif w is not None:
             msg = w.next_message(timeout)
         else:
             msg = self._one_message(name, c.type, timeout)
