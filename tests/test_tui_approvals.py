@@ -48,3 +48,39 @@ async def test_a_request_nobody_answers_closes_and_the_estop_answers_no(tmp_path
         await pilot.press("ctrl+e")  # the E-STOP answers any open question with "no"
         await wait_for(pilot, lambda: server.approval(held)["status"] == "denied")
     server.close()
+
+
+async def test_an_mcp_client_actuation_is_approved_and_refused_in_the_console(tmp_path):
+    """The SDK's client → `astiop mcp` (its own process) → the console on the same database:
+    y lets the goal go to the robot, n refuses it and the client is told why."""
+    import os
+    import sys
+
+    from mcp import Client, StdioServerParameters
+    from mcp.types import Implementation
+
+    env = {**os.environ, "ASTIOP_SIM__SPEED": "20", "ASTIOP_LLM__THREADS": "1"}
+    args = ["-m", "astiop", "--db", str(tmp_path / "console.db"), "mcp"]
+    params = StdioServerParameters(command=sys.executable, args=args, env=env)
+    app = console(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+        server = Store(tmp_path / "console.db")
+        await wait_for(pilot, server.console_open, what="the console's heartbeat")
+        async with Client(params, client_info=Implementation(name="agent-x", version="1")) as c:
+
+            async def ask(answer: str) -> tuple[bool, str]:
+                call = asyncio.create_task(c.call_tool("go_to_location", {"name": "shipping"}))
+                await wait_for(pilot, lambda: type(app.screen).__name__ == "ConfirmModal")
+                question = str(app.screen.query_one("Static").render())
+                assert "agent-x" in question and "shipping" in question
+                await pilot.press(answer)
+                result = await asyncio.wait_for(call, 30)
+                return result.is_error, "\n".join(x.text for x in result.content)
+
+            refused, text = await ask("n")
+            assert refused and "denied by the operator" in text
+            ok, text = await ask("y")
+            assert not ok and "goal accepted: shipping" in text, text
+        statuses = [r["status"] for r in server.db.query("SELECT status FROM approvals")]
+        assert statuses == ["denied", "approved"]
+        server.close()
