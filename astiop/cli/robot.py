@@ -2,15 +2,11 @@
 
 from __future__ import annotations
 
-import time
-
 import typer
 
 from astiop.cli.common import fail, interactive, print_json, state
 from astiop.robot.backend import BackendError
 from astiop.ros2.validation import Checked
-
-ESTOP_LINGER_S = 1.0  # the zero-Twist burst's length
 
 
 def exec_command(
@@ -113,7 +109,8 @@ def estop(
         st.store.latch_estop("estop")  # no robot reached: still hold every other process
         fail(f"E-STOP latched in the database, but the robot was not reached: {exc}", code=1)
     failures = gateway.estop()
-    time.sleep(ESTOP_LINGER_S)  # let the zero Twist burst and /stop go out before exiting
+    # the zero-Twist burst and /stop go out before this process exits
+    failures += gateway.backend.settle_estop(st.settings.robot.ros2_timeout_s)
     gateway.close()
     for failure in failures:
         typer.echo(f"astiop: {failure}", err=True)

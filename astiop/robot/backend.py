@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from abc import ABC, abstractmethod
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field
@@ -75,6 +76,13 @@ class RobotBackend(ABC):
     def refresh(self) -> bool:
         """Read the robot's graph again; False if nothing was read."""
         return False
+
+    def settle_estop(self, timeout_s: float) -> list[str]:
+        """Wait (at most `timeout_s`) for what an E-STOP started in the background to go out, for
+        a process about to exit; the failures that came. By default: the zero-Twist burst's
+        second."""
+        time.sleep(min(timeout_s, 1.0))
+        return []
 
     @property
     @abstractmethod

@@ -64,6 +64,8 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         self._hold: dict | None = None
         self._hold_until = 0.0
         self._silent = False
+        self._estop_threads: list[threading.Thread] = []
+        self._estop_seq = 0
         self._status_word: str | None = None
         self._fault = ""
         self.t0 = time.monotonic()
@@ -303,30 +305,66 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
 
     def estop(self) -> list[str]:
         """The zero Twist now, /stop called and every goal of this process canceled, none
-        waiting on another; failures that come later arrive as events."""
+        waiting on another; failures that come later arrive as events (`settle_estop`)."""
         self._e_stopped = True
         with self._lock:
             self._hold = None
         failures: list[str] = []
+        self._estop_seq = self._event_seq
+        self._estop_threads = []
         try:
-            self._send_twist(zero_twist())
-            threading.Thread(target=self._zero_burst, name="estop-zero", daemon=True).start()
+            self._send_twist(zero_twist())  # matched already in a running console
+            self._estop_threads.append(self._background(self._zero_burst, "estop-zero"))
         except BackendError as exc:
             failures.append(f"{exc}: no zero Twist was sent")
-        if "/stop" in self.catalog.services:
-            self._call_async("/stop", self.catalog.services["/stop"].type, {}, "E-STOP /stop")
-        else:
-            failures.append("the robot has no /stop service: goals were canceled directly")
+        spec = self.catalog.services.get("/stop")  # a young process may not have seen it yet
+        stop_type = spec.type if spec else "std_srvs/srv/Trigger"
+        self._estop_threads.append(
+            self._background(lambda: self._call_stop(stop_type), "estop-stop")
+        )
         self._cancel_goals()
         for f in failures:
             self._event("estop", "error", f)
         return failures
 
+    @staticmethod
+    def _background(target, name: str) -> threading.Thread:
+        thread = threading.Thread(target=target, name=name, daemon=True)
+        thread.start()
+        return thread
+
     def _zero_burst(self) -> None:
+        """A zero Twist at 10 Hz for a second from when the base listens (in a new process,
+        discovery may take a moment: the first one may have found no one)."""
+        pub, _cls, _type = self._publisher()
+        deadline = time.monotonic() + self.timeout_s
+        while pub.get_subscription_count() < 1 and time.monotonic() < deadline:
+            time.sleep(0.01)
         end = time.monotonic() + ESTOP_BURST_S
         while time.monotonic() < end and self._e_stopped and not self._closed.is_set():
-            time.sleep(1.0 / TELEOP_HZ)
             self._send_twist(zero_twist())
+            time.sleep(1.0 / TELEOP_HZ)
+
+    def _call_stop(self, type_: str) -> None:
+        srv = interface_class(type_)
+        client = self.proc.node.create_client(srv, "/stop")
+        try:
+            if not client.wait_for_service(timeout_sec=self.timeout_s):
+                self._event(
+                    "estop", "error", f"E-STOP: no /stop answered within {self.timeout_s:g} s"
+                )
+                return
+            self.proc.wait(client.call_async(srv.Request()), self.timeout_s, "E-STOP /stop")
+        except Exception as exc:  # noqa: BLE001 - said, never raised: the stop goes on
+            self._event("estop", "error", f"E-STOP /stop: {exc}")
+        finally:
+            self.proc.node.destroy_client(client)
+
+    def settle_estop(self, timeout_s: float) -> list[str]:
+        deadline = time.monotonic() + timeout_s
+        for thread in self._estop_threads:
+            thread.join(max(0.0, deadline - time.monotonic()))
+        return [e.message for e in self.events_since(self._estop_seq) if e.kind == "estop"]
 
     def release_estop(self) -> None:
         self._e_stopped = False

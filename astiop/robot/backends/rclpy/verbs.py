@@ -266,20 +266,6 @@ class RclpyVerbs:
             self._cancel_goals()
         return "\n".join(lines) + "\n", to_dict(response)
 
-    def _call_async(self, name: str, type_: str, values: dict, what: str) -> None:
-        """Call without waiting; a failure arrives as an event."""
-        srv = interface_class(type_)
-        client = self.proc.node.create_client(srv, name)
-        future = client.call_async(to_message(srv.Request, values))
-
-        def done(f) -> None:
-            ok = f.exception() is None and f.result() is not None
-            if not ok:
-                self._event("estop", "error", f"{what}: {f.exception() or 'no response'}")
-            self.proc.node.destroy_client(client)
-
-        future.add_done_callback(done)
-
     # -- the action ----------------------------------------------------------------------------
     def _action_send_goal(self, c: Checked, timeout: float):
         """Return at acceptance; the goal is followed to its end in the background."""
