@@ -273,3 +273,16 @@ def from_messages(
         e_stopped=e_stopped or bool(status and status.e_stopped),
         event_seq=event_seq,
     )
+
+
+def live_topic_stats(topics: dict, sources: dict, now: float) -> list[TopicStat]:
+    """Each catalog topic's statistics from what watches it on a live robot (anything with
+    rate(now), age(now) and count); a topic nothing watches is absent (NaN), never zero."""
+    stats = []
+    for name, spec in sorted(topics.items()):
+        s = sources.get(name)
+        if s is None:
+            stats.append(TopicStat(name, spec.type, spec.rate_hz, math.nan, math.nan, 0))
+        else:
+            stats.append(TopicStat(name, spec.type, spec.rate_hz, s.rate(now), s.age(now), s.count))
+    return stats

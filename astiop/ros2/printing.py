@@ -77,3 +77,12 @@ def ros2cli_yaml(values: Any) -> str:
         allow_unicode=True,
         width=2**31 - 1,  # rosidl passes sys.maxsize; libyaml takes a C int
     )
+
+
+def node_info_text(node: str, sections: dict[str, list[tuple[str, str]]]) -> str:
+    """As `ros2 node info` prints a node: each section, then its name: type lines."""
+    lines = [node]
+    for section, items in sections.items():
+        lines.append(f"  {section}:")
+        lines += [f"    {n}: {t}" for n, t in items]
+    return "\n".join(lines) + "\n"

@@ -22,6 +22,7 @@ from astiop.robot.state import (
     TopicStat,
     from_messages,
     grid_from_message,
+    live_topic_stats,
 )
 from astiop.ros2.catalog import Catalog
 from astiop.ros2.grammar import current_distro
@@ -237,17 +238,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
             return [e for e in self._events if e.seq > seq]
 
     def topic_stats(self) -> list[TopicStat]:
-        now = time.monotonic()
-        stats = []
-        for name, spec in sorted(self.catalog.topics.items()):
-            w = self._watches.get(name)
-            if w is None:
-                stats.append(TopicStat(name, spec.type, spec.rate_hz, math.nan, math.nan, 0))
-            else:
-                stats.append(
-                    TopicStat(name, spec.type, spec.rate_hz, w.rate(now), w.age(now), w.count)
-                )
-        return stats
+        return live_topic_stats(self.catalog.topics, self._watches, time.monotonic())
 
     def map_geometry(self):
         return self._map

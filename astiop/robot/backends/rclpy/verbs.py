@@ -17,7 +17,7 @@ from astiop.robot.backends.rclpy.graph import full_name, hidden, matched_qos
 from astiop.robot.backends.rclpy.node import RosTimeout
 from astiop.ros2.interfaces import interface_show
 from astiop.ros2.message_objects import MessageTypeError, interface_class, to_dict, to_message
-from astiop.ros2.printing import echo_text, ros2cli_yaml
+from astiop.ros2.printing import echo_text, node_info_text, ros2cli_yaml
 from astiop.ros2.render import STAMPED
 from astiop.ros2.validation import Checked
 
@@ -128,11 +128,7 @@ class RclpyVerbs:
         info = {
             k: sorted((n, ", ".join(t)) for n, t in v if not hidden(n)) for k, v in sections.items()
         }
-        lines = [target]
-        for section, items in info.items():
-            lines.append(f"  {section}:")
-            lines += [f"    {n}: {t}" for n, t in items]
-        return "\n".join(lines) + "\n", info
+        return node_info_text(target, info), info
 
     def _interface_show(self, c: Checked, timeout: float):
         return interface_show(c.command.args["type"]), None

@@ -6,7 +6,6 @@ Live state comes from long-lived `ros2 topic echo` streams; long-running verbs r
 
 from __future__ import annotations
 
-import math
 import re
 import shutil
 import threading
@@ -31,6 +30,7 @@ from astiop.robot.state import (
     TopicStat,
     from_messages,
     grid_from_message,
+    live_topic_stats,
 )
 from astiop.ros2.grammar import current_distro
 from astiop.ros2.interfaces import decode_bytes
@@ -181,17 +181,7 @@ class Ros2Backend(RobotBackend):
             return [e for e in self._events if e.seq > seq]
 
     def topic_stats(self) -> list[TopicStat]:
-        now = time.monotonic()
-        stats = []
-        for name, spec in sorted(self.catalog.topics.items()):
-            s = self._streams.get(name)
-            if s is None:
-                stats.append(TopicStat(name, spec.type, spec.rate_hz, math.nan, math.nan, 0))
-            else:
-                stats.append(
-                    TopicStat(name, spec.type, spec.rate_hz, s.rate(now), s.age(now), s.count)
-                )
-        return stats
+        return live_topic_stats(self.catalog.topics, self._streams, time.monotonic())
 
     def map_geometry(self):
         return self._map

@@ -10,7 +10,7 @@ from typing import Any
 from astiop.robot.backend import BackendError
 from astiop.robot.state import yaw_of
 from astiop.ros2.interfaces import interface_show, python_repr
-from astiop.ros2.printing import echo_text, indent_yaml
+from astiop.ros2.printing import echo_text, indent_yaml, node_info_text
 from astiop.ros2.validation import Checked
 from astiop.sim.simulator import GoalError
 from astiop.store import LocationError
@@ -226,11 +226,7 @@ class SimVerbs:
 
     def _node_info(self, c: Checked, timeout: float):
         info = self.catalog.node_info(c.command.name)
-        lines = [c.command.name]
-        for section, items in info.items():
-            lines.append(f"  {section}:")
-            lines += [f"    {n}: {t}" for n, t in items]
-        return "\n".join(lines) + "\n", info
+        return node_info_text(c.command.name, info), info
 
     def _interface_show(self, c: Checked, timeout: float):
         return interface_show(c.command.args["type"]), None
