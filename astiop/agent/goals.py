@@ -18,6 +18,7 @@ NAVIGATING = ("/goto_position", "/dock", "/undock", "send_goal")
 MOVING = ("navigating", "docking", "undocking", "blocked")
 ARRIVED_M = 0.3
 STATUS_LAG_S = 2.0  # a status stream may still say idle this long after a goal starts
+NO_STATUS_S = 15.0  # a robot that reports no status at all: the pose decides after this
 
 
 def started(ex: Execution) -> bool:
@@ -100,7 +101,9 @@ async def follow(
         if state.e_stopped:
             outcome = "e-stopped"
         idle = not (state.status and state.status.active_goal)
-        settled = time.monotonic() - t0 > STATUS_LAG_S
+        # a status not yet received is not "idle": a CLI stream may take seconds to start
+        waited = time.monotonic() - t0
+        settled = waited > STATUS_LAG_S and (state.status is not None or waited > NO_STATUS_S)
         if outcome is None and idle and state.state_word not in MOVING and settled:
             break
     if timed_out:
