@@ -11,7 +11,6 @@ import atexit
 import contextlib
 import os
 import threading
-import time
 from typing import Any
 
 import rclpy
@@ -92,12 +91,3 @@ def _close() -> None:
         proc, _shared = _shared, None
     if proc is not None:
         proc.close()
-
-
-def until(predicate, timeout: float, step: float = 0.02) -> bool:
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(step)
-    return True
