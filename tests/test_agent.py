@@ -295,3 +295,26 @@ async def test_switching_the_reply_mode_or_the_model_keeps_the_conversation(llm,
         other.close()
     with pytest.raises(ValueError, match="mode must be"):
         agent.switch(mode="poetry")
+
+
+async def test_when_nothing_ran_the_answer_is_the_reason_and_the_model_is_not_asked(llm, store):
+    """Issue 24: refused by safety (the E-STOP), or every command failed: no story."""
+    goto = 'ros2 service call /goto_position astiop_msgs/srv/GotoPosition \\"{name: shipping}\\"'
+    llm.default = "The robot went to shipping and reported a GotoPosition exception."
+    llm.replies = ['{"commands": ["' + goto + '"]}']
+    agent = make_agent(llm, store)
+    agent.gateway.estop()
+    result = await agent.turn("go to shipping")
+    assert not result.commands[0].executed and len(llm.requests) == 1  # the plan only
+    assert (
+        result.answer.startswith("`ros2 service call /goto_position") and "E-STOP" in result.answer
+    )
+    assert result.answer.endswith("Nothing was sent to the robot.")
+    assert result.grounding == "nothing ran" and "GotoPosition exception" not in result.answer
+    assert store.interactions()[0]["grounding"] == "nothing ran"
+
+    llm.requests.clear()
+    llm.replies = ['{"commands": ["ros2 topic echo /plan --once"]}']  # no goal: no /plan
+    result = await make_agent(llm, store).turn("show me the current path")
+    assert result.commands[0].executed and result.commands[0].error
+    assert "failed: no message on /plan" in result.answer and len(llm.requests) == 1

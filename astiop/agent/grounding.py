@@ -284,3 +284,31 @@ def factual_answer(
     if started:
         lines.append(started)
     return " | ".join(lines)
+
+
+def nothing_ran(executions: list[Execution]) -> str | None:
+    """When no command ran, or every one that ran failed: what was not done and why, in one or
+    two plain sentences (the model is not asked to tell a story about it); None otherwise."""
+    if any(ex.executed and not ex.error for ex in executions):
+        return None
+    if not executions:
+        return "No robot command was planned for this request, so nothing was sent to the robot."
+    sentences = []
+    for ex in executions:
+        what = _command_words(ex.command)
+        if ex.executed:
+            sentences.append(f"{what} failed: {_clause(ex.error)}.")
+        else:
+            sentences.append(f"{what} was not run: {_clause(ex.reason)}.")
+    if not any(ex.executed for ex in executions):
+        sentences.append("Nothing was sent to the robot.")
+    return " ".join(dict.fromkeys(sentences))
+
+
+def _command_words(command: str) -> str:
+    parts = command.split()
+    return f"`{' '.join(parts[:4])}`" if len(parts) > 4 else f"`{command}`"
+
+
+def _clause(text: str) -> str:
+    return (text or "no reason was given").strip().rstrip(".")

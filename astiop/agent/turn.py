@@ -295,6 +295,11 @@ class Agent:
             result.grounding = "rules"
             emit("answer_token", answer)
             return answer
+        reason = grounding.nothing_ran(result.commands)
+        if reason is not None:  # nothing to interpret: the reason, not a model's story
+            result.grounding = "nothing ran"
+            emit("answer_token", reason)
+            return reason
         if result.commands:
             results = "\n".join(summarize(ex) for ex in result.commands)
             results += "".join(f"\n{line}" for line in self._waited_lines(result))
