@@ -188,3 +188,38 @@ async def test_navigation_is_reported_started_then_arrived_as_a_follow_up(llm, s
         "SELECT outcome FROM interactions WHERE id = ?", [result.interaction_id]
     ).fetchone()
     assert row[0] == "succeeded"
+
+
+def test_each_sentence_is_checked_and_only_the_true_ones_stay(results):
+    """Issue 24: a sentence stays if it states a checked fact and nothing unsupported; a name
+    the results never mention (a service, an error) makes it unsupported."""
+    bat = results["/battery_status"]
+    pct = bat.values["percentage"] * 100
+    facts = grounding.facts_of("what is the battery level?", [bat])
+    answer = (
+        f"The battery is at {pct:.1f} %. "
+        "This is measured by the EchoBite-USB system, see the ROS documentation. "
+        "A GotoPosition exception occurs when another robot sends data. "
+        "I hope this helps!"
+    )
+    text, reason, dropped = grounding.grounded(answer, facts, [bat])
+    assert text == f"The battery is at {pct:.1f} %." and reason is None and dropped == 3
+    # nothing true left: the answer cannot stand, and the reason names the first false claim
+    text, reason, _ = grounding.grounded("A GotoPosition exception occurred.", facts, [bat])
+    assert text == "" and "GotoPosition" in reason
+    # a true sentence that leaves out what the robot reported does not stand alone
+    status = results["/robot_status"]
+    facts = grounding.facts_of("status and battery?", [status, bat])
+    _, reason, _ = grounding.grounded("The robot is idle.", facts, [status, bat])
+    assert reason and "battery" in reason
+
+
+async def test_the_models_true_sentences_are_kept_and_the_rest_dropped(llm, store):
+    llm.replies = [
+        '{"commands": ["ros2 topic echo /battery_status --once"]}',
+        "The battery is at 85.0 %. The reason can be found in the ROS documentation, "
+        "which describes an exception called GotoPosition.",
+    ]
+    result = await make_agent(llm, store).turn("What is the battery level?")
+    assert result.answer == "The battery is at 85.0 %."
+    assert result.grounding == "kept, 1 sentence(s) dropped"

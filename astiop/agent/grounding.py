@@ -1,8 +1,11 @@
-"""Answers held to what the robot reported.
+"""Answers held to what the robot reported, sentence by sentence.
 
-Every number, state word, arrival, load and health claim in a model's answer is checked against
-this turn's command results. An answer that states what no result supports is replaced by one
-built from the results themselves (`factual_answer`), and the reason is kept.
+Every number, state word, arrival, count, load, health claim and place in a model's answer is
+checked against this turn's command results. A sentence stays only if it states at least one
+fact the results hold and nothing they do not (names of things absent from the results, such as
+a service, a topic or an error the robot never mentioned, included). When no sentence stays, or
+what stays leaves out what the robot reported, the answer is built from the results themselves
+(`factual_answer`), and the reason is kept.
 """
 
 from __future__ import annotations
@@ -77,6 +80,16 @@ OBSTACLE_KINDS = re.compile(
     r"wall of boxes|crate|animal)s?\b",
     re.I,
 )
+_PLACE_IN_COMMAND = re.compile(r"name:\s*'?([\w-]+)")
+_PLACE_IN_REPORT = re.compile(
+    r"(?:goal accepted|arrived|still going to|stopped short of):? ([\w-]+)"
+)
+# what names a thing: a ROS name, a CamelCase identifier, a code with letters and digits
+_NAMED = re.compile(
+    r"(?<![\w/])/[A-Za-z_][\w/]*|\b[A-Z][a-z0-9]+(?:[A-Z][a-z0-9]*)+\b|"
+    r"\b(?=[A-Za-z-]*\d)(?=[\d-]*[A-Za-z])[A-Za-z][\w-]*\d[\w-]*\b"
+)
+_SENTENCE_END = re.compile(r"(?<=[.!?])\s+(?=\S)")
 REPLY_CUT = {"length": "it ran past its token cap", "repetition": "it repeated itself",
              "deadline": "it ran past its deadline"}  # fmt: skip
 
@@ -86,6 +99,13 @@ class Facts:
     numbers: list[float] = field(default_factory=list)
     words: set[str] = field(default_factory=set)
     kinds: set[str] = field(default_factory=set)  # obstacle kinds reported
+    measured: list[float] = field(
+        default_factory=list
+    )  # numbers the results hold (not the request's)
+    places: set[str] = field(
+        default_factory=set
+    )  # named places in this turn's commands and reports
+    text: str = ""  # everything the results and the commands say, lower case (for names)
 
 
 def _walk(value: Any, key: str = "") -> Iterable[tuple[str, float]]:
@@ -120,24 +140,34 @@ def facts_of(
     started goal's distance to go, a waited goal's outcome)."""
     facts = Facts()
     facts.numbers += [float(n) for n in _NUMBER.findall(request)]
+    texts = [request, *reported]
     for line in reported:
         facts.numbers += [float(n) for n in _NUMBER.findall(line)]
+        facts.measured += [float(n) for n in _NUMBER.findall(line)]
         facts.words |= set(re.findall(r"[a-z_-]+", line.lower()))
+        facts.places |= set(_PLACE_IN_REPORT.findall(line))
     for ex in executions:
         facts.numbers += [float(n) for n in _NUMBER.findall(ex.command)]
+        facts.places |= set(_PLACE_IN_COMMAND.findall(ex.command))
+        texts += [ex.command, ex.reason, ex.error]
         if not ex.executed or ex.error:
             facts.words.add("error")
             continue
+        texts += [ex.output, summarize(ex)]
         facts.numbers += [float(n) for n in _NUMBER.findall(summarize(ex))]
+        facts.measured += [float(n) for n in _NUMBER.findall(summarize(ex))]
         for text in _strings(ex.values):
             facts.words |= {text, *re.findall(r"[a-z_-]+", text)}
         for key, v in _walk(ex.values):
-            facts.numbers.append(v)
+            extra = [v]
             if key in ("percentage",):
-                facts.numbers.append(v * 100)
+                extra.append(v * 100)
             if key in ("theta", "bearing", "angle_min", "angle_max", "yaw", "z", "w"):
-                facts.numbers.append(math.degrees(v))
+                extra.append(math.degrees(v))
+            facts.numbers += extra
+            facts.measured += extra
         _words(ex, facts)
+    facts.text = " ".join(t for t in texts if t).lower()
     if outcome == "succeeded":
         facts.words |= {"arrived", "succeeded", "stopped"}
     elif outcome:
@@ -312,3 +342,63 @@ def _command_words(command: str) -> str:
 
 def _clause(text: str) -> str:
     return (text or "no reason was given").strip().rstrip(".")
+
+
+def sentences(answer: str) -> list[str]:
+    """The answer's sentences, split after . ! ? (a decimal point has no space after it)."""
+    return [s.strip() for s in _SENTENCE_END.split(answer.strip()) if s.strip()]
+
+
+def unnamed(sentence: str, facts: Facts) -> str | None:
+    """A name in the sentence that nothing in this turn's results or commands mentions."""
+    for m in _NAMED.finditer(sentence):
+        name = m.group().lower()
+        spaced = re.sub(r"(?<=[a-z0-9])(?=[A-Z])", " ", m.group()).lower()
+        if name not in facts.text and spaced not in facts.text:
+            return f"it names '{m.group()}', which no result mentions"
+    return None
+
+
+def checked_facts(sentence: str, facts: Facts) -> int:
+    """How many facts the results hold the sentence states (the request's own numbers and
+    words do not count)."""
+    n = 0
+    for m in _NUMBER.finditer(sentence):
+        tol = 10.0 ** -_decimals(m.group()) + 1e-9
+        n += any(abs(float(m.group()) - f) <= tol for f in facts.measured)
+    lowered = sentence.lower()
+    for m in re.finditer(rf"\b({'|'.join(_COUNT_WORDS)})\s+(?:\w+\s+)?{_COUNTED}", lowered):
+        value = _COUNT_WORDS[m.group(1)]
+        n += any(abs(value - f) < 1e-9 for f in facts.measured) or (
+            value == 0 and "clear" in facts.words
+        )
+    for claim, support in STATE_CLAIMS.items():
+        if re.search(rf"\b{re.escape(claim)}\b", lowered) and support & facts.words:
+            n += 1
+    n += bool(ARRIVAL.search(sentence)) and "arrived" in facts.words
+    n += sum(
+        1 for m in OBSTACLE_KINDS.finditer(sentence) if m.group().lower().rstrip("s") in facts.kinds
+    )
+    for place in facts.places:
+        n += place.lower() in lowered or place.replace("_", " ").lower() in lowered
+    return n
+
+
+def grounded(answer: str, facts: Facts, executions: list[Execution]) -> tuple[str, str | None, int]:
+    """(the sentences that stay, why the answer cannot stand or None, how many were dropped).
+    A sentence stays if it states a checked fact and nothing unsupported."""
+    kept, first_reason, dropped = [], None, 0
+    for s in sentences(answer):
+        reason = unsupported(s, facts) or unnamed(s, facts)
+        if reason is None and checked_facts(s, facts) == 0:
+            reason = f"'{s[:60]}' states no fact the robot reported"
+        if reason is None:
+            kept.append(s)
+        else:
+            dropped += 1
+            first_reason = first_reason or reason
+    text = " ".join(kept)
+    if not kept:
+        return "", first_reason or "it states nothing the robot reported", dropped
+    gap = missing(text, executions)
+    return text, gap, dropped

@@ -325,12 +325,15 @@ class Agent:
         facts = grounding.facts_of(
             request, result.commands, outcome, [result.started, *self._waited_lines(result)]
         )
+        dropped = 0
         if c.finish_reason in grounding.REPLY_CUT:
             reason = f"the reply was cut: {grounding.REPLY_CUT[c.finish_reason]}"
         else:
-            reason = grounding.unsupported(text, facts) or grounding.missing(text, result.commands)
+            text, reason, dropped = grounding.grounded(text, facts, result.commands)
         if reason is None:
-            result.grounding = "kept"
+            result.grounding = f"kept, {dropped} sentence(s) dropped" if dropped else "kept"
+            if dropped:
+                emit("answer_trimmed", text)
             return _with_started(text, result.started)
         result.grounding = f"replaced: {reason}"
         answer = grounding.factual_answer(

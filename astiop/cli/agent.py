@@ -77,6 +77,11 @@ def chat(
             )
         elif kind == "answer_token":
             typer.echo(data, nl=False)
+        elif kind == "answer_trimmed":
+            typer.echo(
+                "\n[checked] sentences the robot's results do not support were dropped:", err=True
+            )
+            typer.echo(data, nl=False)
         elif kind == "answer_replaced":
             typer.echo("\n[checked] the model's reply was not used; from the results:", err=True)
             typer.echo(data, nl=False)

@@ -80,6 +80,11 @@ class TurnView:
             note = Text(f"⚠ answer built from the results: the model's reply was not used ({why})")
             note.stylize("yellow italic")
             self._before_status(Static(note, classes="grounding"))
+        elif result.grounding.startswith("kept, "):
+            dropped = result.grounding.removeprefix("kept, ")
+            note = Text(f"⚠ the model's words, checked: {dropped} (not what the robot reported)")
+            note.stylize("yellow italic")
+            self._before_status(Static(note, classes="grounding"))
         if result.refused:
             self._before_status(Static(Text("⛔ refused by the intent gate", style="red")))
         info = f"{result.model} · {result.mode} · {result.total_s:.1f} s"
