@@ -9,6 +9,16 @@ from astiop.store import Store
 from tests.tui_helpers import console, wait_for
 
 SIZE = (120, 40)
+
+
+def asked(app) -> str:
+    """The open dialog's question, once it is on screen and composed; "" until then."""
+    if type(app.screen).__name__ != "ConfirmModal":
+        return ""
+    found = app.screen.query("Static")
+    return str(found.first().render()) if found else ""
+
+
 GOTO = 'ros2 service call /goto_position astiop_msgs/srv/GotoPosition "{name: shipping}"'
 
 
@@ -18,7 +28,7 @@ async def test_an_open_console_is_asked_and_its_answer_goes_back(tmp_path):
     async with app.run_test(size=SIZE) as pilot:
         await wait_for(pilot, server.console_open, what="the console's heartbeat")
         first = await asyncio.to_thread(server.request_approval, "claude-desktop", GOTO, "", 30)
-        await wait_for(pilot, lambda: type(app.screen).__name__ == "ConfirmModal")
+        await wait_for(pilot, lambda: asked(app) != "")
         question = str(app.screen.query_one("Static").render())
         assert (
             "claude-desktop" in question and "/goto_position" in question and "shipping" in question
@@ -26,7 +36,7 @@ async def test_an_open_console_is_asked_and_its_answer_goes_back(tmp_path):
         await pilot.press("y")
         await wait_for(pilot, lambda: server.approval(first)["status"] == "approved")
         second = await asyncio.to_thread(server.request_approval, "cursor", GOTO, "", 30)
-        await wait_for(pilot, lambda: type(app.screen).__name__ == "ConfirmModal")
+        await wait_for(pilot, lambda: asked(app) != "")
         await pilot.press("n")
         await wait_for(pilot, lambda: server.approval(second)["status"] == "denied")
         assert app.services.gateway.backend.sim.goal is None, "the console itself sent nothing"
@@ -40,11 +50,11 @@ async def test_a_request_nobody_answers_closes_and_the_estop_answers_no(tmp_path
     async with app.run_test(size=SIZE) as pilot:
         await wait_for(pilot, server.console_open, what="the console's heartbeat")
         late = await asyncio.to_thread(server.request_approval, "agent", GOTO, "", 1.0)
-        await wait_for(pilot, lambda: type(app.screen).__name__ == "ConfirmModal")
+        await wait_for(pilot, lambda: asked(app) != "")
         await wait_for(pilot, lambda: type(app.screen).__name__ != "ConfirmModal", timeout=10)
         assert server.expire_approval(late) and server.approval(late)["status"] == "expired"
         held = await asyncio.to_thread(server.request_approval, "agent", GOTO, "", 30)
-        await wait_for(pilot, lambda: type(app.screen).__name__ == "ConfirmModal")
+        await wait_for(pilot, lambda: asked(app) != "")
         await pilot.press("ctrl+e")  # the E-STOP answers any open question with "no"
         await wait_for(pilot, lambda: server.approval(held)["status"] == "denied")
     server.close()
@@ -70,9 +80,8 @@ async def test_an_mcp_client_actuation_is_approved_and_refused_in_the_console(tm
 
             async def ask(answer: str) -> tuple[bool, str]:
                 call = asyncio.create_task(c.call_tool("go_to_location", {"name": "shipping"}))
-                await wait_for(pilot, lambda: type(app.screen).__name__ == "ConfirmModal")
-                question = str(app.screen.query_one("Static").render())
-                assert "agent-x" in question and "shipping" in question
+                await wait_for(pilot, lambda: "agent-x" in asked(app))
+                assert "shipping" in asked(app)
                 await pilot.press(answer)
                 result = await asyncio.wait_for(call, 30)
                 return result.is_error, "\n".join(x.text for x in result.content)
