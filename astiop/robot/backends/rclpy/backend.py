@@ -6,10 +6,10 @@ from __future__ import annotations
 import math
 import threading
 import time
-from collections import deque
 from typing import Any
 
 from astiop.robot.backend import BackendError, RobotBackend
+from astiop.robot.backends.event_log import EventLog
 from astiop.robot.backends.live_catalog import describe_graph
 from astiop.robot.backends.rclpy.graph import read_lists, read_params
 from astiop.robot.backends.rclpy.node import ros_process
@@ -52,8 +52,6 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         self.label = f"ros2 via rclpy, {self.distro}, domain {self.proc.domain_id}"
         self._lock = threading.Lock()
         self._refresh_lock = threading.Lock()
-        self._events: deque[RobotEvent] = deque(maxlen=500)
-        self._event_seq = 0
         self._watches: dict[str, TopicWatch] = {}
         self._map_watch: TopicWatch | None = None
         self._map: OccupancyGrid | None = None
@@ -67,9 +65,8 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         self._silent = False
         self._estop_threads: list[threading.Thread] = []
         self._estop_seq = 0
-        self._status_word: str | None = None
-        self._fault = ""
         self.t0 = time.monotonic()
+        self.events = EventLog(self.t0)
         self._lists = self._discover(discovery_s)
         self._params: list[tuple[str, str]] = []  # read by start(), or when a command needs them
         self.catalog: Catalog = describe_graph({**self._lists, "param": self._params})
@@ -121,16 +118,16 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
                     self.refresh()
                 self._check_silence()
             except Exception as exc:  # noqa: BLE001 - the loop must outlive one bad read
-                self._event("graph", "warning", f"reading the robot's graph failed: {exc}")
+                self.events.add("graph", "warning", f"reading the robot's graph failed: {exc}")
 
     def _check_silence(self) -> None:
         now = time.monotonic()
         ages = [w.age(now) for w in self._watches.values()]
         silent = bool(ages) and min(ages) > SILENT_S
         if silent and not self._silent:
-            self._event("robot", "error", f"no message from the robot for {SILENT_S:g} s")
+            self.events.add("robot", "error", f"no message from the robot for {SILENT_S:g} s")
         elif self._silent and not silent:
-            self._event("robot", "info", "the robot is publishing again")
+            self.events.add("robot", "info", "the robot is publishing again")
         self._silent = silent
 
     # -- lifecycle ---------------------------------------------------------------------------
@@ -169,28 +166,15 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
             self._cmd_vel = None
 
     # -- live state --------------------------------------------------------------------------
-    def _event(self, kind: str, severity: str, message: str) -> None:
-        with self._lock:
-            self._event_seq += 1
-            t = time.monotonic() - self.t0
-            self._events.append(RobotEvent(self._event_seq, t, kind, severity, message))
-
     def _on_message(self, name: str, msg: Any) -> None:
-        if name != "/robot_status":
-            return
-        before, after, fault = self._status_word, msg.state, msg.fault
-        if before is not None and before != after:
-            severity = "error" if after in ("fault", "e_stopped") else "info"
-            self._event("state", severity, f"{before} -> {after}")
-        if fault and fault != self._fault:
-            self._event("fault", "error", fault)
-        self._status_word, self._fault = after, fault
+        if name == "/robot_status":
+            self.events.status(msg.state, msg.fault)
 
     def _on_map(self, _name: str, msg: Any) -> None:
         try:
             self._map = grid_from_message(to_dict(msg))
         except (KeyError, TypeError, ValueError) as exc:
-            self._event("map", "warning", f"/map could not be read: {exc}")
+            self.events.add("map", "warning", f"/map could not be read: {exc}")
 
     def _fresh(self, now: float) -> dict[str, dict[str, Any]]:
         """The latest message of each state topic that is not stale: older than three of its
@@ -211,8 +195,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         status = messages.get("/robot_status") or {}
         if status.get("state") not in MOVING:
             messages.pop("/plan", None)  # the last plan of a finished goal
-        with self._lock:
-            seq = self._event_seq
+        seq = self.events.seq
         return from_messages(now - self.t0, messages, e_stopped=self._e_stopped, event_seq=seq)
 
     def messages(self, names) -> dict[str, dict[str, Any]]:
@@ -234,8 +217,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         return out
 
     def events_since(self, seq: int) -> list[RobotEvent]:
-        with self._lock:
-            return [e for e in self._events if e.seq > seq]
+        return self.events.since(seq)
 
     def topic_stats(self) -> list[TopicStat]:
         return live_topic_stats(self.catalog.topics, self._watches, time.monotonic())
@@ -288,7 +270,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
                 elif twist is not None and not self._e_stopped:
                     self._send_twist(twist)
             except Exception as exc:  # noqa: BLE001
-                self._event("teleop", "error", f"/cmd_vel: {exc}")
+                self.events.add("teleop", "error", f"/cmd_vel: {exc}")
 
     @property
     def e_stopped(self) -> bool:
@@ -301,7 +283,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         with self._lock:
             self._hold = None
         failures: list[str] = []
-        self._estop_seq = self._event_seq
+        self._estop_seq = self.events.seq
         self._estop_threads = []
         try:
             self._send_twist(zero_twist())  # matched already in a running console
@@ -315,7 +297,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         )
         self._cancel_goals()
         for f in failures:
-            self._event("estop", "error", f)
+            self.events.add("estop", "error", f)
         return failures
 
     @staticmethod
@@ -341,13 +323,13 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         client = self.proc.node.create_client(srv, "/stop")
         try:
             if not client.wait_for_service(timeout_sec=self.timeout_s):
-                self._event(
+                self.events.add(
                     "estop", "error", f"E-STOP: no /stop answered within {self.timeout_s:g} s"
                 )
                 return
             self.proc.wait(client.call_async(srv.Request()), self.timeout_s, "E-STOP /stop")
         except Exception as exc:  # noqa: BLE001 - said, never raised: the stop goes on
-            self._event("estop", "error", f"E-STOP /stop: {exc}")
+            self.events.add("estop", "error", f"E-STOP /stop: {exc}")
         finally:
             self.proc.node.destroy_client(client)
 
@@ -355,7 +337,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         deadline = time.monotonic() + timeout_s
         for thread in self._estop_threads:
             thread.join(max(0.0, deadline - time.monotonic()))
-        return [e.message for e in self.events_since(self._estop_seq) if e.kind == "estop"]
+        return [e.message for e in self.events.since(self._estop_seq) if e.kind == "estop"]
 
     def release_estop(self) -> None:
         self._e_stopped = False

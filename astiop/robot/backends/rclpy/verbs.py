@@ -294,7 +294,7 @@ class RclpyVerbs:
         self._last_outcome = status.lower()
         why = getattr(result.result, "error_msg", "") if result is not None else ""
         severity = "info" if status == "SUCCEEDED" else "warning"
-        self._event("goal", severity, f"goal finished: {status}" + (f" ({why})" if why else ""))
+        self.events.add("goal", severity, f"goal finished: {status}" + (f" ({why})" if why else ""))
         client.destroy()
 
     def _cancel_goals(self) -> None:

@@ -10,10 +10,10 @@ import re
 import shutil
 import threading
 import time
-from collections import deque
 from typing import Any
 
 from astiop.robot.backend import BackendError, RobotBackend
+from astiop.robot.backends.event_log import EventLog
 from astiop.robot.backends.ros2cli import process as ros2_process
 from astiop.robot.backends.ros2cli.graph import GraphReader
 from astiop.robot.backends.ros2cli.motion import STDIN_DISTROS, ArmedStop, TeleopPublisher
@@ -68,8 +68,6 @@ class Ros2Backend(RobotBackend):
         self._lock = threading.Lock()
         self._latest: dict[str, dict[str, Any]] = {}
         self._received: dict[str, float] = {}  # on the robot clock: s since t0
-        self._events: deque[RobotEvent] = deque(maxlen=500)
-        self._event_seq = 0
         self._streams: dict[str, TopicStream] = {}
         self._goal_procs: list[Any] = []
         self._last_outcome: str | None = None
@@ -77,6 +75,7 @@ class Ros2Backend(RobotBackend):
         self._teleop: TeleopPublisher | None = None
         self._armed: ArmedStop | None = None
         self.t0 = time.monotonic()
+        self.events = EventLog(self.t0)
         self._closed = threading.Event()
         self._graph = GraphReader(self._run, timeout_s)
         self.catalog = self._graph.read()
@@ -118,7 +117,7 @@ class Ros2Backend(RobotBackend):
             extra = ("--full-length",) if name in ARRAYS else ()
             spec = self.catalog.topics[name]
             self._streams[name] = TopicStream(
-                self.executable, name, spec.type, self._on_message, self._event, extra
+                self.executable, name, spec.type, self._on_message, self.events.add, extra
             ).start()
         if "/map" in self.catalog.topics:
             threading.Thread(target=self._read_map, name="ros2-map", daemon=True).start()
@@ -139,29 +138,15 @@ class Ros2Backend(RobotBackend):
     # -- live state -----------------------------------------------------------------------
     def _on_message(self, name: str, msg: dict[str, Any], received: float) -> None:
         if name == "/robot_status":
-            self._status_changed(self._latest.get(name), msg)
+            self.events.status(str(msg.get("state")), str(msg.get("fault") or ""))
         with self._lock:
             self._latest[name] = msg
             self._received[name] = received - self.t0
 
-    def _event(self, kind: str, severity: str, message: str) -> None:
-        with self._lock:
-            self._event_seq += 1
-            t = time.monotonic() - self.t0
-            self._events.append(RobotEvent(self._event_seq, t, kind, severity, message))
-
-    def _status_changed(self, old: dict | None, new: dict) -> None:
-        before, after = (old or {}).get("state"), new.get("state")
-        if old is not None and before != after:
-            severity = "error" if after in ("fault", "e_stopped") else "info"
-            self._event("state", severity, f"{before} -> {after}")
-        if new.get("fault") and new.get("fault") != (old or {}).get("fault"):
-            self._event("fault", "error", str(new["fault"]))
-
     def state(self) -> RobotState:
         with self._lock:
             messages = dict(self._latest)
-            seq = self._event_seq
+        seq = self.events.seq
         status = messages.get("/robot_status") or {}
         if status.get("state") not in MOVING:
             messages.pop("/plan", None)  # the last plan of a finished goal
@@ -177,8 +162,7 @@ class Ros2Backend(RobotBackend):
             return {name: self._received[name] for name in names if name in self._received}
 
     def events_since(self, seq: int) -> list[RobotEvent]:
-        with self._lock:
-            return [e for e in self._events if e.seq > seq]
+        return self.events.since(seq)
 
     def topic_stats(self) -> list[TopicStat]:
         return live_topic_stats(self.catalog.topics, self._streams, time.monotonic())
@@ -193,12 +177,12 @@ class Ros2Backend(RobotBackend):
         run = self._run(argv, 30.0)
         doc = parse_document(run.out.split("\n---", 1)[0].splitlines(keepends=True))
         if doc is None:
-            self._event("map", "warning", "no /map received: the map view follows the scan")
+            self.events.add("map", "warning", "no /map received: the map view follows the scan")
             return
         try:
             self._map = grid_from_message(doc)
         except (KeyError, TypeError, ValueError) as exc:
-            self._event("map", "warning", f"/map could not be read: {exc}")
+            self.events.add("map", "warning", f"/map could not be read: {exc}")
 
     def wait_until_idle(self, timeout_s: float) -> str | None:
         deadline = time.monotonic() + timeout_s
@@ -240,7 +224,7 @@ class Ros2Backend(RobotBackend):
             failures.append("the robot has no /stop service: goals were canceled directly")
         self._cancel_goals()
         for f in failures:
-            self._event("estop", "error", f)
+            self.events.add("estop", "error", f)
         return failures
 
     def _background(self, argv: list[str], what: str) -> None:
@@ -248,7 +232,7 @@ class Ros2Backend(RobotBackend):
             run = self._run(argv, self.timeout_s)
             if run.returncode != 0 or run.stopped:
                 why = run.err.strip()[-200:] or ("timed out" if run.stopped else "failed")
-                self._event("estop", "error", f"E-STOP {what}: {why}")
+                self.events.add("estop", "error", f"E-STOP {what}: {why}")
 
         threading.Thread(target=go, name=f"estop {what}", daemon=True).start()
 
@@ -260,7 +244,7 @@ class Ros2Backend(RobotBackend):
             rc = None
         if rc != 0:
             err = (proc.stderr.read() or "").strip()[-200:] if proc.stderr else ""
-            self._event("estop", "error", f"E-STOP {what}: {err or f'exit status {rc}'}")
+            self.events.add("estop", "error", f"E-STOP {what}: {err or f'exit status {rc}'}")
 
     def release_estop(self) -> None:
         self._e_stopped = False
@@ -352,10 +336,10 @@ class Ros2Backend(RobotBackend):
                 m = re.match(r"Goal finished with status: (\w+)", line)
                 if m:
                     self._last_outcome = m[1].lower()
-                    self._event("goal", "info", f"goal finished: {m[1]}")
+                    self.events.add("goal", "info", f"goal finished: {m[1]}")
                 elif line.startswith("Goal canceled."):
                     self._last_outcome = "canceled"
-                    self._event("goal", "warning", "goal canceled")
+                    self.events.add("goal", "warning", "goal canceled")
             proc.wait()
             accepted.set()
             if proc in self._goal_procs:

@@ -1,0 +1,40 @@
+"""The robot's events as a live ROS 2 backend notes them: numbered, on the backend's clock, and
+the changes of the robot's reported state and fault."""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections import deque
+
+from astiop.robot.state import RobotEvent
+
+
+class EventLog:
+    def __init__(self, t0: float, keep: int = 500):
+        self.t0 = t0  # time.monotonic() of the backend's start: the events' clock
+        self.seq = 0
+        self._events: deque[RobotEvent] = deque(maxlen=keep)
+        self._lock = threading.Lock()
+        self._state: str | None = None
+        self._fault = ""
+
+    def add(self, kind: str, severity: str, message: str) -> None:
+        with self._lock:
+            self.seq += 1
+            t = time.monotonic() - self.t0
+            self._events.append(RobotEvent(self.seq, t, kind, severity, message))
+
+    def since(self, seq: int) -> list[RobotEvent]:
+        with self._lock:
+            return [e for e in self._events if e.seq > seq]
+
+    def status(self, state: str, fault: str) -> None:
+        """A /robot_status arrived: an event for a new state word, and one for a new fault."""
+        before, self._state = self._state, state
+        if before is not None and before != state:
+            severity = "error" if state in ("fault", "e_stopped") else "info"
+            self.add("state", severity, f"{before} -> {state}")
+        if fault and fault != self._fault:
+            self.add("fault", "error", fault)
+        self._fault = fault
