@@ -333,7 +333,7 @@ class AstiopApp(App):
             return bool(answer and answer[0])
 
         def expire() -> None:
-            if modal in self.screen_stack:
+            if self.screen is modal:  # dismiss() closes whatever is on top
                 modal.dismiss(False)
             self.notify(
                 f"No answer within {timeout_s:g} s: the command was not sent.",

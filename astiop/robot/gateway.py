@@ -42,6 +42,7 @@ class RobotGateway:
         self._last_drive: tuple[float, float, float] | None = None
         self._journaled = 0  # the last event kept in the store
         self._journal_lock = threading.Lock()
+        self._latch_lock = threading.Lock()
         self._latch_seen = self.latched
         if self._latch_seen and not backend.e_stopped:
             backend.estop()  # a restart keeps the E-STOP until it is released
@@ -64,16 +65,18 @@ class RobotGateway:
         failures = self.backend.estop()  # the robot first: the record must never delay it
         if self.store is not None:
             try:
-                self.store.latch_estop(self.who)
-                self._latch_seen = True
+                with self._latch_lock:  # the sampler's follow_latch must not undo it
+                    self.store.latch_estop(self.who)
+                    self._latch_seen = True
             except Exception as exc:  # noqa: BLE001 - reported, the stop itself went out
                 failures.append(f"the E-STOP is not latched for other processes: {exc}")
         return failures
 
     def release_estop(self) -> None:
         if self.store is not None:
-            self.store.release_estop(self.who)
-            self._latch_seen = False
+            with self._latch_lock:
+                self.store.release_estop(self.who)
+                self._latch_seen = False
         self.backend.release_estop()
 
     # -- live state ------------------------------------------------------------------------
@@ -90,13 +93,16 @@ class RobotGateway:
     def follow_latch(self) -> bool:
         """Whether the E-STOP is latched; when another process (a second console, `astiop
         estop`) latched or released it since the last look, this process's robot follows."""
-        latched = self.latched
-        if self.store is not None and latched != self._latch_seen:
-            self._latch_seen = latched
-            if latched and not self.backend.e_stopped:
-                self.backend.estop()
-            elif not latched and self.backend.e_stopped:
-                self.backend.release_estop()
+        if self.store is None:
+            return False
+        with self._latch_lock:  # read and acted on together: an estop() meanwhile waits
+            latched = self.latched
+            if latched != self._latch_seen:
+                self._latch_seen = latched
+                if latched and not self.backend.e_stopped:
+                    self.backend.estop()
+                elif not latched and self.backend.e_stopped:
+                    self.backend.release_estop()
         return latched
 
     def events_since(self, seq: int) -> list[RobotEvent]:

@@ -5,6 +5,7 @@ asks, y/n. No answer before the request's bound closes the dialog; the server re
 from __future__ import annotations
 
 import contextlib
+import sqlite3
 import threading
 import time
 
@@ -28,8 +29,8 @@ class ApprovalDesk(threading.Thread):
                 try:
                     store.console_heartbeat()
                     pending = store.pending_approvals()
-                except StoreError:
-                    continue  # a read-only database cannot approve: the server refuses
+                except (StoreError, sqlite3.Error):
+                    continue  # read-only, or busy: the server refuses what is not answered
                 for request in pending:
                     if request["id"] not in self._asked:
                         self._asked.add(request["id"])
@@ -57,8 +58,10 @@ class ApprovalDesk(threading.Thread):
             )
 
         def expire() -> None:
-            if modal in self.app.screen_stack:
-                modal.dismiss(False)  # too late: the server has refused it already
+            # too late: the server has refused it; dismiss() closes whatever is on top, so only
+            # when this dialog is (one under another answers nothing that counts any more)
+            if self.app.screen is modal:
+                modal.dismiss(False)
 
         self.app.push_screen(modal, done)
         self.app.set_timer(left, expire)

@@ -27,7 +27,7 @@ from astiop.robot.state import (
 from astiop.ros2.catalog import Catalog
 from astiop.ros2.grammar import current_distro
 from astiop.ros2.message_objects import interface_class, to_dict, to_message
-from astiop.ros2.render import stamped_now, velocity_message, zero_twist
+from astiop.ros2.render import velocity_message, zero_twist
 
 MOVING = {"navigating", "docking", "undocking", "blocked"}
 GRAPH_POLL_S = 1.0
@@ -69,6 +69,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         self.events = EventLog(self.t0)
         self._lists = self._discover(discovery_s)
         self._params: list[tuple[str, str]] = []  # read by start(), or when a command needs them
+        self._params_of: dict[str, list[tuple[str, str]]] = {}  # node -> its parameters
         self.catalog: Catalog = describe_graph({**self._lists, "param": self._params})
         self.refreshed_at = 0.0  # the parameters are not read yet
 
@@ -100,11 +101,18 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
     def _refresh(self) -> bool:
         young = time.monotonic() - self.t0 < DISCOVERY_YOUNG_S  # discovery may still be going
         lists = self._discover(DISCOVERY_QUIET_S * 3) if young else read_lists(self.proc)
-        nodes = [n for n, _ in lists["node"]]
-        if nodes != [n for n, _ in self._lists["node"]] or (
-            time.monotonic() - self.refreshed_at > PARAMS_REFRESH_S
-        ):
-            self._params = read_params(self.proc, nodes, min(self.timeout_s, 2.0))
+        # parameters of the nodes that serve them (other astiop processes do not), read for a
+        # node when it appears, and for all of them every 30 s
+        served = {n for n, _ in lists["service"]}
+        nodes = [n for n, _ in lists["node"] if f"{n}/list_parameters" in served]
+        stale = time.monotonic() - self.refreshed_at > PARAMS_REFRESH_S
+        new = nodes if stale else [n for n in nodes if n not in self._params_of]
+        if new:
+            read = read_params(self.proc, new, min(self.timeout_s, 2.0))
+            for node in new:
+                self._params_of[node] = [p for p in read if p[0].split(" ", 1)[0] == node]
+        self._params_of = {n: ps for n, ps in self._params_of.items() if n in nodes}
+        self._params = sorted(p for ps in self._params_of.values() for p in ps)
         self._lists = lists
         self.catalog = describe_graph({**lists, "param": self._params})
         self.refreshed_at = time.monotonic()
@@ -151,8 +159,8 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
                 continue
             on_message = self._on_message if name == "/robot_status" else None  # its events
             w = watch(self.proc, name, spec.type, on_message)
-            if w is not None:
-                self._watches[name] = w
+            if w is not None:  # a new dict: the sampler may be iterating the old one
+                self._watches = {**self._watches, name: w}
 
     def close(self) -> None:
         self._closed.set()
@@ -237,6 +245,10 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
 
     # -- teleop and the E-STOP ------------------------------------------------------------------
     def _publisher(self) -> tuple[Any, Any, str]:
+        with self._lock:
+            return self._publisher_locked()
+
+    def _publisher_locked(self) -> tuple[Any, Any, str]:
         if self._cmd_vel is None:
             spec = self.catalog.topics.get("/cmd_vel")
             if spec is None:
@@ -247,7 +259,15 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
 
     def _send_twist(self, twist: dict) -> None:
         pub, cls, type_ = self._publisher()
-        pub.publish(to_message(cls, stamped_now(type_, velocity_message(type_, twist))))
+        pub.publish(self._stamped(cls, velocity_message(type_, twist)))
+
+    def _stamped(self, cls: Any, message: dict) -> Any:
+        """The message object, a TwistStamped's header stamped now by this node's clock (what
+        `header: auto` asks of ros2topic's pub)."""
+        msg = to_message(cls, message)
+        if hasattr(msg, "header"):
+            msg.header.stamp = self.proc.node.get_clock().now().to_msg()
+        return msg
 
     def drive(self, twist: dict) -> None:
         if self._e_stopped:
@@ -288,7 +308,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         try:
             self._send_twist(zero_twist())  # matched already in a running console
             self._estop_threads.append(self._background(self._zero_burst, "estop-zero"))
-        except BackendError as exc:
+        except Exception as exc:  # noqa: BLE001 - /stop and the cancels go out regardless
             failures.append(f"{exc}: no zero Twist was sent")
         spec = self.catalog.services.get("/stop")  # a young process may not have seen it yet
         stop_type = spec.type if spec else "std_srvs/srv/Trigger"
@@ -319,9 +339,10 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
             time.sleep(1.0 / TELEOP_HZ)
 
     def _call_stop(self, type_: str) -> None:
-        srv = interface_class(type_)
-        client = self.proc.node.create_client(srv, "/stop")
+        client = None
         try:
+            srv = interface_class(type_)
+            client = self.proc.node.create_client(srv, "/stop")
             if not client.wait_for_service(timeout_sec=self.timeout_s):
                 self.events.add(
                     "estop", "error", f"E-STOP: no /stop answered within {self.timeout_s:g} s"
@@ -331,7 +352,8 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         except Exception as exc:  # noqa: BLE001 - said, never raised: the stop goes on
             self.events.add("estop", "error", f"E-STOP /stop: {exc}")
         finally:
-            self.proc.node.destroy_client(client)
+            if client is not None:
+                self.proc.node.destroy_client(client)
 
     def settle_estop(self, timeout_s: float) -> list[str]:
         deadline = time.monotonic() + timeout_s

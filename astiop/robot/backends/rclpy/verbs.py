@@ -230,7 +230,9 @@ class RclpyVerbs:
                     time.sleep(1.0 / rate)
                 if self._e_stopped and name == "/cmd_vel":
                     raise BackendError("the E-STOP is engaged: publishing stopped")
-                msg = to_message(cls, message)
+                msg = (
+                    self._stamped(cls, message) if name == "/cmd_vel" else to_message(cls, message)
+                )
                 pub.publish(msg)
                 lines += [f"publishing #{i + 1}: {msg!r}", ""]
         finally:
