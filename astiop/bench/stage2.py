@@ -67,7 +67,7 @@ class Truth:
         """As the robot reported it (/robot_pose, /battery_status, /robot_status, /obstacles,
         /conveyor/status); what it did not report is NaN or empty, and fails its check."""
         status = st.status
-        speed = math.hypot(*st.velocity[:2]) if st.velocity else (status.speed if status else 0.0)
+        speed = st.speed or 0.0
         return cls(
             st.pose.x if st.pose else math.nan,
             st.pose.y if st.pose else math.nan,

@@ -239,7 +239,7 @@ def build(
         )
     work = prefix / "share" / "astiop" / "interface-build"
     env = _build_env(prefix)
-    for package, sources, digest in _dependency_order(todo):
+    for package, sources, digest in todo:  # none of them needs another's build
         say(f"building {package} ({distro}) into {prefix} …")
         shutil.rmtree(work / "src" / package, ignore_errors=True)  # no file of an older build
         src = _write_sources(work / "src" / package, sources)
@@ -249,11 +249,6 @@ def build(
     importlib.invalidate_caches()
     report.seconds = time.monotonic() - t0
     return report
-
-
-def _dependency_order(todo: list) -> list:
-    # astiop_msgs needs none of the subsets; the subsets need nothing of each other
-    return sorted(todo, key=lambda item: item[0] == "astiop_msgs")
 
 
 def _build_env(prefix: Path) -> dict[str, str]:

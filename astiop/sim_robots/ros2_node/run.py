@@ -8,32 +8,22 @@ import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
-NEEDED = ("rclpy", "geometry_msgs.msg", "sensor_msgs.msg", "nav_msgs.msg", "std_srvs.srv")
-BUILT = ("astiop_msgs.msg", "nav2_msgs.action", "tf2_msgs.msg")
-
 
 class NodeSetupError(Exception):
     """What is missing, and the one thing to do about it."""
 
 
 def check_imports() -> None:
-    import importlib
+    from astiop.robot.backends.rclpy.available import rclpy_missing
 
-    for module in NEEDED:
-        try:
-            importlib.import_module(module)
-        except ImportError as exc:
-            raise NodeSetupError(
-                f'ROS 2 is not importable here ({module}: {exc}): pip install "astiop[ros]", '
-                "or source your ROS 2 setup.bash"
-            ) from None
-    for module in BUILT:
-        try:
-            importlib.import_module(module)
-        except ImportError:
-            raise NodeSetupError(
-                f"{module.split('.')[0]} is not built: run `astiop ros2 build-interfaces`"
-            ) from None
+    missing = rclpy_missing()  # the same packages the rclpy transport needs
+    if missing:
+        hint = (
+            ""
+            if "build-interfaces" in missing
+            else (': pip install "astiop[ros]", or source your ROS 2 setup.bash')
+        )
+        raise NodeSetupError(f"ROS 2 is not ready here: {missing}{hint}")
 
 
 def where() -> str:

@@ -3,8 +3,6 @@ to read a topic with, matched to its publishers (as ros2topic's echo chooses it)
 
 from __future__ import annotations
 
-from typing import Any
-
 from rclpy.action import get_action_names_and_types
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
@@ -64,12 +62,11 @@ def read_params(proc: RosProcess, nodes: list[str], timeout: float) -> list[tupl
     listed: list[tuple[str, str]] = []
     for node_name in nodes:
         try:
-            names = _call(
-                proc, ListParameters, f"{node_name}/list_parameters", ListParameters.Request(),
+            names = proc.call(
+                ListParameters, f"{node_name}/list_parameters", ListParameters.Request(),
                 timeout,
             ).result.names  # fmt: skip
-            types = _call(
-                proc,
+            types = proc.call(
                 GetParameterTypes,
                 f"{node_name}/get_parameter_types",
                 GetParameterTypes.Request(names=list(names)),
@@ -79,16 +76,6 @@ def read_params(proc: RosProcess, nodes: list[str], timeout: float) -> list[tupl
             continue
         listed += [(f"{node_name} {n}", PARAM_TYPES.get(t, "")) for n, t in zip(names, types)]
     return sorted(listed)
-
-
-def _call(proc: RosProcess, srv_type: Any, name: str, request: Any, timeout: float) -> Any:
-    client = proc.node.create_client(srv_type, name)
-    try:
-        if not client.wait_for_service(timeout_sec=timeout):
-            raise TimeoutError(f"{name} is not served")
-        return proc.wait(client.call_async(request), timeout, name)
-    finally:
-        proc.node.destroy_client(client)
 
 
 def matched_qos(proc: RosProcess, topic: str, depth: int = 10) -> QoSProfile:

@@ -62,6 +62,17 @@ class RosProcess:
             raise RosTimeout(f"{what}: no answer within {timeout:g} s")
         return future.result()
 
+    def call(self, srv_type: Any, name: str, request: Any, timeout: float) -> Any:
+        """One service call: wait for the server, ask, wait for the answer; RosTimeout when
+        nobody serves `name` or answers within `timeout`."""
+        client = self.node.create_client(srv_type, name)
+        try:
+            if not client.wait_for_service(timeout_sec=timeout):
+                raise RosTimeout(f"{name} is not served")
+            return self.wait(client.call_async(request), timeout, name)
+        finally:
+            self.node.destroy_client(client)
+
     def close(self) -> None:
         self._halt.set()
         with contextlib.suppress(Exception):

@@ -276,7 +276,11 @@ class RclpyVerbs:
             raise BackendError(f"no action server for {c.command.name} within {timeout:g} s")
         lines.append(f"Sending goal:\n     {ros2cli_yaml(to_dict(goal))}")
         future = client.send_goal_async(goal)  # its feedback is not shown: it returns here
-        handle = self.proc.wait(future, timeout, f"{c.command.name} goal")
+        try:
+            handle = self.proc.wait(future, timeout, f"{c.command.name} goal")
+        except RosTimeout:
+            client.destroy()
+            raise
         if not handle.accepted:
             client.destroy()
             lines.append("Goal was rejected.")
@@ -339,10 +343,9 @@ class RclpyVerbs:
         ) + "\n", {"value": value}
 
     def _param_call(self, srv: Any, name: str, request: Any, timeout: float) -> Any:
-        client = self.proc.node.create_client(srv, name)
         try:
-            if not client.wait_for_service(timeout_sec=timeout):
-                raise BackendError(f"{name.rsplit('/', 1)[0]}: node not found")
-            return self.proc.wait(client.call_async(request), timeout, name)
-        finally:
-            self.proc.node.destroy_client(client)
+            return self.proc.call(srv, name, request, timeout)
+        except RosTimeout as exc:
+            if "is not served" in str(exc):
+                raise BackendError(f"{name.rsplit('/', 1)[0]}: node not found") from None
+            raise
