@@ -7,11 +7,13 @@ Every call yields text as it arrives and ends with a `Completion` carrying time 
 from __future__ import annotations
 
 import asyncio
+import functools
 import json
+import ssl
 import time
 from collections.abc import AsyncIterator, Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import httpx
 
@@ -56,6 +58,32 @@ class _Options:
     guard: bool = False  # cut a reply that repeats itself or runs past its cap or deadline
     penalties: bool = False  # llama.cpp's repeat and DRY penalties
     deadline_s: float | None = None
+    slot: int | None = None  # llama.cpp's server slot that keeps this kind of call's prefix
+
+
+class SlotRouter(Protocol):
+    """Pins each kind of call to a server slot of its own (`prompt_cache.PromptCache`)."""
+
+    def slot_for(self, messages: Messages) -> int | None: ...
+
+    async def kept(self, slot: int, messages: Messages) -> None: ...
+
+
+@functools.cache
+def _with_ca() -> ssl.SSLContext:
+    return httpx.create_ssl_context()
+
+
+@functools.cache
+def _without_ca() -> ssl.SSLContext:
+    return ssl.SSLContext(ssl.PROTOCOL_TLS_CLIENT)
+
+
+def tls_for(url: str) -> ssl.SSLContext:
+    """The TLS context for a client of `url`, made once per process: httpx loads the CA bundle
+    for every client it builds (25-50 ms each). Plain http (the embedded server on 127.0.0.1)
+    never needs one; its context still verifies, against no CA, so it could trust nothing."""
+    return _with_ca() if url.lower().startswith("https:") else _without_ca()
 
 
 @dataclass(frozen=True)
@@ -77,12 +105,14 @@ class ChatClient:
         timeout_s: float = 120.0,
         connect_timeout_s: float = 5.0,
         api_key: str | None = None,
+        slots: SlotRouter | None = None,
     ):
         self.base_url = base_url.rstrip("/")
         self.model = model
         self.timeout_s = timeout_s
         self.connect_timeout_s = connect_timeout_s
         self.api_key = api_key
+        self.slots = slots
 
     @property
     def label(self) -> str:
@@ -115,17 +145,21 @@ class ChatClient:
         to a GBNF grammar, and wins over `schema`. With `guard`, a reply that loops, or runs
         past `max_tokens` or `deadline_s` (a server may ignore the cap or never stop), is cut
         and ends with finish_reason "repetition", "length" or "deadline"."""
+        slot = self.slots.slot_for(messages) if self.slots else None
         opts = _Options(
-            max_tokens, temperature, schema, seed, grammar, guard, penalties, deadline_s
+            max_tokens, temperature, schema, seed, grammar, guard, penalties, deadline_s, slot
         )
         for attempt in (0, 1):
             try:
-                return await self._chat_once(messages, opts, on_token)
+                completion = await self._chat_once(messages, opts, on_token)
+                break
             except LLMUnavailable:
                 if attempt == 1:
                     raise
                 await asyncio.sleep(0.5)
-        raise AssertionError("unreachable")
+        if self.slots and slot is not None:
+            await self.slots.kept(slot, messages)
+        return completion
 
     async def _chat_once(self, messages, opts: _Options, on_token) -> Completion:
         url, body = self._request(messages, opts)
@@ -133,7 +167,9 @@ class ChatClient:
         state = StreamState(t0)
         try:
             async with (
-                httpx.AsyncClient(timeout=self._timeout(), headers=self._headers()) as cl,
+                httpx.AsyncClient(
+                    timeout=self._timeout(), headers=self._headers(), verify=tls_for(url)
+                ) as cl,
                 cl.stream("POST", url, json=body) as resp,
             ):
                 if resp.status_code >= 400:
@@ -176,7 +212,9 @@ class ChatClient:
 
     async def _get_json(self, path: str) -> Any:
         try:
-            async with httpx.AsyncClient(timeout=httpx.Timeout(5.0), headers=self._headers()) as cl:
+            async with httpx.AsyncClient(
+                timeout=httpx.Timeout(5.0), headers=self._headers(), verify=tls_for(self.base_url)
+            ) as cl:
                 resp = await cl.get(f"{self.base_url}{path}")
         except httpx.HTTPError as exc:
             detail = one_line(str(exc)) or type(exc).__name__
@@ -231,6 +269,8 @@ class OpenAIClient(ChatClient):
         }
         if opts.seed is not None:
             body["seed"] = opts.seed
+        if opts.slot is not None:
+            body["id_slot"] = opts.slot  # llama.cpp's server extension
         if opts.penalties:  # llama.cpp's server extensions, like `grammar`
             body.update(repeat_penalty=1.15, repeat_last_n=64, dry_multiplier=0.8)
         if opts.grammar is not None:
