@@ -81,7 +81,9 @@ async def run_one(
         turn.answer,
         truth,
     )
-    facts = grounding.facts_of(case.request, turn.commands, reported=[turn.started])
+    waited = [f"goal {outcome}" for outcome in turn.waited.values()]
+    outcome = "succeeded" if "succeeded" in turn.waited.values() else None
+    facts = grounding.facts_of(case.request, turn.commands, outcome, [turn.started, *waited])
     return {
         "request": case.request,
         "commands": [c.command for c in turn.commands],
@@ -91,6 +93,7 @@ async def run_one(
         "refused": turn.refused or None,
         "answer": turn.answer,
         "grounding": turn.grounding,
+        "model_answer": turn.model_answer,
         "answer_checks": checks,
         "answer_true": all(checks.values()),
         "unsupported": grounding.unsupported(turn.answer, facts),
@@ -130,6 +133,7 @@ async def main(args) -> int:
         "answers_with_unsupported_claims": sum(bool(r["unsupported"]) for r in rows),
         "answers_looping": sum(r["loops"] for r in rows),
         "answers_replaced": sum(r["grounding"].startswith("replaced") for r in rows),
+        "answers_model_worded": sum(r["grounding"].startswith("kept") for r in rows),
         "mean_s": round(sum(r["s"] for r in rows) / n, 2),
     }
     if args.json:

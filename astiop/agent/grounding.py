@@ -16,7 +16,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
-from astiop.agent.summaries import STATUS_WORDS, summarize
+from astiop.agent.summaries import STATUS_WORDS, provenance, stale_age, summarize
 from astiop.robot.backend import Execution
 
 _NUMBER = re.compile(r"(?<![\w.])-?\d+(?:\.\d+)?(?![\w])")
@@ -68,6 +68,13 @@ STATE_CLAIMS: dict[str, set[str]] = {
     "succeeded": {"succeeded"},
     "successfully": {"succeeded"},
     "accepted": {"accepted", "succeeded"},
+    "canceled": {"canceled"},
+    "cancelled": {"canceled"},
+    "turning": {"moving", "navigating", "docking", "undocking"},
+    "rotating": {"moving", "navigating", "docking", "undocking"},
+    "strafing": {"moving"},
+    "loading": {"loading"},
+    "unloading": {"unloading"},
 }
 ARRIVAL = re.compile(
     r"\b(?:arrived|arrives|has reached|reached|reaches|is now at|is at the|made it to|got to|"
@@ -89,6 +96,25 @@ _NAMED = re.compile(
     r"(?<![\w/])/[A-Za-z_][\w/]*|\b[A-Z][a-z0-9]+(?:[A-Z][a-z0-9]*)+\b|"
     r"\b(?=[A-Za-z-]*\d)(?=[\d-]*[A-Za-z])[A-Za-z][\w-]*\d[\w-]*\b"
 )
+# a number and the unit written after it; the unit's normal form is the group's name
+_UNIT = re.compile(
+    r"\s*(?:(?P<ms>m/s|m per second|met(?:er|re)s? per second)|(?P<rads>rad/s)|"
+    r"(?P<pct>%|percent\b)|(?P<V>V\b|volts?\b)|(?P<A>A\b|amps?\b|amperes?\b)|"
+    r"(?P<deg>deg\b|degrees?\b)|(?P<m>m\b|met(?:er|re)s?\b))"
+)
+_UNIT_NAMES = {"ms": "m/s", "rads": "rad/s", "pct": "%", "V": "V", "A": "A", "deg": "deg", "m": "m"}
+_DIRECTIONS = {
+    "left": "left", "right": "right", "forward": "forward", "forwards": "forward",
+    "backward": "backward", "backwards": "backward", "clockwise": "right",
+    "counterclockwise": "left", "anticlockwise": "left",
+}  # fmt: skip
+# a word that names what a figure is, and the unit such a figure has
+_QUANTITY_WORDS = {
+    "speed": "m/s", "velocity": "m/s", "fast": "m/s", "voltage": "V", "heading": "deg",
+    "bearing": "deg", "angle": "deg", "battery": "%", "charge": "%", "charged": "%",
+    "percentage": "%",
+}  # fmt: skip
+_QUANTITY_NOUNS = {"m/s": "a speed", "V": "a voltage", "deg": "an angle", "%": "a charge"}
 _SENTENCE_END = re.compile(r"(?<=[.!?])\s+(?=\S)")
 REPLY_CUT = {"length": "it ran past its token cap", "repetition": "it repeated itself",
              "deadline": "it ran past its deadline"}  # fmt: skip
@@ -106,6 +132,8 @@ class Facts:
         default_factory=set
     )  # named places in this turn's commands and reports
     text: str = ""  # everything the results and the commands say, lower case (for names)
+    quantities: list[tuple[float, str]] = field(default_factory=list)  # (value, unit) reported
+    directions: set[str] | None = None  # the directions astiop commanded, when it published
 
 
 def _walk(value: Any, key: str = "") -> Iterable[tuple[str, float]]:
@@ -142,6 +170,7 @@ def facts_of(
     facts.numbers += [float(n) for n in _NUMBER.findall(request)]
     texts = [request, *reported]
     for line in reported:
+        facts.quantities += quantities_in(line)
         facts.numbers += [float(n) for n in _NUMBER.findall(line)]
         facts.measured += [float(n) for n in _NUMBER.findall(line)]
         facts.words |= set(re.findall(r"[a-z_-]+", line.lower()))
@@ -154,6 +183,9 @@ def facts_of(
             facts.words.add("error")
             continue
         texts += [ex.output, summarize(ex)]
+        facts.quantities += quantities_in(summarize(ex))
+        if (directions := _published_directions(ex)) is not None:
+            facts.directions = (facts.directions or set()) | directions
         facts.numbers += [float(n) for n in _NUMBER.findall(summarize(ex))]
         facts.measured += [float(n) for n in _NUMBER.findall(summarize(ex))]
         for text in _strings(ex.values):
@@ -204,7 +236,10 @@ def _words(ex: Execution, facts: Facts) -> None:
         t = v["twist"]["twist"]["linear"]
         facts.words.add("moving" if math.hypot(t["x"], t["y"]) >= 0.05 else "stopped")
     if "success" in v:
-        facts.words.add("succeeded" if v["success"] else "error")
+        if not v["success"]:
+            facts.words.add("error")
+        elif provenance(ex) != "accepted":  # a goal accepted has not succeeded yet
+            facts.words.add("succeeded")
         if v["success"] and "/goto_position" in cmd:
             facts.words |= {"accepted", "navigating", "moving"}
         if v["success"] and "/stop" in cmd:
@@ -213,8 +248,36 @@ def _words(ex: Execution, facts: Facts) -> None:
             facts.words |= {"accepted", "docking", "moving"}
         if v["success"] and "/undock" in cmd:
             facts.words |= {"accepted", "undocking", "moving"}
+        if v["success"] and "/conveyor/load" in cmd:
+            facts.words |= {"accepted", "loading"}
+        if v["success"] and "/conveyor/unload" in cmd:
+            facts.words |= {"accepted", "unloading"}
     if v.get("accepted"):
         facts.words |= {"accepted", "navigating", "moving"}
+
+
+def quantities_in(text: str) -> list[tuple[float, str]]:
+    """Each number of `text` with the unit written after it ("" when none)."""
+    return [(value, unit) for value, unit, _ in _figures(text)]
+
+
+def _figures(text: str) -> Iterable[tuple[float, str, str]]:
+    """(number, unit, what the clause before it calls it: a unit or "")."""
+    for m in _NUMBER.finditer(text):
+        unit = _UNIT.match(text, m.end())
+        name = next((k for k, v in unit.groupdict().items() if v), "") if unit else ""
+        clause = re.split(r"[,;:]|\band\b", text[: m.start()])[-1].lower()
+        words = re.findall(r"[a-z]+", clause)[-4:]
+        called = next((_QUANTITY_WORDS[w] for w in reversed(words) if w in _QUANTITY_WORDS), "")
+        yield float(m.group()), _UNIT_NAMES.get(name, ""), called
+
+
+def _published_directions(ex: Execution) -> set[str] | None:
+    summary = summarize(ex)
+    if "commanded " not in summary:
+        return None
+    said = summary.split("commanded ", 1)[1]
+    return {d for d in ("left", "right", "forward", "backward") if re.search(rf"\b{d}\b", said)}
 
 
 def _decimals(text: str) -> int:
@@ -236,6 +299,16 @@ def unsupported(answer: str, facts: Facts) -> str | None:
         tol = 10.0 ** -_decimals(m.group()) + 1e-9
         if not any(abs(claim - f) <= tol for f in facts.numbers):
             return f"it states {m.group()}, which no result reported"
+    for value, unit, called in _figures(answer):
+        if unit and not _reported_as(value, unit, facts):
+            return f"it states {value:g} {unit}, which no result reported"
+        if unit and called and called != unit:
+            return f"it calls {value:g} {unit} {_QUANTITY_NOUNS[called]}"
+    if facts.directions is not None:
+        for m in re.finditer(rf"\b({'|'.join(_DIRECTIONS)})\b", answer, re.I):
+            direction = _DIRECTIONS[m.group(1).lower()]
+            if direction not in facts.directions and not _negated(answer.lower(), m.start()):
+                return f"it says {m.group(1)}, but astiop commanded {', '.join(sorted(facts.directions)) or 'no motion'}"
     for m in re.finditer(rf"\b({'|'.join(_COUNT_WORDS)})\s+(?:\w+\s+)?{_COUNTED}", answer, re.I):
         n = _COUNT_WORDS[m.group(1).lower()]
         if n == 0 and "clear" in facts.words:
@@ -248,6 +321,8 @@ def unsupported(answer: str, facts: Facts) -> str | None:
             asserted = claim.startswith("no ") or not _negated(lowered, m.start(), m.end())
             if asserted and not support & facts.words:
                 return f"it says '{claim}', which no result reported"
+            if not asserted and claim in facts.words:
+                return f"it denies '{claim}', which the robot reported"
     for m in ARRIVAL.finditer(answer):
         if not _negated(lowered, m.start()) and "arrived" not in facts.words:
             return f"it says '{m.group()}', but no arrival was reported"
@@ -256,6 +331,15 @@ def unsupported(answer: str, facts: Facts) -> str | None:
         if kind not in facts.kinds and not _negated(lowered, m.start()):
             return f"it mentions a {kind}, which no result reported"
     return None
+
+
+def _reported_as(value: float, unit: str, facts: Facts) -> bool:
+    """A figure with its unit, as the results gave it (a coordinate without a unit is metres)."""
+    for v, u in facts.quantities:
+        same = u == unit or (not u and unit == "m")
+        if same and abs(v - value) <= 10.0 ** -_decimals(f"{value:g}") + 1e-9:
+            return True
+    return False
 
 
 def missing(answer: str, executions: list[Execution]) -> str | None:
@@ -270,6 +354,8 @@ def missing(answer: str, executions: list[Execution]) -> str | None:
         v = ex.values
         if not ex.executed or ex.error or not isinstance(v, dict):
             continue
+        if stale_age(ex) is not None and not re.search(r"\bago\b|\bold\b", text):
+            return "it leaves out how old the robot's reading is"
         cmd, gap = ex.command, None
         if "/robot_pose" in cmd and "x" in v:
             gap = None if said(v["x"], 0.1) and said(v["y"], 0.1) else "position (x, y)"
@@ -280,6 +366,10 @@ def missing(answer: str, executions: list[Execution]) -> str | None:
             n = v["count"]
             words = [w for w, k in _COUNT_WORDS.items() if k == n]
             ok = said(n, 0) or any(re.search(rf"\b{w}\b", text) for w in words)
+            ok = ok or (
+                n == 1
+                and bool(re.search(rf"\b(?:a|an)\s+(?:\w+\s+)?{OBSTACLE_KINDS.pattern}", text))
+            )
             ok = ok or (n == 0 and bool(re.search(r"\b(?:clear|nothing|none)\b", text)))
             gap = None if ok else "obstacle count"
         elif "/robot_status" in cmd and "state" in v:

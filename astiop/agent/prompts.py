@@ -64,3 +64,24 @@ def example_messages(mode: str) -> list[dict[str, str]]:
 
 def interpret_prompt() -> str:
     return template("agent_interpret")
+
+
+def interpret_user(request: str, results: str) -> str:
+    return f"Operator request: {request}\n\nResults:\n{results}\n\nAnswer:"
+
+
+@lru_cache(maxsize=1)
+def interpret_examples() -> list[dict]:
+    return yaml.safe_load(prompts_path("agent_interpret_examples.yaml").read_text(encoding="utf-8"))
+
+
+def interpret_messages(request: str, results: str) -> list[dict[str, str]]:
+    """The interpretation call: the fixed prompt and worked examples (a prefix the server's
+    cache keeps), then this turn's request and results."""
+    messages = [{"role": "system", "content": interpret_prompt()}]
+    for ex in interpret_examples():
+        messages += [
+            {"role": "user", "content": interpret_user(ex["request"], ex["results"])},
+            {"role": "assistant", "content": ex["answer"]},
+        ]
+    return [*messages, {"role": "user", "content": interpret_user(request, results)}]

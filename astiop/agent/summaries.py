@@ -1,7 +1,9 @@
 """Short, factual summaries of command results for the interpretation call and the rules.
 
 Small models copy numbers well and read long YAML badly; every number here comes from the
-command's own values, so the answer cannot cite telemetry no command returned.
+command's own values, so the answer cannot cite telemetry no command returned. Each says what
+kind of fact it is: a reading the robot published (measured, with its age when it is old), what
+astiop commanded, or what a service accepted (a goal accepted has not arrived).
 """
 
 from __future__ import annotations
@@ -10,8 +12,12 @@ import math
 from typing import Any
 
 from astiop.robot.backend import Execution
+from astiop.ros2 import grammar
 
 STATUS_WORDS = {0: "unknown", 1: "charging", 2: "discharging", 3: "not charging", 4: "full"}
+# services whose success means the robot took the job on, not that it is done
+ACCEPTING = ("/goto_position", "/dock", "/undock", "/conveyor/load", "/conveyor/unload")
+STALE_PERIODS = 2  # a reading older than this many of its topic's periods is said with its age
 
 
 def summarize(ex: Execution) -> str:
@@ -19,12 +25,36 @@ def summarize(ex: Execution) -> str:
         return f"{ex.command}\n  NOT RUN: {ex.reason}"
     if ex.error:
         return f"{ex.command}\n  FAILED: {ex.error}"
-    body = _summary(ex.command, ex.values)
+    values = ex.values
+    if values is None and " topic pub " in ex.command:  # a CLI's pub prints, it returns nothing
+        values = _pub_values(ex)
+    body = _summary(ex.command, values)
+    if body is not None and (age := stale_age(ex)) is not None:
+        body += f" (read {age:.0f} s ago)"
     if body is None:
         body = ex.output.strip()
         if len(body) > 600:
             body = body[:600] + " ..."
     return f"{ex.command}\n  " + body.replace("\n", "\n  ")
+
+
+def provenance(ex: Execution) -> str:
+    """measured (a reading the robot published), accepted (a service took a job on), commanded
+    (what astiop sent), or reported (any other answer of the robot)."""
+    parts = ex.command.split()
+    verb = " ".join(parts[1:3])
+    if verb in ("topic echo", "topic hz"):
+        return "measured"
+    if verb == "service call":
+        return "accepted" if len(parts) > 3 and parts[3] in ACCEPTING else "reported"
+    return "commanded" if ex.kind == "actuate" else "reported"
+
+
+def stale_age(ex: Execution) -> float | None:
+    """The reading's age when it is older than STALE_PERIODS of its topic's periods."""
+    if ex.age_s is None or ex.period_s is None or ex.period_s <= 0:
+        return None
+    return ex.age_s if ex.age_s > STALE_PERIODS * ex.period_s else None
 
 
 def _deg(rad: float) -> float:
@@ -83,7 +113,39 @@ def _summary(command: str, v: Any) -> str | None:
             f"{n} ({p['x']:.1f}, {p['y']:.1f})" for n, p in zip(v["names"], v["poses"])
         )
     if "success" in v:
-        return f"{'succeeded' if v['success'] else 'FAILED'}: {v.get('message', '')}"
+        accepted = any(f" {name} " in f"{command} " for name in ACCEPTING)
+        word = ("accepted" if accepted else "succeeded") if v["success"] else "FAILED"
+        return f"{word}: {v.get('message', '')}"
+    if "published" in v or " pub " in command:
+        return _published(command, v)
     if "status" in v and "accepted" in v:
         return f"navigation goal {v['status']}"
     return None
+
+
+def _published(command: str, v: dict[str, Any]) -> str | None:
+    """What astiop commanded on /cmd_vel, in words (the robot's motion is not measured here)."""
+    twist = v.get("twist")
+    if not isinstance(twist, dict):
+        return None
+    lin, ang = twist.get("linear", {}), twist.get("angular", {})
+    vx, vy, wz = (float(lin.get("x", 0.0)), float(lin.get("y", 0.0)), float(ang.get("z", 0.0)))
+    moves = []
+    if vx:
+        moves.append(f"{'forward' if vx > 0 else 'backward'} {abs(vx):.2f} m/s")
+    if vy:
+        moves.append(f"{'left' if vy > 0 else 'right'} {abs(vy):.2f} m/s")
+    if wz:
+        moves.append(f"rotation {'left' if wz > 0 else 'right'} {abs(wz):.2f} rad/s")
+    times = v.get("published")
+    sent = f", sent {times} time(s)" if isinstance(times, int) else ""
+    return f"commanded {', '.join(moves) or 'zero velocity (stop)'} on /cmd_vel{sent}"
+
+
+def _pub_values(ex: Execution) -> dict[str, Any] | None:
+    try:
+        command = grammar.parse(ex.command)
+    except grammar.CommandSyntaxError:
+        return None
+    twist = command.args.get("values")
+    return {"published": ex.output.count("publishing #"), "twist": twist or {}}

@@ -16,6 +16,7 @@ from collections.abc import Callable
 from typing import Any
 
 from astiop.agent import gate, goals, grounding, intent, planner, prompts, rules
+from astiop.agent.answer_grammar import answer_grammar
 from astiop.agent.intent import Intent
 from astiop.agent.llm import LLMError, LLMHTTPError, LLMTimeout, LLMUnavailable
 from astiop.agent.recorder import Recorder
@@ -193,7 +194,9 @@ class Agent:
         limits = {
             "max_tokens": max_tokens or self.max_tokens,
             "guard": True,
-            "penalties": kind == "answer_token" and self.endpoint.local,
+            # llama.cpp's repeat penalties keep a free answer from looping, but under the
+            # answer grammar they push a small model off the very figures it must copy
+            "penalties": kind == "answer_token" and self.endpoint.local and grammar is None,
             "deadline_s": DEADLINE_S,
         }
         try:
@@ -307,24 +310,27 @@ class Agent:
             results = "(no robot command was run)"
         if result.started:
             results += f"\n{result.started} (the robot is on its way; it has not arrived)"
-        messages = [
-            {"role": "system", "content": prompts.interpret_prompt()},
-            {
-                "role": "user",
-                "content": f"Operator request: {request}\n\nResults:\n{results}\n\nAnswer:",
-            },
-        ]
+        outcome = "succeeded" if "succeeded" in result.waited.values() else None
+        facts = grounding.facts_of(
+            request, result.commands, outcome, [result.started, *self._waited_lines(result)]
+        )
+        messages = prompts.interpret_messages(request, results)
+        grammar = None  # llama.cpp servers: the words and figures this turn's results allow
+        if self.interpretation == "grounded":
+            grammar = answer_grammar(request, results, facts.words, facts.kinds)
         c = await self._ask(
-            messages, None, result, emit, "answer_token", max_tokens=self.interpret_tokens
+            messages,
+            None,
+            result,
+            emit,
+            "answer_token",
+            grammar=grammar,
+            max_tokens=self.interpret_tokens,
         )
         text = result.model_answer = c.text.strip()
         if self.interpretation == "raw":
             result.grounding = "raw"
             return _with_started(text, result.started)
-        outcome = "succeeded" if "succeeded" in result.waited.values() else None
-        facts = grounding.facts_of(
-            request, result.commands, outcome, [result.started, *self._waited_lines(result)]
-        )
         dropped = 0
         if c.finish_reason in grounding.REPLY_CUT:
             reason = f"the reply was cut: {grounding.REPLY_CUT[c.finish_reason]}"

@@ -37,6 +37,8 @@ class Execution:
     notes: list[str] = field(default_factory=list)
     error: str = ""
     duration_s: float = 0.0
+    age_s: float | None = None  # a reading's age by its stamp, on the robot's clock
+    period_s: float | None = None  # its topic's publishing period (None: latched or unknown)
 
     def record(self) -> dict[str, Any]:
         """The fields a stored command row keeps."""
@@ -57,6 +59,8 @@ class Execution:
             data["notes"] = self.notes
         if self.error:
             data["error"] = self.error
+        if self.age_s is not None:
+            data["age_s"] = round(self.age_s, 3)
         return data
 
 
@@ -76,6 +80,11 @@ class RobotBackend(ABC):
     def refresh(self) -> bool:
         """Read the robot's graph again; False if nothing was read."""
         return False
+
+    def robot_time(self) -> float | None:
+        """Now on the clock the robot stamps its messages with (seconds), or None when it is
+        not known here; a reading's age is measured on it."""
+        return None
 
     def settle_estop(self, timeout_s: float) -> list[str]:
         """Wait (at most `timeout_s`) for what an E-STOP started in the background to go out, for

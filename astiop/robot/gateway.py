@@ -21,6 +21,7 @@ from astiop.ros2.validation import Checked, validate
 from astiop.store import Store, StoreError
 
 Confirm = Callable[[Checked], bool]
+MAX_STAMP_AGE_S = 86400.0  # a stamp older than a day is on another clock, not a day-old reading
 ESTOP_REASON = "the E-STOP is engaged: no motion command runs until the operator releases it"
 
 
@@ -208,6 +209,8 @@ class RobotGateway:
         try:
             result.output, result.values = self.backend.execute(checked, timeout or self.timeout_s)
             result.executed = True
+            if checked.command.verb == "topic" and checked.command.sub == "echo":
+                self._date(checked.command.name, result)
         except BackendError as exc:
             result.executed = True
             result.error = str(exc)
@@ -215,6 +218,24 @@ class RobotGateway:
         self._after(checked, result)
         result.duration_s = time.perf_counter() - t0
         return result
+
+    def _date(self, topic: str, result: Execution) -> None:
+        """A reading's period and its age by its header stamp, when the robot's clock is known
+        here and agrees with the stamp (a stamp on another clock, e.g. sim time, says nothing)."""
+        spec = self.catalog.topics.get(topic)
+        if spec is not None and spec.rate_hz > 0:
+            result.period_s = 1.0 / spec.rate_hz
+        header = result.values.get("header") if isinstance(result.values, dict) else None
+        stamp = header.get("stamp") if isinstance(header, dict) else None
+        now = self.backend.robot_time()
+        if now is None or not isinstance(stamp, dict):
+            return
+        try:
+            age = now - (int(stamp["sec"]) + int(stamp["nanosec"]) * 1e-9)
+        except (KeyError, TypeError, ValueError):
+            return
+        if -1.0 <= age <= MAX_STAMP_AGE_S:
+            result.age_s = max(age, 0.0)
 
     def drive(self, vx: float, vy: float, wz: float) -> Execution:
         """Teleop: the key press is the operator's consent; safety still clamps and holds.

@@ -197,6 +197,9 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
                     out[name] = msg
         return out
 
+    def robot_time(self) -> float:
+        return self.proc.node.get_clock().now().nanoseconds * 1e-9
+
     def state(self) -> RobotState:
         now = time.monotonic()
         messages = self._fresh(now)

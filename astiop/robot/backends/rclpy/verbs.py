@@ -148,7 +148,7 @@ class RclpyVerbs:
         else:
             msg = self._one_message(name, c.type, timeout)
         if msg is None:
-            raise BackendError(f"no message on {name} within {timeout:g} s")
+            raise BackendError(f"no reading from {name} in {timeout:g} s")
         values = to_dict(msg)
         field = c.command.options.get("field")
         if field:

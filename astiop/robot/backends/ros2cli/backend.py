@@ -143,6 +143,9 @@ class Ros2Backend(RobotBackend):
             self._latest[name] = msg
             self._received[name] = received - self.t0
 
+    def robot_time(self) -> float:
+        return time.time()  # ros2 runs on this machine's clock, as the robot's drivers do
+
     def state(self) -> RobotState:
         with self._lock:
             messages = dict(self._latest)
@@ -303,8 +306,8 @@ class Ros2Backend(RobotBackend):
         doc = parse_document(run.out.split("\n---", 1)[0].splitlines(keepends=True))
         if doc is None:
             if run.stopped:
-                raise BackendError(f"no message on {checked.command.name} within {timeout:g} s")
-            raise BackendError(run.err.strip()[:300] or f"no message on {checked.command.name}")
+                raise BackendError(f"no reading from {checked.command.name} in {timeout:g} s")
+            raise BackendError(run.err.strip()[:300] or f"no reading from {checked.command.name}")
         doc = decode_bytes(checked.type, doc)
         return echo_text(doc, checked.command), doc
 

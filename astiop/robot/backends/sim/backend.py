@@ -63,6 +63,9 @@ class SimBackend(SimVerbs, RobotBackend):
         self.sim.release_estop()
 
     # -- live state -------------------------------------------------------------------
+    def robot_time(self) -> float:
+        return self.sim.t  # the simulator stamps its messages with its own clock
+
     def state(self) -> RobotState:
         snap = self.sim.snapshot()
         messages = {name: self.message(name, snap) for name in self.catalog.state_topics()}
@@ -203,7 +206,7 @@ class SimBackend(SimVerbs, RobotBackend):
             if name == "/plan" and self.sim.goal is None:
                 raise BackendError("no message on /plan: the robot has no active goal")
             if self._last_publish(name) == -math.inf:
-                raise BackendError(f"no message on {name}: nothing has published it yet")
+                raise BackendError(f"no reading from {name}: nothing has published it yet")
             return self.message(name)
         period = 1.0 / spec.rate_hz
         next_t = (math.floor(self.sim.t / period + 1e-9) + 1) * period
