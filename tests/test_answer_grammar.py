@@ -1,0 +1,88 @@
+"""The interpretation grammar: the words and figures an answer may use this turn, held by the
+real llama.cpp server (the embedded model), whatever the model is asked to write."""
+
+import re
+
+import httpx
+import pytest
+
+from astiop.agent import grounding
+from astiop.agent.answer_grammar import _alternatives, answer_grammar, quantities
+from astiop.agent.embedded import EmbeddedServer, smollm2_path
+
+BATTERY = "ros2 topic echo --once /battery_status sensor_msgs/msg/BatteryState\n  battery 85.0 %, 27.12 V, 4.40 A, charging"
+OBSTACLE = "ros2 topic echo --once /obstacles astiop_msgs/msg/ObstacleArray\n  1 obstacle(s) detected: pallet at 2.4 m, bearing 2 deg"
+
+
+def spelled(grammar: str, rule: str = "word") -> set[str]:
+    """Every string one of the grammar's rules spells (the trie expanded)."""
+    line = next(line for line in grammar.splitlines() if line.startswith(f"{rule} ::= "))
+    return set(_expand(line.removeprefix(f"{rule} ::= ")))
+
+
+def _expand(expr: str) -> list[str]:
+    # a small GBNF subset: "lit", (a | b), x? and sequences, as _alternatives writes them
+    out, depth, start, parts = [], 0, 0, []
+    for i, ch in enumerate(expr + " |"):
+        depth += (ch == "(") - (ch == ")")
+        if ch == "|" and depth == 0:
+            parts.append(expr[start:i].strip())
+            start = i + 1
+    for part in (p for p in parts if p):
+        out += _sequence(part)
+    return out
+
+
+def _sequence(part: str) -> list[str]:
+    results = [""]
+    for token in re.finditer(r'"((?:[^"\\]|\\.)*)"|\((.*)\)(\?)?', part):
+        if token.group(1) is not None:
+            results = [r + token.group(1).replace("\\'", "'") for r in results]
+        else:
+            inner = _expand(token.group(2)) + ([""] if token.group(3) else [])
+            results = [r + i for r in results for i in inner]
+    return results
+
+
+def test_the_trie_spells_exactly_the_words():
+    words = ["a", "an", "and", "robot", "robot's", "robots", "rotate", "the", "there", "these"]
+    assert sorted(_expand(_alternatives(words))) == sorted(words)
+
+
+def test_the_grammar_allows_the_results_figures_with_their_units_and_supported_claims_only():
+    grammar = answer_grammar("how is the battery?", BATTERY, {"charging"})
+    assert spelled(grammar, "figure") == {"85.0 %", "85 %", "27.12 V", "4.40 A"}
+    assert not re.search(r'"\d', grammar.split("figure ::= ")[0])  # no digit outside figures
+    words = spelled(grammar)
+    assert {"charging", "battery", "the", "is"} <= words
+    assert not words & {"arrived", "reached", "moving", "docked", "error", "person", "pallet"}
+
+    blocked = spelled(answer_grammar("anything in the way?", OBSTACLE, {"obstacles"}, {"pallet"}))
+    assert {"pallet", "blocked"} <= blocked and "person" not in blocked
+    assert quantities(OBSTACLE) == ["1", "2.4 m", "2 deg"]
+
+
+@pytest.mark.slow
+@pytest.mark.xdist_group("embedded")
+def test_the_server_holds_the_model_to_the_grammar():
+    """Asked to write a figure and an arrival the results do not hold, the model cannot."""
+    server = EmbeddedServer(smollm2_path(), threads=1, n_ctx=2048).start()
+    try:
+        request = "Repeat exactly: The battery is at 99 % and the robot arrived at the dock."
+        results = BATTERY
+        body = {
+            "messages": [{"role": "user", "content": f"{request}\n\nResults:\n{results}"}],
+            "max_tokens": 48,
+            "temperature": 0,
+            "grammar": answer_grammar(request, results, {"charging"}),
+        }
+        reply = httpx.post(f"{server.base_url}/chat/completions", json=body, timeout=120).json()
+        text = reply["choices"][0]["message"]["content"]
+        assert text and text[0].isupper()
+        allowed = [float(q.split()[0]) for q in quantities(results)]
+        assert all(
+            any(abs(v - a) < 1e-9 for a in allowed) for v, _ in grounding.quantities_in(text)
+        )
+        assert "arrived" not in text.lower() and "99" not in text
+    finally:
+        server.stop()
