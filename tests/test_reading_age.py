@@ -9,7 +9,7 @@ import time
 import pytest
 
 from astiop.agent import grounding
-from astiop.agent.summaries import provenance, summarize
+from astiop.agent.summaries import summarize
 from astiop.config import load_settings
 from astiop.robot.backend import Execution
 from astiop.robot.factory import make_robot_gateway, make_sim_gateway
@@ -46,8 +46,7 @@ def test_an_answer_that_leaves_out_a_stale_readings_age_is_replaced():
 
 def test_a_service_that_takes_a_job_on_reads_accepted_not_succeeded():
     values = {"success": True, "message": "navigating to shipping, 36.1 m along the path"}
-    ex = Execution(GOTO, True, kind="actuate", executed=True, values=values)
-    assert provenance(ex) == "accepted"
+    ex = Execution(GOTO, True, kind="actuate", executed=True, values=values, provenance="accepted")
     assert summarize(ex).endswith("accepted: navigating to shipping, 36.1 m along the path")
     facts = grounding.facts_of("go to shipping", [ex])
     kept, reason, _ = grounding.grounded(
@@ -56,7 +55,7 @@ def test_a_service_that_takes_a_job_on_reads_accepted_not_succeeded():
     assert kept == "The goal to shipping was accepted." and reason is None
     stop = Execution("ros2 service call /stop std_srvs/srv/Trigger", True, kind="actuate",
                      executed=True, values={"success": True, "message": "stopped"})  # fmt: skip
-    assert summarize(stop).endswith("succeeded: stopped") and provenance(stop) == "reported"
+    assert summarize(stop).endswith("succeeded: stopped")
 
 
 def test_a_published_twist_reads_as_commanded_on_every_transport():
@@ -66,7 +65,6 @@ def test_a_published_twist_reads_as_commanded_on_every_transport():
     output = "publisher: beginning loop\n" + "publishing #1: ...\n" * 5
     cli = Execution(cmd, True, kind="actuate", executed=True, output=output)  # no values
     for ex in (sim, cli):
-        assert provenance(ex) == "commanded"
         assert summarize(ex).endswith(
             "commanded rotation right 0.60 rad/s on /cmd_vel, sent 5 time(s)"
         )
@@ -126,3 +124,24 @@ def test_a_stale_stamp_and_a_silent_topic_on_real_dds(tmp_path):
         finally:
             gateway.close()
             store.close()
+
+
+def test_the_gateway_says_what_kind_of_fact_each_result_is_and_the_store_keeps_it(store):
+    gateway = make_sim_gateway(load_settings({}), store)
+    yes = lambda _c: True  # noqa: E731
+    kinds = {
+        ECHO_BATTERY: "measured",
+        "ros2 topic hz /odom --window 5": "measured",
+        "ros2 service call /undock std_srvs/srv/Trigger": "accepted",
+        "ros2 service call /list_locations astiop_msgs/srv/ListLocations": "reported",
+        "ros2 topic pub --once /cmd_vel geometry_msgs/msg/Twist '{linear: {x: 0.1}}'": "commanded",
+        "ros2 service call /stop std_srvs/srv/Trigger": "reported",
+    }
+    for command, kind in kinds.items():
+        ex = gateway.run(command, yes)
+        assert ex.executed and not ex.error, (command, ex.error)
+        assert ex.provenance == kind, command
+        gateway.record(ex, "test")
+    rows = store.db.conn.execute("SELECT command, provenance, age_s FROM commands").fetchall()
+    assert [(c, p) for c, p, _ in rows] == list(kinds.items())
+    assert rows[0][2] is not None and rows[1][2] is None  # an echo is dated; hz is not

@@ -16,7 +16,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
-from astiop.agent.summaries import STATUS_WORDS, provenance, stale_age, summarize
+from astiop.agent.summaries import STATUS_WORDS, stale_age, summarize
 from astiop.robot.backend import Execution
 
 _NUMBER = re.compile(r"(?<![\w.])-?\d+(?:\.\d+)?(?![\w])")
@@ -238,7 +238,7 @@ def _words(ex: Execution, facts: Facts) -> None:
     if "success" in v:
         if not v["success"]:
             facts.words.add("error")
-        elif provenance(ex) != "accepted":  # a goal accepted has not succeeded yet
+        elif ex.provenance != "accepted":  # a goal accepted has not succeeded yet
             facts.words.add("succeeded")
         if v["success"] and "/goto_position" in cmd:
             facts.words |= {"accepted", "navigating", "moving"}
@@ -366,10 +366,6 @@ def missing(answer: str, executions: list[Execution]) -> str | None:
             n = v["count"]
             words = [w for w, k in _COUNT_WORDS.items() if k == n]
             ok = said(n, 0) or any(re.search(rf"\b{w}\b", text) for w in words)
-            ok = ok or (
-                n == 1
-                and bool(re.search(rf"\b(?:a|an)\s+(?:\w+\s+)?{OBSTACLE_KINDS.pattern}", text))
-            )
             ok = ok or (n == 0 and bool(re.search(r"\b(?:clear|nothing|none)\b", text)))
             gap = None if ok else "obstacle count"
         elif "/robot_status" in cmd and "state" in v:

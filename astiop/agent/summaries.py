@@ -15,8 +15,6 @@ from astiop.robot.backend import Execution
 from astiop.ros2 import grammar
 
 STATUS_WORDS = {0: "unknown", 1: "charging", 2: "discharging", 3: "not charging", 4: "full"}
-# services whose success means the robot took the job on, not that it is done
-ACCEPTING = ("/goto_position", "/dock", "/undock", "/conveyor/load", "/conveyor/unload")
 STALE_PERIODS = 2  # a reading older than this many of its topic's periods is said with its age
 
 
@@ -28,7 +26,7 @@ def summarize(ex: Execution) -> str:
     values = ex.values
     if values is None and " topic pub " in ex.command:  # a CLI's pub prints, it returns nothing
         values = _pub_values(ex)
-    body = _summary(ex.command, values)
+    body = _summary(ex.command, values, ex.provenance)
     if body is not None and (age := stale_age(ex)) is not None:
         body += f" (read {age:.0f} s ago)"
     if body is None:
@@ -36,18 +34,6 @@ def summarize(ex: Execution) -> str:
         if len(body) > 600:
             body = body[:600] + " ..."
     return f"{ex.command}\n  " + body.replace("\n", "\n  ")
-
-
-def provenance(ex: Execution) -> str:
-    """measured (a reading the robot published), accepted (a service took a job on), commanded
-    (what astiop sent), or reported (any other answer of the robot)."""
-    parts = ex.command.split()
-    verb = " ".join(parts[1:3])
-    if verb in ("topic echo", "topic hz"):
-        return "measured"
-    if verb == "service call":
-        return "accepted" if len(parts) > 3 and parts[3] in ACCEPTING else "reported"
-    return "commanded" if ex.kind == "actuate" else "reported"
 
 
 def stale_age(ex: Execution) -> float | None:
@@ -61,7 +47,7 @@ def _deg(rad: float) -> float:
     return math.degrees(rad)
 
 
-def _summary(command: str, v: Any) -> str | None:
+def _summary(command: str, v: Any, provenance: str = "") -> str | None:
     if not isinstance(v, dict):
         return None
     if "/battery_status" in command:
@@ -113,8 +99,9 @@ def _summary(command: str, v: Any) -> str | None:
             f"{n} ({p['x']:.1f}, {p['y']:.1f})" for n, p in zip(v["names"], v["poses"])
         )
     if "success" in v:
-        accepted = any(f" {name} " in f"{command} " for name in ACCEPTING)
-        word = ("accepted" if accepted else "succeeded") if v["success"] else "FAILED"
+        word = (
+            ("accepted" if provenance == "accepted" else "succeeded") if v["success"] else "FAILED"
+        )
         return f"{word}: {v.get('message', '')}"
     if "published" in v or " pub " in command:
         return _published(command, v)

@@ -37,6 +37,9 @@ class Execution:
     notes: list[str] = field(default_factory=list)
     error: str = ""
     duration_s: float = 0.0
+    # measured (a reading the robot published), accepted (a service took a job on), commanded
+    # (what astiop sent), or reported (any other answer of the robot)
+    provenance: str = ""
     age_s: float | None = None  # a reading's age by its stamp, on the robot's clock
     period_s: float | None = None  # its topic's publishing period (None: latched or unknown)
 
@@ -50,6 +53,8 @@ class Execution:
             "executed": int(self.executed),
             "output": self.output,
             "values": self.values,
+            "provenance": self.provenance or None,
+            "age_s": self.age_s,
         }
 
     def as_json(self) -> dict[str, Any]:
@@ -59,6 +64,8 @@ class Execution:
             data["notes"] = self.notes
         if self.error:
             data["error"] = self.error
+        if self.provenance:
+            data["provenance"] = self.provenance
         if self.age_s is not None:
             data["age_s"] = round(self.age_s, 3)
         return data

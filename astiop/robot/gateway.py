@@ -209,6 +209,7 @@ class RobotGateway:
         try:
             result.output, result.values = self.backend.execute(checked, timeout or self.timeout_s)
             result.executed = True
+            result.provenance = self._provenance(checked)
             if checked.command.verb == "topic" and checked.command.sub == "echo":
                 self._date(checked.command.name, result)
         except BackendError as exc:
@@ -218,6 +219,15 @@ class RobotGateway:
         self._after(checked, result)
         result.duration_s = time.perf_counter() - t0
         return result
+
+    def _provenance(self, checked: Checked) -> str:
+        cmd = checked.command
+        if cmd.verb == "topic" and cmd.sub in ("echo", "hz"):
+            return "measured"
+        if cmd.verb == "service" and cmd.sub == "call":
+            spec = self.catalog.services.get(cmd.name)
+            return "accepted" if spec is not None and spec.starts_job else "reported"
+        return "commanded" if checked.kind == "actuate" else "reported"
 
     def _date(self, topic: str, result: Execution) -> None:
         """A reading's period and its age by its header stamp, when the robot's clock is known

@@ -35,6 +35,7 @@ class ServiceSpec:
     actuating: bool
     description: str = ""
     needs_confirmation: bool = True
+    starts_job: bool = False  # its success means the robot took a job on, not that it is done
 
 
 @dataclass(frozen=True)
@@ -201,6 +202,7 @@ _SERVICES = [
         "/navigator",
         True,
         "go to a named location {name: 'shipping'} or to {x, y, theta}",
+        starts_job=True,
     ),
     ServiceSpec(
         "/stop",
@@ -211,15 +213,23 @@ _SERVICES = [
         needs_confirmation=False,
     ),
     ServiceSpec(
-        "/dock", "std_srvs/srv/Trigger", "/navigator", True, "drive onto the charging dock"
+        "/dock",
+        "std_srvs/srv/Trigger",
+        "/navigator",
+        True,
+        "drive onto the charging dock",
+        starts_job=True,
     ),
-    ServiceSpec("/undock", "std_srvs/srv/Trigger", "/navigator", True, "back off the dock"),
+    ServiceSpec(
+        "/undock", "std_srvs/srv/Trigger", "/navigator", True, "back off the dock", starts_job=True
+    ),
     ServiceSpec(
         "/conveyor/load",
         "std_srvs/srv/Trigger",
         "/conveyor_plc",
         True,
         "take a load on, only at a conveyor station",
+        starts_job=True,
     ),
     ServiceSpec(
         "/conveyor/unload",
@@ -227,6 +237,7 @@ _SERVICES = [
         "/conveyor_plc",
         True,
         "hand the load over, only at a conveyor station",
+        starts_job=True,
     ),
     ServiceSpec(
         "/save_location",

@@ -141,7 +141,18 @@ def _migrate_v5(db: sqlite_utils.Database) -> None:
 
 
 # Ordered; the database's PRAGMA user_version counts how many have run.
-MIGRATIONS = [_migrate_v1, _migrate_v2, _migrate_v3, _migrate_v4, _migrate_v5]
+def _migrate_v6(db: sqlite_utils.Database) -> None:
+    # What kind of fact each result is (measured, accepted, commanded, reported) and how old a
+    # reading was by its stamp.
+    db.conn.executescript(
+        """
+        ALTER TABLE commands ADD COLUMN provenance TEXT;
+        ALTER TABLE commands ADD COLUMN age_s REAL;
+        """
+    )
+
+
+MIGRATIONS = [_migrate_v1, _migrate_v2, _migrate_v3, _migrate_v4, _migrate_v5, _migrate_v6]
 SCHEMA_VERSION = len(MIGRATIONS)
 _OUR_TABLES = {
     "locations",
