@@ -321,7 +321,7 @@ def unsupported(answer: str, facts: Facts) -> str | None:
             asserted = claim.startswith("no ") or not _negated(lowered, m.start(), m.end())
             if asserted and not support & facts.words:
                 return f"it says '{claim}', which no result reported"
-            if not asserted and claim in facts.words:
+            if not asserted and support & facts.words:
                 return f"it denies '{claim}', which the robot reported"
     for m in ARRIVAL.finditer(answer):
         if not _negated(lowered, m.start()) and "arrived" not in facts.words:
