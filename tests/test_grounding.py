@@ -7,6 +7,7 @@ import pytest
 from astiop.agent import grounding
 from astiop.agent.llm import OpenAIClient
 from astiop.agent.reply_stream import repeating
+from astiop.robot.backend import Execution
 from astiop.robot.backends.sim.backend import SimBackend
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.safety import SafetyPolicy
@@ -222,4 +223,30 @@ async def test_the_models_true_sentences_are_kept_and_the_rest_dropped(llm, stor
     ]
     result = await make_agent(llm, store).turn("What is the battery level?")
     assert result.answer == "The battery is at 85.0 %."
-    assert result.grounding == "kept, 1 sentence(s) dropped"
+    assert result.grounding == "kept, 1 part(s) dropped"
+
+
+def test_the_parts_of_a_sentence_are_held_one_by_one():
+    """A small model joins a true part to a false one; the false part goes, the true one stays,
+    and a commanded or accepted result is never said as done."""
+    goto = Execution(
+        "ros2 service call /goto_position astiop_msgs/srv/GotoPosition \"{name: 'shipping'}\"",
+        True,
+        kind="actuate",
+        executed=True,
+        values={"success": True, "message": "navigating to shipping, 36.5 m along the path"},
+        provenance="accepted",
+    )
+    facts = grounding.facts_of("go to shipping", [goto], None, ["goal accepted: shipping, 36.5 m"])
+    cases = {
+        "The robot is on its way, and it has not been on its way for 36.5 m.": (
+            "The robot is on its way.", 1),
+        "The goal to shipping was accepted; the robot is on its way with 36.5 m to go.": (
+            "The goal to shipping was accepted; the robot is on its way with 36.5 m to go.", 0),
+        "It successfully arrived at shipping, but the goal was accepted.": (
+            "The goal was accepted.", 1),
+        "The robot is going 36.5 m per second; it was accepted.": ("It was accepted.", 1),
+    }  # fmt: skip
+    for answer, (kept, dropped) in cases.items():
+        text, reason, n = grounding.grounded(answer, facts, [goto])
+        assert (text, reason, n) == (kept, None, dropped), answer

@@ -115,6 +115,7 @@ _QUANTITY_WORDS = {
     "percentage": "%",
 }  # fmt: skip
 _QUANTITY_NOUNS = {"m/s": "a speed", "V": "a voltage", "deg": "an angle", "%": "a charge"}
+_CLAUSE = re.compile(r"(;\s+|,\s+(?:and|but)\s+)")  # a sentence's parts, kept with their joints
 _SENTENCE_END = re.compile(r"(?<=[.!?])\s+(?=\S)")
 REPLY_CUT = {"length": "it ran past its token cap", "repetition": "it repeated itself",
              "deadline": "it ran past its deadline"}  # fmt: skip
@@ -471,20 +472,36 @@ def checked_facts(sentence: str, facts: Facts) -> int:
 
 
 def grounded(answer: str, facts: Facts, executions: list[Execution]) -> tuple[str, str | None, int]:
-    """(the sentences that stay, why the answer cannot stand or None, how many were dropped).
-    A sentence stays if it states a checked fact and nothing unsupported."""
+    """(what stays, why the answer cannot stand or None, how many sentences or parts were
+    dropped). A sentence stays if it states a checked fact and nothing unsupported; in a
+    sentence of several parts (split at ";" and ", and"/", but"), each part is held so, and the
+    parts that fail are dropped from it."""
     kept, first_reason, dropped = [], None, 0
     for s in sentences(answer):
-        reason = unsupported(s, facts) or unnamed(s, facts)
-        if reason is None and checked_facts(s, facts) == 0:
-            reason = f"'{s[:60]}' states no fact the robot reported"
-        if reason is None:
-            kept.append(s)
-        else:
-            dropped += 1
-            first_reason = first_reason or reason
+        parts = _CLAUSE.split(s.rstrip(".!?"))
+        ends = s[len(s.rstrip(".!?")) :] or "."
+        held = []
+        for i in range(0, len(parts), 2):
+            text, joint = parts[i], parts[i - 1] if i else ""
+            reason = unsupported(text, facts) or unnamed(text, facts)
+            if reason is None and checked_facts(text, facts) == 0:
+                reason = f"'{text.strip()[:60]}' states no fact the robot reported"
+            if reason is None:
+                held.append((joint, text))
+            else:
+                dropped += 1
+                first_reason = first_reason or reason
+        if held:
+            kept.append(_joined(held) + ends)
     text = " ".join(kept)
     if not kept:
         return "", first_reason or "it states nothing the robot reported", dropped
     gap = missing(text, executions)
     return text, gap, dropped
+
+
+def _joined(held: list[tuple[str, str]]) -> str:
+    """The parts that stay, joined as the model joined them; the first one capitalised."""
+    text = held[0][1].strip()
+    text = text[:1].upper() + text[1:]
+    return text + "".join(joint + part for joint, part in held[1:])

@@ -337,7 +337,7 @@ class Agent:
         else:
             text, reason, dropped = grounding.grounded(text, facts, result.commands)
         if reason is None:
-            result.grounding = f"kept, {dropped} sentence(s) dropped" if dropped else "kept"
+            result.grounding = f"kept, {dropped} part(s) dropped" if dropped else "kept"
             if dropped:
                 emit("answer_trimmed", text)
             return _with_started(text, result.started)

@@ -79,7 +79,7 @@ def chat(
             typer.echo(data, nl=False)
         elif kind == "answer_trimmed":
             typer.echo(
-                "\n[checked] sentences the robot's results do not support were dropped:", err=True
+                "\n[checked] what the robot's results do not support was dropped:", err=True
             )
             typer.echo(data, nl=False)
         elif kind == "answer_replaced":
