@@ -78,9 +78,7 @@ def chat(
         elif kind == "answer_token":
             typer.echo(data, nl=False)
         elif kind == "answer_trimmed":
-            typer.echo(
-                "\n[checked] what the robot's results do not support was dropped:", err=True
-            )
+            typer.echo("\n[checked] what the robot's results do not support was dropped:", err=True)
             typer.echo(data, nl=False)
         elif kind == "answer_replaced":
             typer.echo("\n[checked] the model's reply was not used; from the results:", err=True)
