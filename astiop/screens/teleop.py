@@ -1,11 +1,14 @@
 """Teleop: keys drive vx, vy, ωz; the inverse kinematics shows the four wheel speeds.
 
 Terminals send no key-release events, so each key press commands motion for half a second:
-holding a key repeats it, letting go lets the command lapse. Every press goes to the robot in
-a worker, never on the UI thread, so a slow robot cannot freeze the screen or delay E-STOP.
+holding a key repeats it, letting go lets the command lapse. Every press goes to the robot on
+the screen's sender thread, in order, never on the UI thread, so a slow robot cannot freeze the
+screen or delay E-STOP; a worker per press waits for it and reports a refusal.
 """
 
 from __future__ import annotations
+
+from concurrent.futures import Future, ThreadPoolExecutor
 
 from rich.text import Text
 from textual.app import ComposeResult
@@ -16,6 +19,7 @@ from textual.widgets import Footer, Header, Static
 from astiop.robot.state import RobotState, wheel_speeds
 from astiop.screens.base import ConsoleScreen
 from astiop.screens.messages import RobotStateSampled
+from astiop.screens.panel_text import show_text
 from astiop.widgets.gauges import WheelBars
 from astiop.widgets.map_view import WarehouseMapView
 
@@ -39,6 +43,10 @@ class TeleopScreen(ConsoleScreen):
         super().__init__()
         self.step = 1
         self.command = (0.0, 0.0, 0.0)
+        self._wheels_shown: tuple[float, ...] | None = None
+        self._state_shown: str | None = None
+        # one thread sends the presses, in order (a press waits for none of it)
+        self._sender = ThreadPoolExecutor(max_workers=1, thread_name_prefix="teleop")
 
     def compose(self) -> ComposeResult:
         yield Header(show_clock=False)
@@ -57,7 +65,7 @@ class TeleopScreen(ConsoleScreen):
 
     def on_mount(self) -> None:
         self._show_help()
-        self.query_one(WheelBars).show((0.0, 0.0, 0.0, 0.0))
+        self._show_wheels((0.0, 0.0, 0.0, 0.0))
         self.show_state(self.app.robot_state)
 
     def _show_help(self) -> None:
@@ -74,28 +82,51 @@ class TeleopScreen(ConsoleScreen):
 
     def action_drive(self, fx: int, fy: int, fw: int) -> None:
         v = STEPS[self.step]
-        self.command = (fx * v, fy * v, fw * 2 * v)
-        self.query_one(WheelBars).show(wheel_speeds(*self.command))
-        command = self.command
+        command = (fx * v, fy * v, fw * 2 * v)
+        # the robot first: the sender's thread is idle and starts at once (a worker per press
+        # starts at the event loop's next turn); the bars are redrawn once it is sent
+        sent = self._sender.submit(self.app.services.gateway.drive, *command)
+        self.command = command
         self.run_worker(
-            lambda: self._drive(*command), thread=True, group="teleop", exit_on_error=False
+            lambda: self._report(sent, wheel_speeds(*command)),
+            thread=True,
+            group="teleop",
+            exit_on_error=False,
         )
 
-    def _drive(self, vx: float, vy: float, wz: float) -> None:
-        result = self.app.services.gateway.drive(vx, vy, wz)
+    def _report(self, sent: Future, wheels) -> None:
+        result = sent.result()
+        self.app.call_from_thread(self._show_wheels, wheels)
         if not result.executed or result.error:
             why = result.reason or result.error
             self.app.call_from_thread(self.notify, why, severity="warning", markup=False)
 
+    def _show_wheels(self, wheels) -> None:
+        """Only a change is drawn: each redraw is a layout pass, and a held key repeats."""
+        shown = tuple(round(w, 2) for w in wheels)
+        if shown != self._wheels_shown:
+            self._wheels_shown = shown
+            self.query_one(WheelBars).show(wheels)
+
     def action_halt(self) -> None:
         self.command = (0.0, 0.0, 0.0)
-        self.query_one(WheelBars).show((0.0, 0.0, 0.0, 0.0))
-        self.run_worker(self._halt, thread=True, group="teleop", exit_on_error=False)
+        self._show_wheels((0.0, 0.0, 0.0, 0.0))
+        # after the presses before it, on the same thread
+        sent = self._sender.submit(
+            self.app.services.gateway.run, "ros2 service call /stop std_srvs/srv/Trigger"
+        )
+        self.run_worker(
+            lambda: self._halted(sent), thread=True, group="teleop", exit_on_error=False
+        )
 
-    def _halt(self) -> None:
-        result = self.app.services.gateway.run("ros2 service call /stop std_srvs/srv/Trigger")
+    def _halted(self, sent: Future) -> None:
+        result = sent.result()
         if result.error:
             self.app.call_from_thread(self.notify, result.error, severity="error", markup=False)
+
+    def on_unmount(self) -> None:
+        super().on_unmount()
+        self._sender.shutdown(wait=False)
 
     def on_robot_state_sampled(self, msg: RobotStateSampled) -> None:
         self.show_state(msg.state)
@@ -103,7 +134,7 @@ class TeleopScreen(ConsoleScreen):
     def show_state(self, st: RobotState) -> None:
         self.query_one(WarehouseMapView).show(st)
         if st.wheel_speeds is not None:
-            self.query_one(WheelBars).show(st.wheel_speeds)
+            self._show_wheels(st.wheel_speeds)
         text = Text(f"state {st.state_word}")
         if st.status:
             text.append(f"  mode {st.status.mode}")
@@ -116,4 +147,5 @@ class TeleopScreen(ConsoleScreen):
             text.append(f"  speed {st.speed:.2f} m/s")
         if st.status and st.status.fault:
             text.append(f"\nfault: {st.status.fault}", style="red")
-        self.query_one("#teleop-state", Static).update(text)
+        panel = self.query_one("#teleop-state", Static)
+        self._state_shown = show_text(panel, text, self._state_shown)
