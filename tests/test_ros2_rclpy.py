@@ -66,6 +66,9 @@ def test_live_state_comes_by_subscription_and_reads_agree(robot_gateway):
     stats = {s.name: s for s in gateway.topic_stats()}
     assert until(lambda: {s.name: s for s in gateway.topic_stats()}["/scan"].measured_hz > 7, 10)
     assert math.isnan(stats["/cmd_vel"].measured_hz), "nothing publishes /cmd_vel: absent"
+    # the robot rests on its dock: /odom is not watched (its speed comes from /robot_status)
+    assert math.isnan(stats["/odom"].measured_hz) and gateway.state().velocity is None
+    assert gateway.state().speed == 0.0
     hz = gateway.run("ros2 topic hz /scan", timeout=15)
     assert hz.executed and 8.0 <= hz.values["average_rate"] <= 12.0, hz.output
     assert "average rate:" in hz.output and "window:" in hz.output
@@ -123,7 +126,8 @@ def test_teleop_moves_the_robot_and_the_lapse_stops_it(robot_gateway):
         assert gateway.drive(-0.3, 0.0, 0.0).executed  # it faces west: backwards is +x
         time.sleep(0.1)
     assert until(lambda: gateway.state().pose.x > x0 + 0.2, 5), gateway.state().pose
-    assert until(lambda: abs(gateway.state().velocity[0]) < 1e-3, 5), "the lapse stops it"
+    # driving watches /odom: the velocity is measured, and the lapse brings it to zero
+    assert until(lambda: (gateway.state().velocity or (1.0,))[0] < 1e-3, 5), "the lapse stops it"
 
 
 def test_estop_from_another_process_stops_a_moving_robot_and_holds(robot_gateway, tmp_path):
@@ -168,6 +172,13 @@ def test_the_console_runs_on_the_rclpy_transport(tmp_path):
 
             await wait_for(pilot, lambda: "85." in shown("#battery"))
             await wait_for(pilot, lambda: "x   1.15 m" in shown("#robot"))
+            topics = app.screen.query_one("#topics")
+
+            def row(topic: str) -> list:
+                return topics.get_row(topic)[2:] if topic in topics.rows else []
+
+            await wait_for(pilot, lambda: row("/robot_pose") and row("/robot_pose")[1] != "never")
+            assert row("/odom") == ["-", "unwatched"], "not watched, not silent"
             assert "rclpy" in app.sub_title
             await pilot.press("ctrl+e")
             await wait_for(pilot, lambda: app.services.gateway.e_stopped)

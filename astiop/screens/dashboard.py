@@ -42,7 +42,7 @@ def _num(value: float | None, fmt: str) -> str:
 
 def _rate_and_age(s: TopicStat) -> tuple[str, str]:
     if math.isnan(s.measured_hz):
-        return "-", "-"
+        return "-", "unwatched"  # nothing here subscribes to it (on a live robot)
     return f"{s.measured_hz:.1f}", "never" if math.isinf(s.age_s) else f"{s.age_s:.1f}s"
 
 

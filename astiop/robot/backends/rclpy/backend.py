@@ -38,6 +38,13 @@ SILENT_S = 3.0  # no message from the robot for this long: it is said to be gone
 TELEOP_HZ = 10.0
 LAPSE_S = 0.5
 ESTOP_BURST_S = 1.0
+# Watched only while wanted: /odom at 50 Hz was most of the console's rclpy cost, and what the
+# state takes from it, /robot_status (speed) and /robot_pose (pose) carry too. Wanted while this
+# process drives, while the robot moves (its status says so), and while a reader (a recording)
+# asks for its messages; always where the robot lacks /robot_pose or /robot_status.
+ON_DEMAND = ("/odom",)
+WANTED_S = 5.0  # an on-demand topic stays watched this long after it was last wanted
+MOVING_SPEED = 0.005  # m/s: /robot_status's speed above this is a robot that moves
 
 
 class RclpyBackend(RclpyVerbs, RobotBackend):
@@ -53,6 +60,9 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         self._lock = threading.Lock()
         self._refresh_lock = threading.Lock()
         self._watches: dict[str, TopicWatch] = {}
+        self._watch_lock = threading.Lock()  # watches made and dropped by one thread at a time
+        self._wanted: dict[str, float] = {}  # an on-demand topic -> wanted until (monotonic)
+        self._poke = threading.Event()  # the graph thread: subscribe what is wanted now
         self._map_watch: TopicWatch | None = None
         self._map: OccupancyGrid | None = None
         self._goals: list[Any] = []  # goal handles this process sent and that have not ended
@@ -120,11 +130,22 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         return True
 
     def _graph_loop(self) -> None:
-        while not self._closed.wait(GRAPH_POLL_S):
+        """The graph read each second; a wanted topic subscribed as soon as it is wanted."""
+        next_read = time.monotonic() + GRAPH_POLL_S
+        while not self._closed.is_set():
+            self._poke.wait(max(0.0, next_read - time.monotonic()))
+            if self._closed.is_set():
+                return
             try:
-                if read_lists(self.proc) != self._lists:
-                    self.refresh()
-                self._check_silence()
+                if self._poke.is_set():
+                    self._poke.clear()
+                    self._watch_state_topics()
+                if time.monotonic() >= next_read:
+                    next_read = time.monotonic() + GRAPH_POLL_S
+                    if read_lists(self.proc) != self._lists:
+                        self.refresh()
+                    self._drop_unwanted()
+                    self._check_silence()
             except Exception as exc:  # noqa: BLE001 - the loop must outlive one bad read
                 self.events.add("graph", "warning", f"reading the robot's graph failed: {exc}")
 
@@ -148,9 +169,15 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         threading.Thread(target=self._teleop_loop, name="rclpy-teleop", daemon=True).start()
 
     def _watch_state_topics(self) -> None:
+        with self._watch_lock:
+            self._watch_state_topics_locked()
+
+    def _watch_state_topics_locked(self) -> None:
         for name in self.catalog.state_topics() + ["/map"]:
             spec = self.catalog.topics.get(name)
             if spec is None or name in self._watches or (name == "/map" and self._map_watch):
+                continue
+            if name in ON_DEMAND and not self._is_wanted(name):
                 continue
             if not self.proc.node.get_publishers_info_by_topic(name):
                 continue  # subscribed when a publisher appears, with its QoS
@@ -162,8 +189,31 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
             if w is not None:  # a new dict: the sampler may be iterating the old one
                 self._watches = {**self._watches, name: w}
 
+    # -- topics watched on demand -------------------------------------------------------------
+    def _want(self, name: str) -> None:
+        """Keep an on-demand topic watched for WANTED_S from now (the graph thread subscribes it:
+        never the caller, who may be the executor's callback or a key press)."""
+        if name in ON_DEMAND:
+            self._wanted[name] = time.monotonic() + WANTED_S
+            if name not in self._watches:
+                self._poke.set()
+
+    def _is_wanted(self, name: str) -> bool:
+        if name == "/odom" and not {"/robot_pose", "/robot_status"} <= self.catalog.topics.keys():
+            return True  # the robot's pose or speed has no other source
+        return time.monotonic() < self._wanted.get(name, 0.0)
+
+    def _drop_unwanted(self) -> None:
+        with self._watch_lock:
+            for name in ON_DEMAND:
+                w = self._watches.get(name)
+                if w is not None and not self._is_wanted(name):
+                    self._watches = {n: v for n, v in self._watches.items() if n != name}
+                    w.close()
+
     def close(self) -> None:
         self._closed.set()
+        self._poke.set()
         for w in [*self._watches.values(), *([self._map_watch] if self._map_watch else [])]:
             w.close()
         self._watches.clear()
@@ -177,6 +227,8 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
     def _on_message(self, name: str, msg: Any) -> None:
         if name == "/robot_status":
             self.events.status(msg.state, msg.fault)
+            if msg.state in MOVING or getattr(msg, "speed", 0.0) > MOVING_SPEED:
+                self._want("/odom")  # its velocity is worth its cost while the robot moves
 
     def _on_map(self, _name: str, msg: Any) -> None:
         try:
@@ -212,6 +264,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
     def messages(self, names) -> dict[str, dict[str, Any]]:
         out = {}
         for n in names:
+            self._want(n)  # a reader (a recording) keeps asking: it stays watched
             w = self._watches.get(n)
             msg = w.latest() if w else None
             if msg is not None:
@@ -221,6 +274,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
     def message_times(self, names) -> dict[str, float]:
         out = {}
         for n in names:
+            self._want(n)
             w = self._watches.get(n)
             received = w.received() if w else None
             if received is not None:
@@ -278,6 +332,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         with self._lock:
             self._hold, self._hold_until = twist, time.monotonic() + LAPSE_S
         self._send_twist(twist)  # now, not at the next tick
+        self._want("/odom")  # the velocity it makes, after it is sent
 
     def _teleop_loop(self) -> None:
         """Repeat the held velocity at 10 Hz; when the keys stop, one zero Twist."""
