@@ -18,8 +18,9 @@ pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("embedded")]  # one serv
 
 
 @pytest.fixture(scope="module")
-def server():
-    s = EmbeddedServer(smollm2_path(), threads=1, n_ctx=2048).start()
+def server(tmp_path_factory):
+    cache_dir = tmp_path_factory.mktemp("prompt-cache")  # not the user's cache folder
+    s = EmbeddedServer(smollm2_path(), threads=1, n_ctx=2048, cache_dir=cache_dir).start()
     yield s
     s.stop()
 
@@ -28,7 +29,7 @@ def server():
 def endpoint(server):
     ep = LLMEndpoint(parse_spec("embedded"), threads=1, n_ctx=2048)
     ep.server = server  # share the one server across the module
-    ep._client = OpenAIClient(server.base_url, server.model_name)
+    ep._client = server.client()  # each kind of call pinned to its slot
     return ep
 
 

@@ -110,9 +110,7 @@ class LLMEndpoint:
             if spec.kind in ("embedded", "gguf"):
                 path = smollm2_path() if spec.kind == "embedded" else spec.path
                 self.server = EmbeddedServer(path, self.threads, self.n_ctx).start()
-                self._client = OpenAIClient(
-                    self.server.base_url, self.server.model_name, timeout_s=self.timeout_s
-                )
+                self._client = self.server.client(self.timeout_s)
             elif spec.kind == "ollama":
                 self._client = OllamaClient(spec.url, spec.name, timeout_s=self.timeout_s)
             elif spec.kind in ("openai", "dmr"):
