@@ -64,7 +64,7 @@ class _Options:
 class SlotRouter(Protocol):
     """Pins each kind of call to a server slot of its own (`prompt_cache.PromptCache`)."""
 
-    def slot_for(self, messages: Messages) -> int | None: ...
+    async def slot_for(self, messages: Messages) -> int | None: ...
 
     async def kept(self, slot: int, messages: Messages) -> None: ...
 
@@ -145,7 +145,7 @@ class ChatClient:
         to a GBNF grammar, and wins over `schema`. With `guard`, a reply that loops, or runs
         past `max_tokens` or `deadline_s` (a server may ignore the cap or never stop), is cut
         and ends with finish_reason "repetition", "length" or "deadline"."""
-        slot = self.slots.slot_for(messages) if self.slots else None
+        slot = await self.slots.slot_for(messages) if self.slots else None
         opts = _Options(
             max_tokens, temperature, schema, seed, grammar, guard, penalties, deadline_s, slot
         )
