@@ -86,3 +86,10 @@ def test_the_server_holds_the_model_to_the_grammar():
         assert "arrived" not in text.lower() and "99" not in text
     finally:
         server.stop()
+
+
+def test_an_answer_to_a_commanded_move_opens_by_saying_it_was_commanded():
+    results = "ros2 topic pub -t 5 /cmd_vel geometry_msgs/msg/Twist '{linear: {x: 0.3}}'\n  commanded forward 0.30 m/s on /cmd_vel, sent 5 time(s)"
+    grammar = answer_grammar("move forward", results, commanded_only=True)
+    assert spelled(grammar, "first") == {"Commanded", "Sent"}
+    assert "moving" not in spelled(grammar) and "0.30 m/s" in spelled(grammar, "figure")

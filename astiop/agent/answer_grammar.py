@@ -23,6 +23,7 @@ _QUANTITY = re.compile(
 )
 _WORD = re.compile(r"[A-Za-z][A-Za-z_'-]*")
 ARRIVAL_WORDS = {"arrived", "arrives", "reached", "reaches", "navigated", "completed", "finished"}
+COMMANDED_LEADS = ["Commanded", "Sent"]
 MAX_FACTS = 48  # a long listing (every location) keeps its first numbers only
 MAX_ITEMS = 28  # words and figures in one sentence
 
@@ -57,10 +58,15 @@ def quantities(results: str) -> list[str]:
 
 
 def answer_grammar(
-    request: str, results: str, supported: Iterable[str] = (), kinds: Iterable[str] = ()
+    request: str,
+    results: str,
+    supported: Iterable[str] = (),
+    kinds: Iterable[str] = (),
+    commanded_only: bool = False,
 ) -> str:
     """One or two sentences of allowed words and figures; `supported` are the fact words of
-    this turn (grounding.Facts.words), `kinds` the obstacle kinds reported."""
+    this turn (grounding.Facts.words), `kinds` the obstacle kinds reported. When all that ran
+    was commanded (a Twist published), the answer opens by saying so: nothing was measured."""
     supported = set(supported)
     allowed_claims, banned = _claim_words(supported)
     kinds = {k.lower() for k in kinds}
@@ -73,7 +79,7 @@ def answer_grammar(
     words.update(dict.fromkeys(allowed_claims | kinds | {k + "s" for k in kinds}))
     vocab = [w for w in words if w not in banned or w in allowed_claims or w in kinds]
     figures = sorted(quantities(results), key=len, reverse=True)  # 27.12 V before 27 V
-    first = sorted({w.capitalize() for w in vocab} | {"I"})
+    first = COMMANDED_LEADS if commanded_only else sorted({w.capitalize() for w in vocab} | {"I"})
     rules = [
         'root ::= sentence (" " sentence)?',
         f'sentence ::= first (sep item){{0,{MAX_ITEMS}}} "."',

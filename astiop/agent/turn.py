@@ -317,7 +317,9 @@ class Agent:
         messages = prompts.interpret_messages(request, results)
         grammar = None  # llama.cpp servers: the words and figures this turn's results allow
         if self.interpretation == "grounded":
-            grammar = answer_grammar(request, results, facts.words, facts.kinds)
+            ran = [ex for ex in result.commands if ex.executed and not ex.error]
+            commanded = all(ex.provenance == "commanded" for ex in ran)
+            grammar = answer_grammar(request, results, facts.words, facts.kinds, commanded)
         c = await self._ask(
             messages,
             None,
