@@ -107,6 +107,7 @@ class EmbeddedServer:
             params.cpuparams_batch.n_threads = self.threads
             params.use_jinja = True
             params.verbosity = -1  # its log would write over the console
+            params.warmup = False  # an empty decode at start: 30-40 ms the first call need not wait
             params.fit_params = self.model_path.stat().st_size > FIT_ABOVE_BYTES
             # One slot per kind of call, each with a KV cache of its own and the whole context;
             # flash attention off. Both so that a reply never depends on what was cached:
