@@ -43,7 +43,7 @@ ESTOP_BURST_S = 1.0
 # process drives, while the robot moves (its status says so), and while a reader (a recording)
 # asks for its messages; always where the robot lacks /robot_pose or /robot_status.
 ON_DEMAND = ("/odom",)
-WANTED_S = 5.0  # an on-demand topic stays watched this long after it was last wanted
+WANTED_S = 2.0  # an on-demand topic stays watched this long after it was last wanted
 MOVING_SPEED = 0.005  # m/s: /robot_status's speed above this is a robot that moves
 
 
