@@ -1,6 +1,7 @@
 """Key press to robot, and the console's cost, on both ROS 2 transports side by side.
 
     python benchmarks/ros2_latency.py [--repeats 3] [--latency-ms 300] [--cpu-s 10] [--domain 87]
+                                      [--kinds sim,rclpy,cli] [--wait-set]
 
 One run measures, each repeat in fresh processes:
 - rclpy: the console (--robot ros2 --ros2-transport rclpy) against `astiop sim node` (the
@@ -9,20 +10,23 @@ One run measures, each repeat in fresh processes:
 - cli: the console (--ros2-transport cli) against the emulated `ros2` executable
   (tests/emulator.py), which pays `--latency-ms` of start-up on every call, as importing rclpy
   and ros2cli does; the emulated robot logs each Twist's arrival;
-- sim: the console on the built-in simulator, for the CPU reference only.
+- sim: the console on the built-in simulator, for the CPU reference only;
+- rclpy-wait-set (with --wait-set): rclpy with the wait-set executor, as on Humble, whose rclpy
+  has no events executor (ASTIOP_RCLPY_EXECUTOR=wait-set).
 time.monotonic() is system-wide on Linux, so the robot's clock and the console's agree.
 
 Rows, after the robot is undocked: E-STOP (ctrl+e, while `w` is held) -> zero Twist at the
 robot, and again in a new console before any teleop key; teleop (F5, `w`) first key -> first
-Twist, once the robot's side sees the console's publisher, and the very first key after
-start-up; the worst gap between Twists while `w` is pressed every 50 ms (beside the worst gap
-between the benchmark's own presses: a loaded machine makes them late); the wall time of
-`gateway.run(...)` for `ros2 topic echo ... --once` and `ros2 service call /stop` (warm: the
-console is up; each at a random moment, as an operator types); the console's CPU
-(time.process_time(), and for the CLI with its `ros2` subprocesses) over --cpu-s with the
-dashboard live and nothing pressed, as % of one core. It ends with a Markdown table: median /
-worst over the repeats, and the load average at each trial's start (the figures are only as
-quiet as the machine).
+Twist, once the robot's side sees the console's publisher (TELEOP_FIRST_KEYS times, each after
+the last one's command lapsed), and the very first key after start-up; the worst gap between
+Twists while `w` is pressed every 50 ms (beside the worst gap between the benchmark's own
+presses: a loaded machine makes them late); the wall time of `gateway.run(...)` for
+`ros2 topic echo ... --once` and `ros2 service call /stop` (warm: the console is up; each at a
+random moment, as an operator types); the console's CPU (time.process_time(), and for the CLI
+with its `ros2` subprocesses) over --cpu-s with the dashboard live and nothing pressed, from
+AT_REST_S after the robot came to rest, as % of one core. It ends with a Markdown table: median
+/ worst over the repeats, and the load average at each trial's start and during each CPU
+window (the figures are only as quiet as the machine).
 
 Keys are posted to the app as a terminal's driver posts them, not with Pilot.press, which waits
 for the process to fall idle (up to 2 s a key on a console that receives its robot's topics).
@@ -54,7 +58,11 @@ ROOT = Path(__file__).resolve().parents[1]
 HELD_PRESSES = 40  # 2 s of a held key
 KEY_REPEAT_S = 0.05  # a terminal's key repeat
 EXEC_REPEATS = 3  # each exec row, per repeat
+TELEOP_FIRST_KEYS = 5  # the teleop first-key row, per repeat
+AT_REST_S = 5.0  # the robot at rest this long before the CPU window (the rclpy transport
+# watches /odom while the robot moves and for 2 s after: the window is the console at rest)
 RESULT = "RESULT "  # the child's one line of results on stdout
+KINDS = ("sim", "rclpy", "rclpy-wait-set", "cli")
 Arrivals = Callable[[], list[tuple[float, float]]]  # (time.monotonic(), linear.x) per Twist
 
 
@@ -256,6 +264,7 @@ async def session(side: Side, cpu_s: float) -> dict:
 
         await pilot.press("f1")
         await until(lambda: app.robot_state.status is not None, 10, "the dashboard's state")
+        await asyncio.sleep(AT_REST_S)
         out["load_cpu_window"] = os.getloadavg()[0]
         out["cpu_pct"], out["cpu_with_children_pct"] = await cpu_window(cpu_s, side.owned)
         if arrivals is None:
@@ -290,7 +299,20 @@ async def session(side: Side, cpu_s: float) -> dict:
         await until(side.matched, 10, "the robot's side matched with the console's publisher")
         await until(lambda: lapsed(arrivals), 10, "the lapse's zero Twist")
 
-        # the key held: a press every 50 ms; the first one is the first-key figure
+        # first keys, each after the last one's command lapsed (the robot at rest)
+        out["teleop_ms"] = []
+        for _ in range(TELEOP_FIRST_KEYS - 1):
+            await asyncio.sleep(random.uniform(0.2, 0.5))
+            pressed = time.monotonic()
+            type_key(app, "w")
+            got = await until(
+                lambda t=pressed: first_after(arrivals, t, True), 10, "the first Twist"
+            )
+            out["teleop_ms"].append(ms(got - pressed))
+            await until(lambda: lapsed(arrivals), 10, "the lapse's zero Twist")
+        await asyncio.sleep(random.uniform(0.2, 0.5))
+
+        # the key held: a press every 50 ms; the first one is a first key too
         start = time.monotonic()
         presses = []
         for i in range(HELD_PRESSES):
@@ -298,7 +320,7 @@ async def session(side: Side, cpu_s: float) -> dict:
             presses.append(time.monotonic())
             type_key(app, "w")
         got = await until(lambda: first_after(arrivals, start, True), 10, "the first Twist")
-        out["teleop_ms"] = ms(got - start)
+        out["teleop_ms"].append(ms(got - start))
 
         # E-STOP while the key is held: at its next repeat
         await asyncio.sleep(max(0.0, start + HELD_PRESSES * KEY_REPEAT_S - time.monotonic()))
@@ -363,6 +385,8 @@ def trial(kind: str, args: argparse.Namespace) -> dict:
             return measure(side, args.cpu_s)
     from tests.ros import sim_node
 
+    if kind == "rclpy-wait-set":  # Humble's executor (read when the console's rclpy starts)
+        os.environ["ASTIOP_RCLPY_EXECUTOR"] = "wait-set"
     with sim_node(speed=args.sim_speed):
         probe = Probe()
         try:
@@ -427,17 +451,25 @@ def cell(vs: list[float], unit: str) -> str:
     return f"{statistics.median(vs):.1f} / {max(vs):.1f}{unit}"
 
 
+HEADS = {
+    "rclpy": "rclpy (astiop sim node)",
+    "rclpy-wait-set": "rclpy, wait-set executor (Humble's)",
+    "cli": "cli (emulated, {latency} ms start-up)",
+}
+
+
 def table(results: dict[str, list[dict]], args: argparse.Namespace) -> str:
     ok = {k: [r for r in rs if "error" not in r] for k, rs in results.items()}
-    sim_cpu = values(ok["sim"], "cpu_pct")
-    head = f"cli (emulated, {args.latency_ms} ms start-up)"
+    sim_cpu = values(ok.get("sim", []), "cpu_pct")
+    columns = [k for k in results if k != "sim"]
+    heads = " | ".join(HEADS[k].format(latency=args.latency_ms) for k in columns)
     lines = [
-        f"| row (median / worst, n per cell = {args.repeats} repeats"
-        f" × {EXEC_REPEATS} for exec rows) | rclpy (astiop sim node) | {head} | target (rclpy) |",
-        "|---|---|---|---|",
+        f"| row (median / worst, n per cell = {args.repeats} repeats × {EXEC_REPEATS} for exec"
+        f" rows, × {TELEOP_FIRST_KEYS} for teleop first key) | {heads} | target (rclpy) |",
+        "|---" * (len(columns) + 2) + "|",
     ]
     for name, key, unit, target, stat, limit in ROWS:
-        rcl, cli = values(ok["rclpy"], key), values(ok["cli"], key)
+        rcl = values(ok.get("rclpy", []), key)
         verdict = ""
         if limit == "sim" and rcl and sim_cpu:
             met = statistics.median(rcl) <= statistics.median(sim_cpu)
@@ -446,11 +478,16 @@ def table(results: dict[str, list[dict]], args: argparse.Namespace) -> str:
         elif limit is not None and rcl:
             figure = statistics.median(rcl) if stat == "median" else max(rcl)
             verdict = " — met" if figure <= limit else " — missed"
-        lines.append(f"| {name} | {cell(rcl, unit)} | {cell(cli, unit)} | {target}{verdict} |")
-    lines.append(
-        f"| console CPU on the built-in simulator (reference) | {cell(sim_cpu, ' %')} "
-        "(robot.backend = sim) | | |"
-    )
+        cells = " | ".join(cell(values(ok[k], key), unit) for k in columns)
+        lines.append(f"| {name} | {cells} | {target}{verdict} |")
+    loads = " | ".join(cell(values(ok[k], "load_cpu_window"), "") for k in columns)
+    lines.append(f"| load average (1 min) at the CPU window | {loads} | |")
+    if "sim" in results:
+        pad = " |" * len(columns)
+        lines.append(
+            f"| console CPU on the built-in simulator (reference) | {cell(sim_cpu, ' %')}"
+            f" (robot.backend = sim), load {cell(values(ok['sim'], 'load_cpu_window'), '')} |" + pad
+        )
     return "\n".join(lines)
 
 
@@ -461,7 +498,13 @@ def main() -> None:
     ap.add_argument("--cpu-s", type=float, default=10.0, help="the CPU window, s")
     ap.add_argument("--sim-speed", type=float, default=1.0, help="the robots' simulated speed")
     ap.add_argument("--domain", type=int, default=None, help="ROS_DOMAIN_ID (default 87)")
-    ap.add_argument("--trial", choices=("rclpy", "cli", "sim"), help=argparse.SUPPRESS)
+    ap.add_argument(
+        "--kinds", default="sim,rclpy,cli", help="the consoles measured, in this order each repeat"
+    )
+    ap.add_argument(
+        "--wait-set", action="store_true", help="also rclpy with the wait-set executor (Humble's)"
+    )
+    ap.add_argument("--trial", choices=KINDS, help=argparse.SUPPRESS)
     args = ap.parse_args()
     args.domain = keep_dds_on_loopback(args.domain)
     sys.path.insert(0, str(ROOT))
@@ -479,9 +522,15 @@ def main() -> None:
         f"ROS_DOMAIN_ID={args.domain}, DDS on the loopback; {os.cpu_count()} cores, "
         f"load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}"
     )
-    results: dict[str, list[dict]] = {"rclpy": [], "cli": [], "sim": []}
+    kinds = [k for k in args.kinds.split(",") if k]
+    if args.wait_set and "rclpy-wait-set" not in kinds:
+        kinds.insert(kinds.index("rclpy") + 1 if "rclpy" in kinds else len(kinds), "rclpy-wait-set")
+    unknown = set(kinds) - set(KINDS)
+    if unknown:
+        ap.error(f"unknown kinds: {', '.join(sorted(unknown))} (known: {', '.join(KINDS)})")
+    results: dict[str, list[dict]] = {k: [] for k in kinds}
     for i in range(args.repeats):
-        for kind in ("sim", "rclpy", "cli"):  # interleaved: the machine's load falls on each
+        for kind in kinds:  # interleaved: the machine's load falls on each
             say(f"repeat {i + 1}/{args.repeats}: {kind}")
             r = run_trial(kind, args)
             results[kind].append(r)
