@@ -38,6 +38,7 @@ def _isolated_config(tmp_path, monkeypatch):
     # No test reads the developer's own settings or database.
     monkeypatch.setenv("ASTIOP_CONFIG", str(tmp_path / "no-config.toml"))
     monkeypatch.setenv("ASTIOP_DB", str(tmp_path / "default.db"))
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))  # the embedded model's cache
     for name in ("ASTIOP_MODEL", "ASTIOP_ROBOT"):
         monkeypatch.delenv(name, raising=False)
 
