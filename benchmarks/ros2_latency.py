@@ -12,7 +12,7 @@ One run measures, each repeat in fresh processes:
   and ros2cli does; the emulated robot logs each Twist's arrival;
 - sim: the console on the built-in simulator, for the CPU reference only;
 - rclpy-wait-set (with --wait-set): rclpy with the wait-set executor, as on Humble, whose rclpy
-  has no events executor (ASTIOP_RCLPY_EXECUTOR=wait-set).
+  has no events executor (RCLPY_EXECUTOR=wait-set).
 time.monotonic() is system-wide on Linux, so the robot's clock and the console's agree.
 
 Rows, after the robot is undocked: E-STOP (ctrl+e, while `w` is held) -> zero Twist at the
@@ -386,7 +386,7 @@ def trial(kind: str, args: argparse.Namespace) -> dict:
     from tests.ros import sim_node
 
     if kind == "rclpy-wait-set":  # Humble's executor (read when the console's rclpy starts)
-        os.environ["ASTIOP_RCLPY_EXECUTOR"] = "wait-set"
+        os.environ["RCLPY_EXECUTOR"] = "wait-set"
     with sim_node(speed=args.sim_speed):
         probe = Probe()
         try:
