@@ -285,7 +285,8 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         return self.events.since(seq)
 
     def topic_stats(self) -> list[TopicStat]:
-        return live_topic_stats(self.catalog.topics, self._watches, time.monotonic())
+        watches = {**self._watches, **({"/map": self._map_watch} if self._map_watch else {})}
+        return live_topic_stats(self.catalog.topics, watches, time.monotonic())
 
     def map_geometry(self):
         return self._map
