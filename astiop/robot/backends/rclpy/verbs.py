@@ -248,18 +248,15 @@ class RclpyVerbs:
         name = c.command.name
         srv = interface_class(c.type)
         request = to_message(srv.Request, c.message or {})
-        client = self.proc.node.create_client(srv, name)
-        try:
-            lines = []
-            if not client.service_is_ready():
-                lines.append("waiting for service to become available...")
-                if not client.wait_for_service(timeout_sec=timeout):
-                    raise BackendError(f"service {name} is not available (waited {timeout:g} s)")
-            lines.append(f"requester: making request: {request!r}\n")
-            response = self.proc.wait(client.call_async(request), timeout, f"service {name}")
-            lines.append(f"response:\n{response!r}\n")
-        finally:
-            self.proc.node.destroy_client(client)
+        client = self._client(srv, name)
+        lines = []
+        if not client.service_is_ready():
+            lines.append("waiting for service to become available...")
+            if not client.wait_for_service(timeout_sec=timeout):
+                raise BackendError(f"service {name} is not available (waited {timeout:g} s)")
+        lines.append(f"requester: making request: {request!r}\n")
+        response = self.proc.wait(client.call_async(request), timeout, f"service {name}")
+        lines.append(f"response:\n{response!r}\n")
         if name == "/stop":
             self._cancel_goals()
         return "\n".join(lines) + "\n", to_dict(response)
