@@ -68,7 +68,7 @@ def test_live_state_comes_by_subscription_and_reads_agree(robot_gateway):
     assert math.isnan(stats["/cmd_vel"].measured_hz), "nothing publishes /cmd_vel: absent"
     # the robot rests on its dock: /odom is not watched (its speed comes from /robot_status)
     assert math.isnan(stats["/odom"].measured_hz) and gateway.state().velocity is None
-    assert gateway.state().speed == 0.0
+    assert until(lambda: gateway.state().speed == 0.0, 10), gateway.state().status
     latched = lambda: {s.name: s for s in gateway.topic_stats()}["/map"].count  # noqa: E731
     assert until(latched, 10), "the /map watch counts in the topics' statistics"
     hz = gateway.run("ros2 topic hz /scan", timeout=15)
