@@ -63,6 +63,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         self._watch_lock = threading.Lock()  # watches made and dropped by one thread at a time
         self._wanted: dict[str, float] = {}  # an on-demand topic -> wanted until (monotonic)
         self._poke = threading.Event()  # the graph thread: subscribe what is wanted now
+        self._holding = threading.Event()  # teleop holds a velocity: the teleop loop runs
         self._clients: dict[tuple[str, Any], Any] = {}  # (service, type) -> its client
         self._clients_lock = threading.Lock()
         self._map_watch: TopicWatch | None = None
@@ -216,6 +217,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
     def close(self) -> None:
         self._closed.set()
         self._poke.set()
+        self._holding.set()
         for w in [*self._watches.values(), *([self._map_watch] if self._map_watch else [])]:
             w.close()
         self._watches.clear()
@@ -338,17 +340,21 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
             raise BackendError("the E-STOP is engaged")
         with self._lock:
             self._hold, self._hold_until = twist, time.monotonic() + LAPSE_S
+            self._holding.set()
         self._send_twist(twist)  # now, not at the next tick
         self._want("/odom")  # the velocity it makes, after it is sent
 
     def _teleop_loop(self) -> None:
-        """Repeat the held velocity at 10 Hz; when the keys stop, one zero Twist."""
-        while not self._closed.wait(1.0 / TELEOP_HZ):
+        """Repeat the held velocity at 10 Hz; when the keys stop, one zero Twist. Asleep while
+        nothing is held (no wake-up ten times a second for nothing)."""
+        while self._holding.wait() and not self._closed.wait(1.0 / TELEOP_HZ):
             with self._lock:
                 twist, until = self._hold, self._hold_until
                 lapsed = twist is not None and time.monotonic() > until
                 if lapsed:
                     self._hold = None
+                if self._hold is None:
+                    self._holding.clear()  # drive() sets it again, under this lock
             try:
                 if lapsed:
                     self._send_twist(zero_twist())
