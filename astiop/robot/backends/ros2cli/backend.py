@@ -190,7 +190,9 @@ class Ros2Backend(RobotBackend):
     def wait_until_idle(self, timeout_s: float) -> str | None:
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline:
-            goals_running = any(p.poll() is None for p in self._goal_procs)
+            # a goal's client is followed until its last line is read (its outcome), not only
+            # until its process exits: the follower drops it from the list then
+            goals_running = bool(self._goal_procs)
             with self._lock:
                 state = (self._latest.get("/robot_status") or {}).get("state")
             if not goals_running and state not in MOVING:
