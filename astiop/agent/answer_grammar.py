@@ -13,14 +13,11 @@ from __future__ import annotations
 import json
 import re
 from collections.abc import Iterable
+from functools import cache
 
-from astiop.agent.grounding import OBSTACLE_KINDS, STATE_CLAIMS
+from astiop.agent.grounding import OBSTACLE_KINDS, STATE_CLAIMS, written_figures
 from astiop.resources import prompts_path
 
-# a number, and the unit the results write after it
-_QUANTITY = re.compile(
-    r"(?<![\w.])(-?\d+(?:\.\d+)?)(?![\w.])(\s?(?:%|V|A|m/s|rad/s|m|deg)\b|\s?%)?"
-)
 _WORD = re.compile(r"[A-Za-z][A-Za-z_'-]*")
 ARRIVAL_WORDS = {"arrived", "arrives", "reached", "reaches", "navigated", "completed", "finished"}
 COMMANDED_LEADS = ["Commanded", "Sent"]
@@ -28,11 +25,18 @@ MAX_FACTS = 48  # a long listing (every location) keeps its first numbers only
 MAX_ITEMS = 28  # words and figures in one sentence
 
 
-def lexicon() -> list[str]:
+@cache
+def lexicon() -> tuple[str, ...]:
     """The words any answer may use: prompts/answer_words.txt, one or more per line."""
     text = prompts_path("answer_words.txt").read_text(encoding="utf-8")
     lines = (line.split("#", 1)[0] for line in text.splitlines())
-    return [w for line in lines for w in line.split()]
+    return tuple(w for line in lines for w in line.split())
+
+
+@cache
+def _lexicon_kinds() -> frozenset[str]:
+    """The obstacle kinds the lexicon names (allowed only when the robot reported one)."""
+    return frozenset(m.group().lower() for m in OBSTACLE_KINDS.finditer(" ".join(lexicon())))
 
 
 def _claim_words(supported: set[str]) -> tuple[set[str], set[str]]:
@@ -49,8 +53,7 @@ def _claim_words(supported: set[str]) -> tuple[set[str], set[str]]:
 def quantities(results: str) -> list[str]:
     """The results' numbers as the answer may write them: with their unit, each once."""
     found: dict[str, None] = {}
-    for m in _QUANTITY.finditer(results):
-        number, unit = m.group(1), (m.group(2) or "").strip()
+    for number, unit in written_figures(results):  # as grounding reads them
         found[f"{number} {unit}".strip()] = None
         if unit and number.endswith(".0"):
             found[f"{number[:-2]} {unit}"] = None
@@ -70,9 +73,7 @@ def answer_grammar(
     supported = set(supported)
     allowed_claims, banned = _claim_words(supported)
     kinds = {k.lower() for k in kinds}
-    banned |= {
-        m.group().lower() for m in OBSTACLE_KINDS.finditer(" ".join(lexicon()))
-    } - kinds  # an obstacle kind the robot did not report
+    banned |= _lexicon_kinds() - kinds  # an obstacle kind the robot did not report
     words = dict.fromkeys(w.lower() for w in lexicon())
     said = [line for line in results.splitlines() if not line.startswith("ros2 ")]
     words.update(dict.fromkeys(w.lower() for w in _WORD.findall(" ".join([request, *said]))))

@@ -16,7 +16,13 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
-from astiop.agent.summaries import STATUS_WORDS, stale_age, summarize
+from astiop.agent.summaries import (
+    STATUS_WORDS,
+    commanded_twist,
+    directions,
+    stale_age,
+    summarize,
+)
 from astiop.robot.backend import Execution
 
 _NUMBER = re.compile(r"(?<![\w.])-?\d+(?:\.\d+)?(?![\w])")
@@ -172,8 +178,9 @@ def facts_of(
     texts = [request, *reported]
     for line in reported:
         facts.quantities += quantities_in(line)
-        facts.numbers += [float(n) for n in _NUMBER.findall(line)]
-        facts.measured += [float(n) for n in _NUMBER.findall(line)]
+        numbers = [float(n) for n in _NUMBER.findall(line)]
+        facts.numbers += numbers
+        facts.measured += numbers
         facts.words |= set(re.findall(r"[a-z_-]+", line.lower()))
         facts.places |= set(_PLACE_IN_REPORT.findall(line))
     for ex in executions:
@@ -183,12 +190,14 @@ def facts_of(
         if not ex.executed or ex.error:
             facts.words.add("error")
             continue
-        texts += [ex.output, summarize(ex)]
-        facts.quantities += quantities_in(summarize(ex))
-        if (directions := _published_directions(ex)) is not None:
-            facts.directions = (facts.directions or set()) | directions
-        facts.numbers += [float(n) for n in _NUMBER.findall(summarize(ex))]
-        facts.measured += [float(n) for n in _NUMBER.findall(summarize(ex))]
+        summary = summarize(ex)
+        texts += [ex.output, summary]
+        facts.quantities += quantities_in(summary)
+        if (twist := commanded_twist(ex)) is not None:
+            facts.directions = (facts.directions or set()) | directions(twist)
+        numbers = [float(n) for n in _NUMBER.findall(summary)]
+        facts.numbers += numbers
+        facts.measured += numbers
         for text in _strings(ex.values):
             facts.words |= {text, *re.findall(r"[a-z_-]+", text)}
         for key, v in _walk(ex.values):
@@ -262,23 +271,25 @@ def quantities_in(text: str) -> list[tuple[float, str]]:
     return [(value, unit) for value, unit, _ in _figures(text)]
 
 
+def written_figures(text: str) -> Iterable[tuple[str, str]]:
+    """Each number of `text` as written, with the unit written after it ("" when none)."""
+    for m in _NUMBER.finditer(text):
+        yield m.group(), _unit_after(text, m.end())
+
+
+def _unit_after(text: str, end: int) -> str:
+    unit = _UNIT.match(text, end)
+    name = next((k for k, v in unit.groupdict().items() if v), "") if unit else ""
+    return _UNIT_NAMES.get(name, "")
+
+
 def _figures(text: str) -> Iterable[tuple[float, str, str]]:
     """(number, unit, what the clause before it calls it: a unit or "")."""
     for m in _NUMBER.finditer(text):
-        unit = _UNIT.match(text, m.end())
-        name = next((k for k, v in unit.groupdict().items() if v), "") if unit else ""
         clause = re.split(r"[,;:]|\band\b", text[: m.start()])[-1].lower()
         words = re.findall(r"[a-z]+", clause)[-4:]
         called = next((_QUANTITY_WORDS[w] for w in reversed(words) if w in _QUANTITY_WORDS), "")
-        yield float(m.group()), _UNIT_NAMES.get(name, ""), called
-
-
-def _published_directions(ex: Execution) -> set[str] | None:
-    summary = summarize(ex)
-    if "commanded " not in summary:
-        return None
-    said = summary.split("commanded ", 1)[1]
-    return {d for d in ("left", "right", "forward", "backward") if re.search(rf"\b{d}\b", said)}
+        yield float(m.group()), _unit_after(text, m.end()), called
 
 
 def _decimals(text: str) -> int:

@@ -23,10 +23,7 @@ def summarize(ex: Execution) -> str:
         return f"{ex.command}\n  NOT RUN: {ex.reason}"
     if ex.error:
         return f"{ex.command}\n  FAILED: {ex.error}"
-    values = ex.values
-    if values is None and " topic pub " in ex.command:  # a CLI's pub prints, it returns nothing
-        values = _pub_values(ex)
-    body = _summary(ex.command, values, ex.provenance)
+    body = _summary(ex.command, _values(ex), ex.provenance)
     if body is not None and (age := stale_age(ex)) is not None:
         body += f" (read {age:.0f} s ago)"
     if body is None:
@@ -104,19 +101,47 @@ def _summary(command: str, v: Any, provenance: str = "") -> str | None:
         )
         return f"{word}: {v.get('message', '')}"
     if "published" in v or " pub " in command:
-        return _published(command, v)
+        return _published(v)
     if "status" in v and "accepted" in v:
         return f"navigation goal {v['status']}"
     return None
 
 
-def _published(command: str, v: dict[str, Any]) -> str | None:
-    """What astiop commanded on /cmd_vel, in words (the robot's motion is not measured here)."""
-    twist = v.get("twist")
+def _values(ex: Execution) -> Any:
+    if ex.values is None and " topic pub " in ex.command:  # a CLI's pub prints, returns nothing
+        return _pub_values(ex)
+    return ex.values
+
+
+def commanded_twist(ex: Execution) -> tuple[float, float, float] | None:
+    """(vx, vy, wz) of the Twist a `topic pub` sent, or None for any other result."""
+    v = _values(ex)
+    if not isinstance(v, dict) or not ("published" in v or " pub " in ex.command):
+        return None
+    return _twist(v.get("twist"))
+
+
+def _twist(twist: Any) -> tuple[float, float, float] | None:
     if not isinstance(twist, dict):
         return None
     lin, ang = twist.get("linear", {}), twist.get("angular", {})
-    vx, vy, wz = (float(lin.get("x", 0.0)), float(lin.get("y", 0.0)), float(ang.get("z", 0.0)))
+    return float(lin.get("x", 0.0)), float(lin.get("y", 0.0)), float(ang.get("z", 0.0))
+
+
+def directions(twist: tuple[float, float, float]) -> set[str]:
+    """The directions a Twist commands: forward/backward, left/right (a strafe or a turn)."""
+    vx, vy, wz = twist
+    found = {"forward" if vx > 0 else "backward"} if vx else set()
+    found |= {"left" if vy > 0 else "right"} if vy else set()
+    return found | ({"left" if wz > 0 else "right"} if wz else set())
+
+
+def _published(v: dict[str, Any]) -> str | None:
+    """What astiop commanded on /cmd_vel, in words (the robot's motion is not measured here)."""
+    twist = _twist(v.get("twist"))
+    if twist is None:
+        return None
+    vx, vy, wz = twist
     moves = []
     if vx:
         moves.append(f"{'forward' if vx > 0 else 'backward'} {abs(vx):.2f} m/s")

@@ -303,11 +303,8 @@ class Agent:
             result.grounding = "nothing ran"
             emit("answer_token", reason)
             return reason
-        if result.commands:
-            results = "\n".join(summarize(ex) for ex in result.commands)
-            results += "".join(f"\n{line}" for line in self._waited_lines(result))
-        else:
-            results = "(no robot command was run)"
+        results = "\n".join(summarize(ex) for ex in result.commands)  # some command ran
+        results += "".join(f"\n{line}" for line in self._waited_lines(result))
         if result.started:
             results += f"\n{result.started} (the robot is on its way; it has not arrived)"
         outcome = "succeeded" if "succeeded" in result.waited.values() else None
@@ -316,7 +313,7 @@ class Agent:
         )
         messages = prompts.interpret_messages(request, results)
         grammar = None  # llama.cpp servers: the words and figures this turn's results allow
-        if self.interpretation == "grounded":
+        if self.interpretation == "grounded" and self.endpoint.local:
             ran = [ex for ex in result.commands if ex.executed and not ex.error]
             commanded = all(ex.provenance == "commanded" for ex in ran)
             grammar = answer_grammar(request, results, facts.words, facts.kinds, commanded)
