@@ -8,7 +8,7 @@ screen or delay E-STOP; a worker per press waits for it and reports a refusal.
 
 from __future__ import annotations
 
-from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import CancelledError, Future, ThreadPoolExecutor
 
 from rich.text import Text
 from textual.app import ComposeResult
@@ -42,11 +42,11 @@ class TeleopScreen(ConsoleScreen):
     def __init__(self):
         super().__init__()
         self.step = 1
-        self.command = (0.0, 0.0, 0.0)
         self._wheels_shown: tuple[float, ...] | None = None
         self._state_shown: str | None = None
         # one thread sends the presses, in order (a press waits for none of it)
         self._sender = ThreadPoolExecutor(max_workers=1, thread_name_prefix="teleop")
+        self._pending: Future | None = None  # the last press handed to the sender
 
     def compose(self) -> ComposeResult:
         yield Header(show_clock=False)
@@ -85,8 +85,8 @@ class TeleopScreen(ConsoleScreen):
         command = (fx * v, fy * v, fw * 2 * v)
         # the robot first: the sender's thread is idle and starts at once (a worker per press
         # starts at the event loop's next turn); the bars are redrawn once it is sent
-        sent = self._sender.submit(self.app.services.gateway.drive, *command)
-        self.command = command
+        self._supersede()  # a press not sent yet gives way to this one: no backlog to drive
+        sent = self._pending = self._sender.submit(self.app.services.gateway.drive, *command)
         self.run_worker(
             lambda: self._report(sent, wheel_speeds(*command)),
             thread=True,
@@ -94,8 +94,15 @@ class TeleopScreen(ConsoleScreen):
             exit_on_error=False,
         )
 
+    def _supersede(self) -> None:
+        if self._pending is not None:
+            self._pending.cancel()  # only a press still waiting its turn is canceled
+
     def _report(self, sent: Future, wheels) -> None:
-        result = sent.result()
+        try:
+            result = sent.result()
+        except CancelledError:
+            return  # a newer press, or the stop, took its place
         self.app.call_from_thread(self._show_wheels, wheels)
         if not result.executed or result.error:
             why = result.reason or result.error
@@ -109,7 +116,7 @@ class TeleopScreen(ConsoleScreen):
             self.query_one(WheelBars).show(wheels)
 
     def action_halt(self) -> None:
-        self.command = (0.0, 0.0, 0.0)
+        self._supersede()
         self._show_wheels((0.0, 0.0, 0.0, 0.0))
         # after the presses before it, on the same thread
         sent = self._sender.submit(

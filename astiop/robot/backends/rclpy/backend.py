@@ -78,6 +78,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         self._silent = False
         self._estop_threads: list[threading.Thread] = []
         self._estop_seq = 0
+        self._estop_said: set[str] = set()
         self.t0 = time.monotonic()
         self.events = EventLog(self.t0)
         self._lists = self._discover(discovery_s)
@@ -389,6 +390,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         self._cancel_goals()
         for f in failures:
             self.events.add("estop", "error", f)
+        self._estop_said = set(failures)  # settle_estop says only what came after
         return failures
 
     @staticmethod
@@ -400,14 +402,17 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
     def _zero_burst(self) -> None:
         """A zero Twist at 10 Hz for a second from when the base listens (in a new process,
         discovery may take a moment: the first one may have found no one)."""
-        pub, _cls, _type = self._publisher()
-        deadline = time.monotonic() + self.timeout_s
-        while pub.get_subscription_count() < 1 and time.monotonic() < deadline:
-            time.sleep(0.01)
-        end = time.monotonic() + ESTOP_BURST_S
-        while time.monotonic() < end and self._e_stopped and not self._closed.is_set():
-            self._send_twist(zero_twist())
-            time.sleep(1.0 / TELEOP_HZ)
+        try:
+            pub, _cls, _type = self._publisher()
+            deadline = time.monotonic() + self.timeout_s
+            while pub.get_subscription_count() < 1 and time.monotonic() < deadline:
+                time.sleep(0.01)
+            end = time.monotonic() + ESTOP_BURST_S
+            while time.monotonic() < end and self._e_stopped and not self._closed.is_set():
+                self._send_twist(zero_twist())
+                time.sleep(1.0 / TELEOP_HZ)
+        except Exception as exc:  # noqa: BLE001 - said, never raised: /stop goes on
+            self.events.add("estop", "error", f"E-STOP zero Twist: {exc}")
 
     def _call_stop(self, type_: str) -> None:
         try:
@@ -436,7 +441,11 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         deadline = time.monotonic() + timeout_s
         for thread in self._estop_threads:
             thread.join(max(0.0, deadline - time.monotonic()))
-        return [e.message for e in self.events.since(self._estop_seq) if e.kind == "estop"]
+        return [
+            e.message
+            for e in self.events.since(self._estop_seq)
+            if e.kind == "estop" and e.message not in self._estop_said
+        ]
 
     def release_estop(self) -> None:
         self._e_stopped = False
