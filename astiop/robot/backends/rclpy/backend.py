@@ -64,8 +64,6 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         self._wanted: dict[str, float] = {}  # an on-demand topic -> wanted until (monotonic)
         self._poke = threading.Event()  # the graph thread: subscribe what is wanted now
         self._holding = threading.Event()  # teleop holds a velocity: the teleop loop runs
-        self._clients: dict[tuple[str, Any], Any] = {}  # (service, type) -> its client
-        self._clients_lock = threading.Lock()
         self._map_watch: TopicWatch | None = None
         self._map: OccupancyGrid | None = None
         self._goals: list[Any] = []  # goal handles this process sent and that have not ended
@@ -227,10 +225,6 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         if self._cmd_vel is not None:
             self.proc.node.destroy_publisher(self._cmd_vel[0])
             self._cmd_vel = None
-        with self._clients_lock:
-            for client in self._clients.values():
-                self.proc.node.destroy_client(client)
-            self._clients.clear()
 
     # -- live state --------------------------------------------------------------------------
     def _on_message(self, name: str, msg: Any) -> None:
@@ -416,7 +410,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
 
     def _call_stop(self, type_: str) -> None:
         try:
-            client = self._client(interface_class(type_), "/stop")
+            client = self.proc.client(interface_class(type_), "/stop")
             if not client.wait_for_service(timeout_sec=self.timeout_s):
                 self.events.add(
                     "estop", "error", f"E-STOP: no /stop answered within {self.timeout_s:g} s"
@@ -426,16 +420,6 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
             self.proc.wait(client.call_async(request), self.timeout_s, "E-STOP /stop")
         except Exception as exc:  # noqa: BLE001 - said, never raised: the stop goes on
             self.events.add("estop", "error", f"E-STOP /stop: {exc}")
-
-    def _client(self, srv: Any, name: str) -> Any:
-        """One client per service, kept: a new one is not matched at once, and a Fast DDS service
-        waits for a new client's response reader before it answers (up to 100 ms:
-        ros2/rmw_fastrtps#390, #704); measured ~85 ms on one call in five with a new client."""
-        with self._clients_lock:
-            client = self._clients.get((name, srv))
-            if client is None:
-                client = self._clients[(name, srv)] = self.proc.node.create_client(srv, name)
-            return client
 
     def settle_estop(self, timeout_s: float) -> list[str]:
         deadline = time.monotonic() + timeout_s

@@ -248,7 +248,7 @@ class RclpyVerbs:
         name = c.command.name
         srv = interface_class(c.type)
         request = to_message(srv.Request, c.message or {})
-        client = self._client(srv, name)
+        client = self.proc.client(srv, name)
         lines = []
         if not client.service_is_ready():
             lines.append("waiting for service to become available...")
