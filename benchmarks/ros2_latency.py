@@ -1,7 +1,7 @@
 """Key press to robot, and the console's cost, on both ROS 2 transports side by side.
 
     python benchmarks/ros2_latency.py [--repeats 3] [--latency-ms 300] [--cpu-s 10] [--domain 87]
-                                      [--kinds sim,rclpy,cli] [--wait-set]
+                                      [--kinds sim,rclpy,cli]
 
 One run measures, each repeat in fresh processes:
 - rclpy: the console (--robot ros2 --ros2-transport rclpy) against `astiop sim node` (the
@@ -10,9 +10,8 @@ One run measures, each repeat in fresh processes:
 - cli: the console (--ros2-transport cli) against the emulated `ros2` executable
   (tests/emulator.py), which pays `--latency-ms` of start-up on every call, as importing rclpy
   and ros2cli does; the emulated robot logs each Twist's arrival;
-- sim: the console on the built-in simulator, for the CPU reference only;
-- rclpy-wait-set (with --wait-set): rclpy with the wait-set executor, as on Humble, whose rclpy
-  has no events executor (RCLPY_EXECUTOR=wait-set).
+- sim: the console on the built-in simulator, for the CPU reference only.
+rclpy runs the wait-set executor, Humble's, on every distro (astiop/robot/backends/rclpy/node.py).
 time.monotonic() is system-wide on Linux, so the robot's clock and the console's agree.
 
 Rows, after the robot is undocked: E-STOP (ctrl+e, while `w` is held) -> zero Twist at the
@@ -62,7 +61,7 @@ TELEOP_FIRST_KEYS = 5  # the teleop first-key row, per repeat
 AT_REST_S = 5.0  # the robot at rest this long before the CPU window (the rclpy transport
 # watches /odom while the robot moves and for 2 s after: the window is the console at rest)
 RESULT = "RESULT "  # the child's one line of results on stdout
-KINDS = ("sim", "rclpy", "rclpy-wait-set", "cli")
+KINDS = ("sim", "rclpy", "cli")
 Arrivals = Callable[[], list[tuple[float, float]]]  # (time.monotonic(), linear.x) per Twist
 
 
@@ -385,8 +384,6 @@ def trial(kind: str, args: argparse.Namespace) -> dict:
             return measure(side, args.cpu_s)
     from tests.ros import sim_node
 
-    if kind == "rclpy-wait-set":  # Humble's executor (read when the console's rclpy starts)
-        os.environ["RCLPY_EXECUTOR"] = "wait-set"
     with sim_node(speed=args.sim_speed):
         probe = Probe()
         try:
@@ -453,7 +450,6 @@ def cell(vs: list[float], unit: str) -> str:
 
 HEADS = {
     "rclpy": "rclpy (astiop sim node)",
-    "rclpy-wait-set": "rclpy, wait-set executor (Humble's)",
     "cli": "cli (emulated, {latency} ms start-up)",
 }
 
@@ -501,9 +497,6 @@ def main() -> None:
     ap.add_argument(
         "--kinds", default="sim,rclpy,cli", help="the consoles measured, in this order each repeat"
     )
-    ap.add_argument(
-        "--wait-set", action="store_true", help="also rclpy with the wait-set executor (Humble's)"
-    )
     ap.add_argument("--trial", choices=KINDS, help=argparse.SUPPRESS)
     args = ap.parse_args()
     args.domain = keep_dds_on_loopback(args.domain)
@@ -523,8 +516,6 @@ def main() -> None:
         f"load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}"
     )
     kinds = [k for k in args.kinds.split(",") if k]
-    if args.wait_set and "rclpy-wait-set" not in kinds:
-        kinds.insert(kinds.index("rclpy") + 1 if "rclpy" in kinds else len(kinds), "rclpy-wait-set")
     unknown = set(kinds) - set(KINDS)
     if unknown:
         ap.error(f"unknown kinds: {', '.join(sorted(unknown))} (known: {', '.join(KINDS)})")

@@ -76,6 +76,21 @@ def test_live_state_comes_by_subscription_and_reads_agree(robot_gateway):
     assert "average rate:" in hz.output and "window:" in hz.output
 
 
+def test_state_messages_are_taken_by_the_poller_each_at_its_receive_time(robot_gateway):
+    backend = robot_gateway.backend
+    assert until(lambda: backend.messages(["/odom"]), 10), "/odom is watched once wanted"
+    time.sleep(1.5)
+    watches = backend._watches
+    assert {"/robot_pose", "/odom", "/robot_status"} <= watches.keys()
+    # the executor never wakes for them (Humble's wait-set executor waits only on these)
+    assert not any(backend.proc.executor.can_execute(w._sub) for w in watches.values())
+    odom = list(watches["/odom"]._times)[-40:]
+    gaps = [b - a for a, b in zip(odom, odom[1:])]
+    # 50 Hz taken ten times a second: stamped by their take they would come five at one time
+    assert sum(g < 0.001 for g in gaps) < len(gaps) / 2, gaps
+    assert 40 <= watches["/odom"].rate(time.monotonic()) <= 60
+
+
 def test_a_chat_read_agrees_with_the_robot_and_a_goal_is_followed_to_arrival(robot_gateway):
     import asyncio
 
