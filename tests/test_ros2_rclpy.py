@@ -175,6 +175,29 @@ def test_estop_from_another_process_stops_a_moving_robot_and_holds(robot_gateway
     assert moved.executed and moved.values["success"]
 
 
+def test_estop_with_no_robot_found_latches_and_says_what_did_not_go_out(tmp_path):
+    require_ros()
+    import os
+
+    # no robot on this domain: the zero Twist and /stop each wait out the timeout
+    env = {**os.environ, "ASTIOP_ROBOT__ROS2_TIMEOUT_S": "1"}
+    db = str(tmp_path / "none.db")
+    cli = [sys.executable, "-m", "astiop", "--db", db, "--robot", "ros2"]
+    out = subprocess.run(
+        [*cli, "--ros2-transport", "rclpy", "estop"],
+        capture_output=True, text=True, timeout=60, env=env,
+    )  # fmt: skip
+    assert out.returncode == 1, out.stderr
+    assert "E-STOP engaged and latched (with failures above)" in out.stdout
+    assert "zero Twist: no /cmd_vel on the robot's graph in 1 s" in out.stderr
+    assert "no /stop answered within 1 s" in out.stderr
+    store = Store(tmp_path / "none.db")
+    try:
+        assert store.estop_latch() is not None, "latched for every other process all the same"
+    finally:
+        store.close()
+
+
 def test_the_console_runs_on_the_rclpy_transport(tmp_path):
     require_ros()
     import asyncio

@@ -104,7 +104,7 @@ def estop(
         typer.echo("E-STOP released")
         return
     try:
-        gateway = make_robot_gateway(st.settings, st.store, who="estop")
+        gateway = make_robot_gateway(st.settings, st.store, who="estop", discover=False)
     except BackendError as exc:
         st.store.latch_estop("estop")  # no robot reached: still hold every other process
         fail(f"E-STOP latched in the database, but the robot was not reached: {exc}", code=1)

@@ -56,14 +56,23 @@ def ros2_transport(settings: Settings) -> tuple[str, str]:
 
 
 def make_robot_gateway(
-    settings: Settings, store: Store | None, *, realtime: bool = False, who: str = "astiop"
+    settings: Settings,
+    store: Store | None,
+    *,
+    realtime: bool = False,
+    who: str = "astiop",
+    discover: bool = True,
 ) -> RobotGateway:
+    """`discover=False`: do not wait for a ROS 2 robot's discovery to settle (an E-STOP sends
+    as soon as the base is found)."""
     if settings.robot.backend == "ros2":
         transport, why = ros2_transport(settings)
         if transport == "rclpy":
-            from astiop.robot.backends.rclpy.backend import RclpyBackend
+            from astiop.robot.backends.rclpy.backend import DISCOVERY_S, RclpyBackend
 
-            backend = RclpyBackend(settings.robot.ros2_timeout_s)
+            backend = RclpyBackend(
+                settings.robot.ros2_timeout_s, discovery_s=DISCOVERY_S if discover else 0.0
+            )
         else:
             from astiop.robot.backends.ros2cli.backend import Ros2Backend
 

@@ -31,6 +31,7 @@ from astiop.ros2.render import velocity_message, zero_twist
 
 MOVING = {"navigating", "docking", "undocking", "blocked"}
 GRAPH_POLL_S = 1.0
+DISCOVERY_S = 3.0  # at most this long for a new process's discovery to settle
 DISCOVERY_QUIET_S = 1.0  # no change in the graph for this long: discovery has settled
 DISCOVERY_YOUNG_S = 10.0  # a process this young may not have discovered the whole robot
 PARAMS_REFRESH_S = 30.0
@@ -52,7 +53,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
     capabilities = frozenset({"commands", "teleop"})
     refresh_every_s = 0.0  # the graph is this process's discovery cache: reading it is free
 
-    def __init__(self, timeout_s: float = 10.0, *, discovery_s: float = 3.0):
+    def __init__(self, timeout_s: float = 10.0, *, discovery_s: float = DISCOVERY_S):
         self.timeout_s = timeout_s
         self.distro = current_distro()
         self.proc = ros_process()
@@ -311,12 +312,20 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
 
     def _publisher_locked(self) -> tuple[Any, Any, str]:
         if self._cmd_vel is None:
-            spec = self.catalog.topics.get("/cmd_vel")
-            if spec is None:
-                raise BackendError("the robot has no /cmd_vel")
-            cls = interface_class(spec.type)
-            self._cmd_vel = (self.proc.node.create_publisher(cls, "/cmd_vel", 10), cls, spec.type)
+            type_ = self._cmd_vel_type()
+            cls = interface_class(type_)
+            self._cmd_vel = (self.proc.node.create_publisher(cls, "/cmd_vel", 10), cls, type_)
         return self._cmd_vel
+
+    def _cmd_vel_type(self) -> str:
+        spec = self.catalog.topics.get("/cmd_vel")
+        if spec is not None:
+            return spec.type
+        # a process that did not wait for discovery (astiop estop): the base's subscription
+        infos = self.proc.node.get_subscriptions_info_by_topic("/cmd_vel")
+        if infos:
+            return infos[0].topic_type
+        raise BackendError("the robot has no /cmd_vel")
 
     def _send_twist(self, twist: dict) -> None:
         pub, cls, type_ = self._publisher()
@@ -372,7 +381,8 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         self._estop_seq = self.events.seq
         self._estop_threads = []
         try:
-            self._send_twist(zero_twist())  # matched already in a running console
+            if "/cmd_vel" in self.catalog.topics:
+                self._send_twist(zero_twist())  # matched already in a running console
             self._estop_threads.append(self._background(self._zero_burst, "estop-zero"))
         except Exception as exc:  # noqa: BLE001 - /stop and the cancels go out regardless
             failures.append(f"{exc}: no zero Twist was sent")
@@ -397,9 +407,20 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         """A zero Twist at 10 Hz for a second from when the base listens (in a new process,
         discovery may take a moment: the first one may have found no one)."""
         try:
-            pub, _cls, _type = self._publisher()
             deadline = time.monotonic() + self.timeout_s
-            while pub.get_subscription_count() < 1 and time.monotonic() < deadline:
+            while True:
+                try:
+                    pub, _cls, _type = self._publisher()
+                    break
+                except BackendError:  # not discovered yet
+                    if time.monotonic() > deadline:
+                        raise BackendError(
+                            f"no /cmd_vel on the robot's graph in {self.timeout_s:g} s"
+                        ) from None
+                    time.sleep(0.01)
+            while pub.get_subscription_count() < 1:
+                if time.monotonic() > deadline:
+                    raise BackendError(f"nothing subscribed to /cmd_vel in {self.timeout_s:g} s")
                 time.sleep(0.01)
             end = time.monotonic() + ESTOP_BURST_S
             while time.monotonic() < end and self._e_stopped and not self._closed.is_set():
@@ -422,7 +443,8 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
             self.events.add("estop", "error", f"E-STOP /stop: {exc}")
 
     def settle_estop(self, timeout_s: float) -> list[str]:
-        deadline = time.monotonic() + timeout_s
+        # each thread ends by its own timeout (timeout_s): a moment more to hear how it ended
+        deadline = time.monotonic() + timeout_s + 1.0
         for thread in self._estop_threads:
             thread.join(max(0.0, deadline - time.monotonic()))
         return [

@@ -52,7 +52,7 @@ class TopicWatch:
         self._arrived = threading.Condition(self._lock)
         self._on_message = on_message
         self._proc = proc
-        self._take_lock = threading.Lock()  # one taker at a time: the poller or a reader
+        self._take_lock = threading.Lock()  # the poller or a reader
         if polled:
             qos = matched_qos(proc, name, POLLED_DEPTH)
             self._sub = proc.node.create_subscription(
@@ -75,16 +75,15 @@ class TopicWatch:
     def take(self) -> None:
         """Take the messages that came since the last take (a polled watch), each at its
         receive time."""
-        taken = []
-        with self._take_lock:
+        with self._take_lock:  # received in order, by one taker at a time
             if self._sub is None:
                 return
             with self._sub.handle:
+                taken = []
                 while (got := self._sub.handle.take_message(self.cls, True)) is not None:
                     taken.append(got)
-        if taken:
-            offset = time.monotonic() - time.time()  # the rmw's stamps are system time
             now = time.monotonic()
+            offset = now - time.time()  # the rmw's stamps are system time
             for raw, info in taken:
                 ns = info.get("received_timestamp", 0)
                 self._receive(raw, min(now, ns * 1e-9 + offset) if ns > 0 else now)
