@@ -1,11 +1,14 @@
 """The embedded model: a real llama.cpp server (xllamacpp) with SmolLM2-135M on 127.0.0.1."""
 
 import json
+import subprocess
+import sys
+import time
 
 import httpx
 import pytest
 
-from astiop.agent.embedded import EmbeddedServer, smollm2_path
+from astiop.agent.embedded import EmbeddedModelError, EmbeddedServer, smollm2_path
 from astiop.agent.llm import OpenAIClient
 from astiop.agent.specs import LLMEndpoint, parse_spec
 from astiop.agent.turn import Agent
@@ -126,3 +129,50 @@ async def test_a_grounded_answer_states_only_what_the_robot_reported(endpoint, s
     assert result.grounding in ("kept",) or result.grounding.startswith("replaced: ")
     assert grounding.unsupported(result.answer, facts) is None
     assert grounding.missing(result.answer, result.commands) is None
+
+
+def health(port: int) -> int:
+    return httpx.get(f"http://127.0.0.1:{port}/health", timeout=2).status_code
+
+
+def test_the_model_serves_from_its_own_process_until_stopped():
+    s = EmbeddedServer(smollm2_path(), threads=1, n_ctx=512, prompt_cache=False).launch()
+    try:
+        assert s.start().startup_s < 30 and health(s.port) == 200
+    finally:
+        s.stop()
+    with pytest.raises(httpx.HTTPError):
+        health(s.port)
+
+
+def test_the_model_stops_when_the_process_that_started_it_is_killed():
+    code = (
+        "import sys; from astiop.agent.embedded import EmbeddedServer, smollm2_path; "
+        "s = EmbeddedServer(smollm2_path(), threads=1, n_ctx=512, prompt_cache=False).start(); "
+        "print(s.port, flush=True); sys.stdin.read()"
+    )
+    parent = subprocess.Popen(
+        [sys.executable, "-c", code], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True
+    )
+    try:
+        port = int(parent.stdout.readline())
+        assert health(port) == 200
+    finally:
+        parent.kill()  # no stop(), no cleanup of any kind
+        parent.wait()
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline:
+        try:
+            health(port)
+        except httpx.HTTPError:
+            return
+        time.sleep(0.1)
+    pytest.fail(f"the model still serves on port {port} 10 s after its parent was killed")
+
+
+def test_a_file_that_is_no_model_is_a_one_line_error(tmp_path):
+    bad = tmp_path / "bad.gguf"
+    bad.write_bytes(b"GGUF" + bytes(64))
+    with pytest.raises(EmbeddedModelError, match="the embedded model") as info:
+        EmbeddedServer(bad, threads=1, n_ctx=512, prompt_cache=False).start(ready_timeout_s=30)
+    assert "\n" not in str(info.value)

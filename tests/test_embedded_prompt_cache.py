@@ -197,3 +197,21 @@ async def test_a_damaged_or_stale_cache_is_skipped_and_written_anew(model_path, 
         assert [slot for slot, tokens in third.prompt_cache.restored if tokens > 0] == [0, 1]
     finally:
         third.stop()
+
+
+def test_a_state_file_is_hashed_once_per_version(tmp_path, monkeypatch):
+    from astiop.agent import prompt_cache
+
+    path = tmp_path / "state.bin"
+    path.write_bytes(os.urandom(4096))
+    digest = prompt_cache.file_sha256(path)[:32]
+    hashed = []
+    real = prompt_cache.file_sha256
+    monkeypatch.setattr(prompt_cache, "file_sha256", lambda p: hashed.append(p) or real(p))
+    assert prompt_cache.intact(path, digest) and prompt_cache.intact(path, digest)
+    assert len(hashed) == 1  # a slot restored again is not hashed again
+    with path.open("r+b") as fh:  # damaged in place: another version (its mtime moved on)
+        fh.write(b"\0" * 16)
+    st = path.stat()
+    os.utime(path, ns=(st.st_atime_ns, st.st_mtime_ns + 1_000_000))
+    assert not prompt_cache.intact(path, digest) and len(hashed) == 2

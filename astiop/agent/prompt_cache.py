@@ -26,6 +26,7 @@ each other's cache, never read half of one.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import hashlib
 import json
 import os
@@ -35,13 +36,16 @@ import threading
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import httpx
 import platformdirs
 
-from astiop.agent.llm import Messages, tls_for
 from astiop.config import APP_NAME
+
+if TYPE_CHECKING:
+    import httpx
+
+    from astiop.agent.llm import Messages
 
 FORMAT = 1  # of the index and of what a build is named for
 SLOTS = 2  # planning and interpretation, each in its own slot
@@ -56,6 +60,14 @@ def default_cache_dir() -> Path:
     return platformdirs.user_cache_path(APP_NAME) / "prompt-cache"
 
 
+def _client(base_url: str) -> httpx.Client:
+    import httpx
+
+    from astiop.agent.llm import tls_for
+
+    return httpx.Client(timeout=30.0, verify=tls_for(base_url))
+
+
 def _sha256(data: str) -> str:
     return hashlib.sha256(data.encode("utf-8")).hexdigest()
 
@@ -66,6 +78,30 @@ def file_sha256(path: Path) -> str:
         while chunk := fh.read(1 << 20):
             digest.update(chunk)
     return digest.hexdigest()
+
+
+_INTACT: dict[tuple[str, int, int, int], bool] = {}  # a file's version -> whether intact
+
+
+def intact(path: Path, digest: str) -> bool:
+    """Whether the file's sha256 begins with `digest`: hashed once per version of the file (its
+    size, mtime and inode) in this process, not at each restore."""
+    st = path.stat()
+    key = (str(path), st.st_size, st.st_mtime_ns, st.st_ino)
+    if key not in _INTACT:
+        _INTACT[key] = file_sha256(path).startswith(digest)
+    return _INTACT[key]
+
+
+def check_files(directory: Path) -> None:
+    """Hashes the files the indexes name, e.g. while the model loads, so a restore need not."""
+    for index in Path(directory).glob("slots-*.json"):
+        data = _read_json(index)
+        for raw in data.get("slots", []) if isinstance(data, dict) else []:
+            name = raw.get("file") if isinstance(raw, dict) else None
+            if isinstance(name, str) and _STATE_FILE.match(name):
+                with contextlib.suppress(OSError):
+                    intact(Path(directory) / name, name[17:49])
 
 
 def _read_json(path: Path) -> Any:
@@ -171,12 +207,14 @@ class PromptCache:
     # -- at start ------------------------------------------------------------------------
     def restore(self, base_url: str) -> None:
         """Each slot's file into its slot, before the first request; what fails is skipped."""
+        import httpx  # ~0.1 s to import: not before the model's process is launched
+
         self._base = base_url
         entries = self._read_index()
         if not any(entries):
             return
         try:
-            with httpx.Client(timeout=30.0, verify=tls_for(base_url)) as client:
+            with _client(base_url) as client:
                 for slot, entry in enumerate(entries):
                     if entry is not None:
                         self._restore_one(client, slot, entry)
@@ -196,10 +234,10 @@ class PromptCache:
         """The file into the slot, if intact; the tokens it held, or None."""
         path = self.directory / entry.file
         try:
-            intact = file_sha256(path)[:32] == entry.file[17:49]
+            ok = intact(path, entry.file[17:49])
         except OSError:
             return None
-        if not intact:
+        if not ok:
             path.unlink(missing_ok=True)  # damaged: the next call writes it anew
             return None
         resp = client.post(
@@ -238,11 +276,13 @@ class PromptCache:
 
     def _reset(self, slot: int) -> None:
         """The slot back to its saved prefix; without one, emptied (a cold prefill follows)."""
+        import httpx
+
         with self._lock:
             held = self._slots[slot]
             saved = held.saved if held is not None else None
         try:
-            with httpx.Client(timeout=30.0, verify=tls_for(self._base)) as client:
+            with _client(self._base) as client:
                 if saved is None or self._load(client, slot, saved) is None:
                     client.post(f"{self._base}/slots/{slot}?action=erase")
         except (OSError, httpx.HTTPError):
@@ -270,10 +310,12 @@ class PromptCache:
         await asyncio.to_thread(self._save, slot, cut, entry)
 
     def _save(self, slot: int, cut: Messages, entry: SlotFile) -> None:
+        import httpx
+
         tmp = self.directory / f"tmp-{os.getpid()}-{secrets.token_hex(6)}.bin"
         try:
             self.directory.mkdir(parents=True, exist_ok=True)
-            with httpx.Client(timeout=30.0, verify=tls_for(self._base)) as client:
+            with _client(self._base) as client:
                 # The slot cut back to the prefix: the call with its request emptied (one
                 # token generated, not kept). The prompt parts where the request began, so only
                 # the tokens after that are evaluated: the prefix keeps the call's numbers.

@@ -5,10 +5,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 from urllib.parse import urlsplit
 
 from astiop.agent.embedded import EmbeddedServer, smollm2_path
-from astiop.agent.llm import ChatClient, OllamaClient, OpenAIClient
+
+if TYPE_CHECKING:
+    from astiop.agent.llm import ChatClient
 
 OLLAMA_URL = "http://localhost:11434"
 DMR_URL = "http://localhost:12434/engines/v1"
@@ -103,14 +106,22 @@ class LLMEndpoint:
     def local(self) -> bool:
         return self.spec.kind in ("embedded", "gguf")
 
+    def launch(self) -> None:
+        """Starts loading an embedded model now, without waiting for it (a no-op for others):
+        the first `client()` finds it loaded or loading."""
+        if self.local and self.server is None:
+            path = smollm2_path() if self.spec.kind == "embedded" else self.spec.path
+            self.server = EmbeddedServer(path, self.threads, self.n_ctx).launch()
+
     def client(self) -> ChatClient:
-        """The chat client; starts the embedded server on first use (about a second)."""
+        """The chat client; starts the embedded server on first use (about half a second)."""
         if self._client is None:
+            from astiop.agent.llm import OllamaClient, OpenAIClient  # after `launch`: httpx
+
             spec = self.spec
             if spec.kind in ("embedded", "gguf"):
-                path = smollm2_path() if spec.kind == "embedded" else spec.path
-                self.server = EmbeddedServer(path, self.threads, self.n_ctx).start()
-                self._client = self.server.client(self.timeout_s)
+                self.launch()
+                self._client = self.server.start().client(self.timeout_s)
             elif spec.kind == "ollama":
                 self._client = OllamaClient(spec.url, spec.name, timeout_s=self.timeout_s)
             elif spec.kind in ("openai", "dmr"):
@@ -131,9 +142,9 @@ class LLMEndpoint:
         base = spec.url.rstrip("/") + ("/v1" if spec.kind == "ollama" else "")
         return f"{base}/chat/completions", getattr(client, "model", spec.name)
 
-    def close(self) -> None:
+    def close(self, wait_s: float = 5.0) -> None:
         if self.server is not None:
-            self.server.stop()
+            self.server.stop(wait_s)
             self.server = None
         self._client = None
 
