@@ -153,3 +153,25 @@ def test_record_takes_an_optional_file(monkeypatch):
     for args in (("--record",), ("--record", "x.mcap"), ("--model", "rules", "--record"), ()):
         assert astiop(*args).returncode == 0
     assert seen == ["", "x.mcap", "", None]  # "": the default file under the data dir
+
+
+def test_chat_ends_at_once_with_its_answer_and_its_record(tmp_path):
+    # the executable leaves without Python's teardown: the answer and the record are complete
+    db = tmp_path / "chat.db"
+    argv = ["--db", str(db), "chat", "--model", "rules", "what is the battery level?", "--json"]
+    out = subprocess.run(
+        [sys.executable, "-m", "astiop", *argv], capture_output=True, text=True, timeout=120
+    )
+    assert out.returncode == 0, out.stderr
+    assert "battery" in json.loads(out.stdout)["answer"]
+    from astiop.store import Store
+
+    store = Store(db)
+    try:
+        [row] = store.interactions()
+        assert row["status"] == "done" and "battery" in row["answer"]
+    finally:
+        store.close()
+    # in a process that goes on (as here), the same command returns
+    again = astiop(*argv)
+    assert again.returncode == 0 and "battery" in json.loads(again.stdout)["answer"]

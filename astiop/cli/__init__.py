@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
@@ -23,7 +24,7 @@ from astiop.cli import (
     ros2,
     sim,
 )
-from astiop.cli.common import CliState
+from astiop.cli.common import CliState, Ending
 
 app = typer.Typer(
     help="Operator console for the LLM-controlled ASTIbot. With no command, opens the console.",
@@ -99,9 +100,11 @@ def main(
 
 
 def run(argv: list[str] | None = None) -> None:
-    """The `astiop` executable: the app, with one line (never a traceback) for any failure."""
+    """The `astiop` executable (argv None: this process is it), or a command run in a process
+    that goes on (tests): the app, with one line (never a traceback) for any failure."""
     from astiop.cli.errors import guarded, usage
 
+    Ending.at_once = False
     args = list(sys.argv[1:] if argv is None else argv)
     for i, token in enumerate(args):  # `--record` with no FILE: the default file
         if token == "--record" and (i + 1 == len(args) or args[i + 1].startswith("-")):
@@ -118,6 +121,11 @@ def run(argv: list[str] | None = None) -> None:
                 print("astiop: aborted", file=sys.stderr)
                 sys.exit(1)
             raise
-        sys.exit(code if isinstance(code, int) else 0)
+        code = code if isinstance(code, int) else 0
+        if argv is None and Ending.at_once:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os._exit(code)
+        sys.exit(code)
 
     guarded(main)

@@ -6,8 +6,7 @@ import asyncio
 
 import typer
 
-from astiop.cli.common import fail, interactive, print_json, state
-from astiop.robot.backend import BackendError
+from astiop.cli.common import Ending, fail, interactive, print_json, state
 
 
 def chat(
@@ -31,8 +30,6 @@ def chat(
     """Run one agent turn against the robot (the simulator by default) and print the answer."""
     from astiop.agent.embedded import EmbeddedModelError
     from astiop.agent.specs import SpecError, open_endpoint
-    from astiop.agent.turn import Agent
-    from astiop.robot.factory import make_robot_gateway
 
     st = state(ctx)
     settings = st.settings
@@ -48,8 +45,17 @@ def chat(
             n_ctx=settings.llm.context,
             timeout_s=settings.llm.timeout_s,
         )
+        endpoint.launch()  # the model loads while the robot starts
+    except (SpecError, EmbeddedModelError) as exc:
+        fail(str(exc))
+    from astiop.agent.turn import Agent
+    from astiop.robot.backend import BackendError
+    from astiop.robot.factory import make_robot_gateway
+
+    try:
         gateway = make_robot_gateway(settings, st.store)
-    except (SpecError, BackendError) as exc:
+    except BackendError as exc:
+        endpoint.close()
         fail(str(exc))
 
     def ask(checked) -> bool:
@@ -101,8 +107,9 @@ def chat(
     except EmbeddedModelError as exc:
         fail(str(exc))
     finally:
-        endpoint.close()
+        endpoint.close(wait_s=0)  # the model's process ends on its own
     gateway.close()
+    st.store.close()
     if as_json:
         print_json({**result.as_json(), "follow_up": follow or None})
     else:
@@ -111,6 +118,7 @@ def chat(
             typer.echo(f"↳ {follow}")
         if result.error:
             typer.echo(f"astiop: {result.error}", err=True)
+    Ending.at_once = True  # all is written and closed
     if result.error:
         raise typer.Exit(1)
 

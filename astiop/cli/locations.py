@@ -8,7 +8,6 @@ import typer
 
 from astiop.bounded import escape_controls
 from astiop.cli.common import fail, print_json, state
-from astiop.store import LocationError
 
 app = typer.Typer(help="List, show, add, rename and remove named locations.", no_args_is_help=True)
 
@@ -35,6 +34,8 @@ def list_locations(ctx: typer.Context, as_json: bool = typer.Option(False, "--js
 @app.command("show")
 def show(ctx: typer.Context, name: str, as_json: bool = typer.Option(False, "--json")) -> None:
     """Show one location."""
+    from astiop.store import LocationError  # sqlite-utils: imported by the command that needs it
+
     try:
         loc = state(ctx).store.require_location(name)
     except LocationError as exc:
@@ -58,6 +59,8 @@ def add(
     description: str = typer.Option("", "--description", "-d"),
 ) -> None:
     """Add a named location at X Y (metres) facing THETA_DEG."""
+    from astiop.store import LocationError  # sqlite-utils: imported by the command that needs it
+
     try:
         loc = state(ctx).store.add_location(name, x, y, math.radians(theta_deg), description)
     except LocationError as exc:
@@ -68,6 +71,8 @@ def add(
 @app.command("rename")
 def rename(ctx: typer.Context, old: str, new: str) -> None:
     """Rename a location."""
+    from astiop.store import LocationError  # sqlite-utils: imported by the command that needs it
+
     try:
         loc = state(ctx).store.rename_location(old, new)
     except LocationError as exc:
@@ -78,6 +83,8 @@ def rename(ctx: typer.Context, old: str, new: str) -> None:
 @app.command("remove")
 def remove(ctx: typer.Context, name: str) -> None:
     """Remove a location."""
+    from astiop.store import LocationError  # sqlite-utils: imported by the command that needs it
+
     try:
         loc = state(ctx).store.remove_location(name)
     except LocationError as exc:

@@ -8,7 +8,6 @@ import sys
 import typer
 
 from astiop.cli.common import fail, state
-from astiop.robot.backend import BackendError
 
 
 def parse_http(value: str) -> tuple[str, int]:
@@ -62,6 +61,7 @@ def mcp(
     from astiop.mcp.approval import Policy
     from astiop.mcp.server import AstiopMCP, serve_http, serve_stdio
     from astiop.mcp.tools import RobotTools
+    from astiop.robot.backend import BackendError
     from astiop.robot.factory import make_robot_gateway
 
     st = state(ctx)

@@ -9,7 +9,6 @@ from pathlib import Path
 import typer
 
 from astiop.cli.common import fail, print_json, state
-from astiop.robot.backend import BackendError
 
 
 def record(
@@ -48,6 +47,7 @@ def record(
     for name, value in (("--duration", duration), ("--scan-hz", scan_hz)):
         if value is not None and not (math.isfinite(value) and 0 < value <= 86400):
             fail(f"{name} must be a positive number")
+    from astiop.robot.backend import BackendError
     from astiop.robot.factory import make_robot_gateway
 
     st = state(ctx)

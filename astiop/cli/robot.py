@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import typer
 
 from astiop.cli.common import fail, interactive, print_json, state
-from astiop.robot.backend import BackendError
-from astiop.ros2.validation import Checked
+
+if TYPE_CHECKING:
+    from astiop.ros2.validation import Checked
 
 
 def exec_command(
@@ -20,6 +23,7 @@ def exec_command(
     ),
 ) -> None:
     """Validate and run one `ros2` command (the subset the agent uses) on the robot."""
+    from astiop.robot.backend import BackendError  # numpy: for the commands that use it
     from astiop.robot.factory import make_robot_gateway
 
     st = state(ctx)
@@ -103,6 +107,8 @@ def estop(
         st.store.release_estop("estop --release")
         typer.echo("E-STOP released")
         return
+    from astiop.robot.backend import BackendError
+
     try:
         gateway = make_robot_gateway(st.settings, st.store, who="estop", discover=False)
     except BackendError as exc:

@@ -7,9 +7,6 @@ import math
 import typer
 
 from astiop.cli.common import fail, print_json, state
-from astiop.sim.geometry import path_length
-from astiop.sim.simulator import GoalError, Simulator
-from astiop.store import LocationError
 
 app = typer.Typer(
     help="Run the warehouse simulator headless: benchmark it, drive it.", no_args_is_help=True
@@ -63,6 +60,8 @@ def _parse_target(ctx: typer.Context, text: str) -> tuple[float, float, float, s
             fail(f"'{text}': coordinates are X,Y or X,Y,THETA_DEG")
         theta = math.radians(parts[2]) if len(parts) == 3 else 0.0
         return parts[0], parts[1], theta, text
+    from astiop.store import LocationError
+
     try:
         loc = state(ctx).store.require_location(text)
     except LocationError as exc:
@@ -79,6 +78,9 @@ def goto(
     as_json: bool = typer.Option(False, "--json"),
 ) -> None:
     """Drive from the dock (or --from) to TARGET in fast mode and report how it went."""
+    from astiop.sim.geometry import path_length
+    from astiop.sim.simulator import GoalError, Simulator
+
     x, y, theta, label = _parse_target(ctx, target)
     try:
         if start:
