@@ -318,3 +318,18 @@ async def test_when_nothing_ran_the_answer_is_the_reason_and_the_model_is_not_as
     result = await make_agent(llm, store).turn("show me the current path")
     assert result.commands[0].executed and result.commands[0].error
     assert "failed: no message on /plan" in result.answer and len(llm.requests) == 1
+
+
+def test_the_interpretation_prompt_names_each_command_by_its_topic_or_service():
+    from astiop.agent.prompts import interpret_user
+
+    results = (
+        "ros2 topic echo /battery_status --once\n  battery 85.0 %, 27.12 V\n"
+        "ros2 service call /goto_position astiop_msgs/srv/GotoPosition \"{name: 'dock'}\"\n"
+        "  accepted: navigating to dock, 6.0 m along the path\n"
+        "ros2 service call /goto_position x: goal succeeded"  # a waited outcome: kept whole
+    )
+    text = interpret_user("battery?", results)
+    assert "/battery_status\n  battery 85.0 %" in text and "/goto_position\n  accepted" in text
+    assert "ros2 service call /goto_position x: goal succeeded" in text
+    assert "ros2 topic echo" not in text

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from functools import cache, lru_cache
 
 import yaml
@@ -66,8 +67,22 @@ def interpret_prompt() -> str:
     return template("agent_interpret")
 
 
+_SOURCE = re.compile(r"\s(/[A-Za-z0-9_/]+)")
+
+
+def labelled(results: str) -> str:
+    """Each command line above its indented result cut to the topic or service it used: ~10
+    prompt tokens fewer per command (0.1 s of a turn on one core)."""
+    lines = results.split("\n")
+    for i, line in enumerate(lines[:-1]):
+        found = _SOURCE.search(line) if line.startswith("ros2 ") else None
+        if found and lines[i + 1].startswith("  "):
+            lines[i] = found.group(1)
+    return "\n".join(lines)
+
+
 def interpret_user(request: str, results: str) -> str:
-    return f"Operator request: {request}\n\nResults:\n{results}\n\nAnswer:"
+    return f"Operator request: {request}\n\nResults:\n{labelled(results)}\n\nAnswer:"
 
 
 @lru_cache(maxsize=1)
