@@ -118,7 +118,9 @@ def chat(
             typer.echo(f"↳ {follow}")
         if result.error:
             typer.echo(f"astiop: {result.error}", err=True)
-    Ending.at_once = True  # all is written and closed
+    # all is written and closed; a ROS 2 node still leaves the robot's graph at exit (rclpy's
+    # shutdown, run at exit): without it the robot would list this process for a while
+    Ending.at_once = settings.robot.backend != "ros2"
     if result.error:
         raise typer.Exit(1)
 
