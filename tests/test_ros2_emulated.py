@@ -147,6 +147,19 @@ def test_estop_sends_zero_twist_even_without_a_stop_service(monkeypatch):
         assert not any(c[:2] == ["action", "send_goal"] for c in ros2_calls(folder))
 
 
+def test_astiop_estop_ends_after_its_zero_twists_and_stop_went_out(monkeypatch, tmp_path):
+    with emulated_robot(latency_ms=300) as folder:
+        on_path(monkeypatch, folder)
+        cli = [sys.executable, "-m", "astiop", "--db", str(tmp_path / "e.db"), "--robot", "ros2"]
+        out = subprocess.run([*cli, "estop"], capture_output=True, text=True, timeout=60)
+        ended = time.monotonic()
+        assert out.returncode == 0 and "E-STOP engaged and latched" in out.stdout, out.stderr
+        # the `topic pub -t 10` ran to its end before the command said so (not left behind)
+        zeros = [t for t in cmd_vel_received(folder) if t["twist"]["linear"]["x"] == 0.0]
+        assert len(zeros) == 10 and zeros[-1]["mono"] < ended, zeros
+        assert any(c[:3] == ["service", "call", "/stop"] for c in ros2_calls(folder))
+
+
 def test_teleop_holds_one_publisher_and_lapses(robot):
     gateway = make_gateway()
     try:

@@ -38,3 +38,15 @@ class EventLog:
         if fault and fault != self._fault:
             self.add("fault", "error", fault)
         self._fault = fault
+
+
+def settled_estop(
+    events: EventLog, seq: int, said: set[str], threads: list[threading.Thread], timeout_s: float
+) -> list[str]:
+    """Wait for the threads an E-STOP started (each ends by its own timeout, `timeout_s`: a
+    moment more to hear how), then the E-STOP failures said since event `seq` that the E-STOP
+    did not already return (`said`)."""
+    deadline = time.monotonic() + timeout_s + 1.0
+    for thread in threads:
+        thread.join(max(0.0, deadline - time.monotonic()))
+    return [e.message for e in events.since(seq) if e.kind == "estop" and e.message not in said]

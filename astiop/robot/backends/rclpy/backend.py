@@ -9,7 +9,7 @@ import time
 from typing import Any
 
 from astiop.robot.backend import BackendError, RobotBackend
-from astiop.robot.backends.event_log import EventLog
+from astiop.robot.backends.event_log import EventLog, settled_estop
 from astiop.robot.backends.live_catalog import describe_graph
 from astiop.robot.backends.rclpy.graph import read_lists, read_params
 from astiop.robot.backends.rclpy.node import ros_process
@@ -443,15 +443,9 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
             self.events.add("estop", "error", f"E-STOP /stop: {exc}")
 
     def settle_estop(self, timeout_s: float) -> list[str]:
-        # each thread ends by its own timeout (timeout_s): a moment more to hear how it ended
-        deadline = time.monotonic() + timeout_s + 1.0
-        for thread in self._estop_threads:
-            thread.join(max(0.0, deadline - time.monotonic()))
-        return [
-            e.message
-            for e in self.events.since(self._estop_seq)
-            if e.kind == "estop" and e.message not in self._estop_said
-        ]
+        return settled_estop(
+            self.events, self._estop_seq, self._estop_said, self._estop_threads, timeout_s
+        )
 
     def release_estop(self) -> None:
         self._e_stopped = False
