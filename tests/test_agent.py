@@ -333,3 +333,5 @@ def test_the_interpretation_prompt_names_each_command_by_its_topic_or_service():
     assert "/battery_status\n  battery 85.0 %" in text and "/goto_position\n  accepted" in text
     assert "ros2 service call /goto_position x: goal succeeded" in text
     assert "ros2 topic echo" not in text
+    param = "ros2 param get /astibot_base max_linear_speed\n  Double value is: 0.8"
+    assert param in interpret_user("how fast may it go?", param), "the parameter stays named"
