@@ -189,6 +189,9 @@ class EmbeddedServer:
         if not ready:
             raise EmbeddedModelError("the embedded model did not start in time")
         line = proc.stdout.readline(64 * 1024)
+        if not line:  # it ended: reaped, for its exit code
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                proc.wait(0.5)
         try:
             reply = json.loads(line)
         except ValueError:
@@ -222,8 +225,10 @@ class EmbeddedServer:
                     if client.get(url).status_code == 200:
                         return
                 except httpx.HTTPError:
-                    if self._proc.poll() is not None:
-                        break
+                    if (code := self._proc.poll()) is not None:
+                        raise EmbeddedModelError(
+                            f"the embedded model's process exited with code {code} before it served"
+                        ) from None
                 time.sleep(0.01)
         raise EmbeddedModelError("the embedded model did not become ready in time")
 
@@ -238,6 +243,8 @@ class EmbeddedServer:
             return
         with contextlib.suppress(OSError):
             proc.stdin.close()  # it ends when its stdin does
+        with contextlib.suppress(OSError):
+            proc.stdout.close()
         if wait_s <= 0:
             return
         try:

@@ -40,13 +40,38 @@ class EventLog:
         self._fault = fault
 
 
-def settled_estop(
-    events: EventLog, seq: int, said: set[str], threads: list[threading.Thread], timeout_s: float
-) -> list[str]:
-    """Wait for the threads an E-STOP started (each ends by its own timeout, `timeout_s`: a
-    moment more to hear how), then the E-STOP failures said since event `seq` that the E-STOP
-    did not already return (`said`)."""
-    deadline = time.monotonic() + timeout_s + 1.0
-    for thread in threads:
-        thread.join(max(0.0, deadline - time.monotonic()))
-    return [e.message for e in events.since(seq) if e.kind == "estop" and e.message not in said]
+class EstopWork:
+    """What the last E-STOP started in the background, and the failures it said, for a process
+    about to exit (`RobotBackend.settle_estop`)."""
+
+    def __init__(self, events: EventLog):
+        self.events = events
+        self._seq = 0
+        self._said: set[str] = set()
+        self._threads: list[threading.Thread] = []
+
+    def begin(self) -> None:
+        self._seq, self._said, self._threads = self.events.seq, set(), []
+
+    def start(self, target, name: str) -> None:
+        thread = threading.Thread(target=target, name=name, daemon=True)
+        thread.start()
+        self._threads.append(thread)
+
+    def said(self, failures: list[str]) -> None:
+        """The failures the E-STOP returns, logged; `settle` says only what came after."""
+        for f in failures:
+            self.events.add("estop", "error", f)
+        self._said = set(failures)
+
+    def settle(self, timeout_s: float) -> list[str]:
+        """Wait for the threads (each ends by its own timeout, `timeout_s`: a moment more to hear
+        how), then the E-STOP failures said since it began that it did not already return."""
+        deadline = time.monotonic() + timeout_s + 1.0
+        for thread in self._threads:
+            thread.join(max(0.0, deadline - time.monotonic()))
+        return [
+            e.message
+            for e in self.events.since(self._seq)
+            if e.kind == "estop" and e.message not in self._said
+        ]

@@ -9,7 +9,7 @@ import time
 from typing import Any
 
 from astiop.robot.backend import BackendError, RobotBackend
-from astiop.robot.backends.event_log import EventLog, settled_estop
+from astiop.robot.backends.event_log import EstopWork, EventLog
 from astiop.robot.backends.live_catalog import describe_graph
 from astiop.robot.backends.rclpy.graph import read_lists, read_params
 from astiop.robot.backends.rclpy.node import ros_process
@@ -75,11 +75,9 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         self._hold: dict | None = None
         self._hold_until = 0.0
         self._silent = False
-        self._estop_threads: list[threading.Thread] = []
-        self._estop_seq = 0
-        self._estop_said: set[str] = set()
         self.t0 = time.monotonic()
         self.events = EventLog(self.t0)
+        self._estop = EstopWork(self.events)
         self._lists = self._discover(discovery_s)
         self._params: list[tuple[str, str]] = []  # read by start(), or when a command needs them
         self._params_of: dict[str, list[tuple[str, str]]] = {}  # node -> its parameters
@@ -176,6 +174,8 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
             self._watch_state_topics_locked()
 
     def _watch_state_topics_locked(self) -> None:
+        if self._closed.is_set():
+            return  # a refresh that outlived close(): no watch the process would keep
         for name in self.catalog.state_topics() + ["/map"]:
             spec = self.catalog.topics.get(name)
             if spec is None or name in self._watches or (name == "/map" and self._map_watch):
@@ -218,9 +218,10 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         self._closed.set()
         self._poke.set()
         self._holding.set()
-        for w in [*self._watches.values(), *([self._map_watch] if self._map_watch else [])]:
-            w.close()
-        self._watches.clear()
+        with self._watch_lock:  # none is being made meanwhile
+            for w in [*self._watches.values(), *([self._map_watch] if self._map_watch else [])]:
+                w.close()
+            self._watches, self._map_watch = {}, None
         for handle in list(self._goals):
             handle.cancel_goal_async()  # as ros2cli's send_goal does on the way out
         if self._cmd_vel is not None:
@@ -378,30 +379,19 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         with self._lock:
             self._hold = None
         failures: list[str] = []
-        self._estop_seq = self.events.seq
-        self._estop_threads = []
+        self._estop.begin()
         try:
             if "/cmd_vel" in self.catalog.topics:
                 self._send_twist(zero_twist())  # matched already in a running console
-            self._estop_threads.append(self._background(self._zero_burst, "estop-zero"))
+            self._estop.start(self._zero_burst, "estop-zero")
         except Exception as exc:  # noqa: BLE001 - /stop and the cancels go out regardless
             failures.append(f"{exc}: no zero Twist was sent")
         spec = self.catalog.services.get("/stop")  # a young process may not have seen it yet
         stop_type = spec.type if spec else "std_srvs/srv/Trigger"
-        self._estop_threads.append(
-            self._background(lambda: self._call_stop(stop_type), "estop-stop")
-        )
+        self._estop.start(lambda: self._call_stop(stop_type), "estop-stop")
         self._cancel_goals()
-        for f in failures:
-            self.events.add("estop", "error", f)
-        self._estop_said = set(failures)  # settle_estop says only what came after
+        self._estop.said(failures)
         return failures
-
-    @staticmethod
-    def _background(target, name: str) -> threading.Thread:
-        thread = threading.Thread(target=target, name=name, daemon=True)
-        thread.start()
-        return thread
 
     def _zero_burst(self) -> None:
         """A zero Twist at 10 Hz for a second from when the base listens (in a new process,
@@ -443,9 +433,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
             self.events.add("estop", "error", f"E-STOP /stop: {exc}")
 
     def settle_estop(self, timeout_s: float) -> list[str]:
-        return settled_estop(
-            self.events, self._estop_seq, self._estop_said, self._estop_threads, timeout_s
-        )
+        return self._estop.settle(timeout_s)
 
     def release_estop(self) -> None:
         self._e_stopped = False

@@ -64,7 +64,8 @@ class RosProcess:
         self._polled: tuple[Any, ...] = ()  # the watches the poller takes for
         self._poller: threading.Thread | None = None
         self._clients: dict[tuple[str, Any], Any] = {}  # (service, type) -> its client
-        self._clients_lock = threading.Lock()  # the clients, and the polled watches
+        self._clients_lock = threading.Lock()
+        self._poll_lock = threading.Lock()  # the polled watches and the poller
         self._halt = threading.Event()
         self._thread = threading.Thread(target=self._spin, name="rclpy", daemon=True)
         self._thread.start()
@@ -83,18 +84,23 @@ class RosProcess:
 
     def poll(self, watch: Any) -> None:
         """Have the poller take `watch`'s messages (a TopicWatch made with polled=True)."""
-        with self._clients_lock:
+        with self._poll_lock:
             self._polled = (*self._polled, watch)
             if self._poller is None:
                 self._poller = threading.Thread(target=self._poll, name="rclpy-poll", daemon=True)
                 self._poller.start()
 
     def unpoll(self, watch: Any) -> None:
-        with self._clients_lock:
+        with self._poll_lock:
             self._polled = tuple(w for w in self._polled if w is not watch)
 
     def _poll(self) -> None:
+        """Ends when nothing is left to poll (poll() starts it again)."""
         while not self._halt.wait(POLL_S):
+            with self._poll_lock:
+                if not self._polled:
+                    self._poller = None
+                    return
             for w in self._polled:
                 try:
                     w.take()
@@ -135,8 +141,8 @@ class RosProcess:
         with contextlib.suppress(Exception):
             self.executor.wake()
         self._thread.join(2.0)
-        if self._poller is not None:
-            self._poller.join(2.0)
+        if (poller := self._poller) is not None:
+            poller.join(2.0)
         with contextlib.suppress(Exception):
             self.executor.shutdown(timeout_sec=1.0)
             self.node.destroy_node()

@@ -13,7 +13,7 @@ import time
 from typing import Any
 
 from astiop.robot.backend import BackendError, RobotBackend
-from astiop.robot.backends.event_log import EventLog, settled_estop
+from astiop.robot.backends.event_log import EstopWork, EventLog
 from astiop.robot.backends.ros2cli import process as ros2_process
 from astiop.robot.backends.ros2cli.graph import GraphReader
 from astiop.robot.backends.ros2cli.motion import STDIN_DISTROS, ArmedStop, TeleopPublisher
@@ -47,6 +47,7 @@ from astiop.ros2.validation import Checked
 ARRAYS = {"/scan", "/plan", "/obstacles"}  # echoed in full: ros2 truncates at 128 items
 MOVING = {"navigating", "docking", "blocked"}
 GRAPH_REFRESH_S = 30.0
+ZERO_PUB_S = 1.0  # an E-STOP's ten zero Twists at 10 Hz: a second on top of the start-up
 
 
 class Ros2Backend(RobotBackend):
@@ -76,9 +77,7 @@ class Ros2Backend(RobotBackend):
         self._armed: ArmedStop | None = None
         self.t0 = time.monotonic()
         self.events = EventLog(self.t0)
-        self._estop_seq = 0
-        self._estop_said: set[str] = set()
-        self._estop_threads: list[threading.Thread] = []  # what the last E-STOP started
+        self._estop = EstopWork(self.events)
         self._closed = threading.Event()
         self._graph = GraphReader(self._run, timeout_s)
         self.catalog = self._graph.read()
@@ -215,18 +214,15 @@ class Ros2Backend(RobotBackend):
         if self._teleop is not None:
             self._teleop.halt()
         failures: list[str] = []
-        self._estop_seq, self._estop_threads = self.events.seq, []
+        self._estop.begin()
         cmd_vel = self.catalog.topics.get("/cmd_vel")
         fired = self._armed.fire() if self._armed is not None else None
         if fired is not None:
-            reap = threading.Thread(target=self._reap, args=(fired, "zero /cmd_vel"), daemon=True)
-            reap.start()
-            self._estop_threads.append(reap)
+            self._estop.start(lambda: self._reap(fired, "zero /cmd_vel"), "estop zero /cmd_vel")
         elif cmd_vel is not None:
             argv = ["topic", "pub", "-r", "10", "-t", "10", cmd_vel.name, cmd_vel.type]
             zero = stamped_now(cmd_vel.type, velocity_message(cmd_vel.type, zero_twist()))
-            # ten at 10 Hz: a second of publishing on top of the start-up
-            self._background([*argv, flow_yaml(zero)], "zero /cmd_vel", extra_s=1.0)
+            self._background([*argv, flow_yaml(zero)], "zero /cmd_vel", extra_s=ZERO_PUB_S)
         else:
             failures.append("the robot has no /cmd_vel: no zero Twist was sent")
         if "/stop" in self.catalog.services:
@@ -235,17 +231,13 @@ class Ros2Backend(RobotBackend):
         else:
             failures.append("the robot has no /stop service: goals were canceled directly")
         self._cancel_goals()
-        for f in failures:
-            self.events.add("estop", "error", f)
-        self._estop_said = set(failures)  # settle_estop says only what came after
+        self._estop.said(failures)
         return failures
 
     def settle_estop(self, timeout_s: float) -> list[str]:
         """The zero Twist's `ros2 topic pub` and the `/stop` call run to their end (a real `ros2`
         takes 0.7-3 s to start): an `astiop estop` must not say it stopped the robot before."""
-        return settled_estop(
-            self.events, self._estop_seq, self._estop_said, self._estop_threads, timeout_s + 1.0
-        )
+        return self._estop.settle(timeout_s + ZERO_PUB_S)
 
     def _background(self, argv: list[str], what: str, extra_s: float = 0.0) -> None:
         def go() -> None:
@@ -254,9 +246,7 @@ class Ros2Backend(RobotBackend):
                 why = run.err.strip()[-200:] or ("timed out" if run.stopped else "failed")
                 self.events.add("estop", "error", f"E-STOP {what}: {why}")
 
-        thread = threading.Thread(target=go, name=f"estop {what}", daemon=True)
-        thread.start()
-        self._estop_threads.append(thread)
+        self._estop.start(go, f"estop {what}")
 
     def _reap(self, proc, what: str) -> None:
         try:
