@@ -175,3 +175,23 @@ def test_chat_ends_at_once_with_its_answer_and_its_record(tmp_path):
     # in a process that goes on (as here), the same command returns
     again = astiop(*argv)
     assert again.returncode == 0 and "battery" in json.loads(again.stdout)["answer"]
+
+
+def test_astiop_chat_starts_a_model_process_first_and_ends_it_when_unused(tmp_path, monkeypatch):
+    from astiop.agent import model_spawn
+
+    started = []
+
+    def popen():
+        started.append(real())
+        return started[-1]
+
+    real = model_spawn._popen
+    monkeypatch.setattr(model_spawn, "_popen", popen)
+    out = astiop("--db", str(tmp_path / "a.db"), "models", "--json")
+    assert out.returncode == 0 and started == []  # only chat serves a model
+    # the global options' values are not taken for the command
+    out = astiop("--db", str(tmp_path / "a.db"), "--model", "rules", "chat", "battery?", "--json")
+    assert out.returncode == 0, out.stderr
+    [ahead] = started
+    assert ahead.wait(10) == 0  # not wanted by the rules planner: it ended with the command

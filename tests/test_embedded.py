@@ -176,3 +176,16 @@ def test_a_file_that_is_no_model_is_a_one_line_error(tmp_path):
     with pytest.raises(EmbeddedModelError, match="the embedded model") as info:
         EmbeddedServer(bad, threads=1, n_ctx=512, prompt_cache=False).start(ready_timeout_s=30)
     assert "\n" not in str(info.value)
+
+
+def test_a_model_process_started_ahead_is_the_one_that_serves():
+    from astiop.agent import model_spawn
+
+    model_spawn.start_ahead()  # as `astiop chat` does before its imports
+    ahead = model_spawn._ahead
+    s = EmbeddedServer(smollm2_path(), threads=1, n_ctx=512, prompt_cache=False).start()
+    try:
+        assert s._proc is ahead and health(s.port) == 200
+    finally:
+        s.stop()
+    assert ahead.poll() is not None

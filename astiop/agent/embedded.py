@@ -10,12 +10,12 @@ import os
 import select
 import socket
 import subprocess
-import sys
 import threading
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from astiop.agent import model_spawn
 from astiop.agent.prompt_cache import (
     SLOTS,
     PromptCache,
@@ -92,6 +92,7 @@ class EmbeddedServer:
         self.port: int | None = None
         self._proc: subprocess.Popen | None = None
         self._saving = False  # the child was told where the prompt cache lives
+        self._hashing: threading.Thread | None = None
         self._ready = False
         self._t0 = 0.0
         self._lock = threading.Lock()
@@ -133,15 +134,8 @@ class EmbeddedServer:
             "slot_save_path": str(self.cache_dir) + os.sep if self._saving else None,
         }
         self._t0 = time.perf_counter()
-        # -I: nothing from the environment or the working folder shadows what it imports
         try:
-            self._proc = subprocess.Popen(
-                [sys.executable, "-I", str(Path(__file__).with_name("model_process.py"))],
-                stdin=subprocess.PIPE,
-                stdout=subprocess.PIPE,
-                stderr=subprocess.DEVNULL,  # a crash is reported by its exit code
-                start_new_session=True,  # Ctrl-C reaches this process, which stops the model
-            )
+            self._proc = model_spawn.spawn()  # the one `astiop chat` started ahead, if any
         except OSError as exc:
             raise EmbeddedModelError(f"cannot start the embedded model: {exc}") from None
         try:
@@ -149,6 +143,11 @@ class EmbeddedServer:
             self._proc.stdin.flush()
         except OSError:
             pass  # it ended: start() says how
+        if self._saving:  # the cache's files hashed while the model loads (hashlib frees the GIL)
+            self._hashing = threading.Thread(
+                target=check_files, args=(self.cache_dir,), daemon=True
+            )
+            self._hashing.start()
 
     def start(self, ready_timeout_s: float = 60.0) -> EmbeddedServer:
         with self._lock:
@@ -158,10 +157,9 @@ class EmbeddedServer:
                 self._spawn()
             deadline = time.monotonic() + ready_timeout_s
             try:
-                # hashed while the model loads: the model file (once), the cache's files
-                model_sha = self._model_sha256() if self._saving else None
-                if model_sha is not None:
-                    check_files(self.cache_dir)
+                model_sha = self._model_sha256() if self._saving else None  # hashed once
+                if self._hashing is not None:
+                    self._hashing.join()
                 runs = self._handshake(deadline)
                 self._wait_ready(deadline)
             except EmbeddedModelError:

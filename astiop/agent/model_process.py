@@ -2,14 +2,16 @@
 `embedded.EmbeddedServer` as `python -I model_process.py`.
 
 In a process of its own, loading the model (~0.4 s, with the GIL held throughout) overlaps the
-parent's imports and the robot's start, and never freezes the console. It reads its settings as
-one JSON line on stdin and answers one JSON line on stdout: what it runs (the prompt cache's
+parent's imports and the robot's start, and never freezes the console. It imports xllamacpp,
+then reads its settings as one JSON line on stdin (so a process started ahead, `model_spawn`,
+has it loaded by then) and answers one JSON line on stdout: what it runs (the prompt cache's
 build is named for it) or why it cannot start. It serves until its stdin closes, that is until
 the parent stops it or ends, however it ends. Only the standard library and xllamacpp here.
 """
 
 from __future__ import annotations
 
+import functools
 import importlib.metadata
 import json
 import os
@@ -57,6 +59,7 @@ def serve(config: dict):
     return server, runs
 
 
+@functools.cache
 def _version() -> str:
     try:
         return importlib.metadata.version("xllamacpp")
@@ -70,8 +73,17 @@ def _reply(data: dict) -> None:
 
 
 def main() -> None:
+    try:  # before the settings: a process started ahead (`model_spawn`) loads it meanwhile
+        import xllamacpp  # noqa: F401
+
+        _version()
+    except Exception:
+        pass  # `serve` says why
+    line = sys.stdin.readline(64 * 1024)
+    if not line:
+        return  # started ahead, and not wanted
     try:
-        config = json.loads(sys.stdin.readline(64 * 1024))
+        config = json.loads(line)
         server, runs = serve(config)
     except Exception as exc:  # the parent says it in one line
         _reply({"error": f"{type(exc).__name__}: {exc}"})

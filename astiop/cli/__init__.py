@@ -1,111 +1,39 @@
-"""The `astiop` command: the console by default, and headless subcommands."""
+"""The `astiop` executable: `run()`, light to import (the typer app is in `commands`)."""
 
 from __future__ import annotations
 
 import os
 import sys
-from pathlib import Path
 
-import typer
-
-from astiop import __version__
-from astiop.cli import (
-    agent,
-    bench,
-    config_cmd,
-    console,
-    doctor,
-    emulate,
-    export,
-    locations,
-    mcp,
-    record,
-    robot,
-    ros2,
-    sim,
-)
-from astiop.cli.common import CliState, Ending
-
-app = typer.Typer(
-    help="Operator console for the LLM-controlled ASTIbot. With no command, opens the console.",
-    add_completion=False,
-    pretty_exceptions_enable=False,
-    context_settings={"help_option_names": ["-h", "--help"]},
-)
-app.add_typer(config_cmd.app, name="config")
-app.add_typer(locations.app, name="locations")
-app.add_typer(sim.app, name="sim")
-app.add_typer(bench.app, name="bench")
-app.add_typer(export.app, name="export")
-app.add_typer(ros2.app, name="ros2")
-app.command("exec")(robot.exec_command)
-app.command("estop")(robot.estop)
-app.command("chat")(agent.chat)
-app.command("models")(agent.models)
-app.command("emulate-ros2")(emulate.emulate_ros2)
-app.command("doctor")(doctor.doctor)
-app.command("record")(record.record)
-app.command("replay")(console.replay)
-app.command("mcp")(mcp.mcp)
+_VALUED = ("--db", "--model", "--robot", "--ros2-transport")  # global options with a value
 
 
-def _version(value: bool) -> None:
-    if value:
-        typer.echo(f"astiop {__version__}")
-        raise typer.Exit()
-
-
-@app.callback(invoke_without_command=True)
-def main(
-    ctx: typer.Context,
-    db: Path | None = typer.Option(
-        None, "--db", help="SQLite database (default: XDG data dir; env ASTIOP_DB)."
-    ),
-    model: str | None = typer.Option(
-        None,
-        "--model",
-        help="LLM spec: embedded, rules, ollama:NAME, openai:NAME@URL, dmr:NAME, gguf:PATH.",
-    ),
-    robot: str | None = typer.Option(None, "--robot", help="Robot backend: sim (default) or ros2."),
-    ros2_transport: str | None = typer.Option(
-        None,
-        "--ros2-transport",
-        help="How --robot ros2 talks: rclpy (in process), cli (the ros2 executable) or auto "
-        "(rclpy where it and the robot's message packages import).",
-    ),
-    record: str | None = typer.Option(
-        None,
-        "--record",
-        metavar="[FILE]",
-        help="Console: record the session as MCAP, to FILE or <data dir>/sessions/<time>.mcap.",
-    ),
-    version: bool = typer.Option(
-        False, "--version", callback=_version, is_eager=True, help="Print the version and exit."
-    ),
-) -> None:
-    overrides: dict = {}
-    if db is not None:
-        overrides["db"] = str(db)
-    if model is not None:
-        overrides.setdefault("llm", {})["model"] = model
-    if robot is not None:
-        overrides.setdefault("robot", {})["backend"] = robot
-    if ros2_transport is not None:
-        overrides.setdefault("robot", {})["ros2_transport"] = ros2_transport
-    ctx.obj = CliState(overrides=overrides)
-    if ctx.invoked_subcommand is None:
-        from astiop.cli.console import run_console
-
-        run_console(ctx.obj, record)
+def _command(args: list[str]) -> str | None:
+    """The subcommand named, read before any option is parsed."""
+    after_option = False
+    for token in args:
+        if after_option:
+            after_option = False
+        elif token in _VALUED:
+            after_option = True
+        elif not token.startswith("-"):
+            return token
+    return None
 
 
 def run(argv: list[str] | None = None) -> None:
     """The `astiop` executable (argv None: this process is it), or a command run in a process
     that goes on (tests): the app, with one line (never a traceback) for any failure."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    from astiop.agent import model_spawn
+
+    if _command(args) == "chat":  # the embedded model's process starts before our imports
+        model_spawn.start_ahead()
+    from astiop.cli.commands import app
+    from astiop.cli.common import Ending
     from astiop.cli.errors import guarded, usage
 
     Ending.at_once = False
-    args = list(sys.argv[1:] if argv is None else argv)
     for i, token in enumerate(args):  # `--record` with no FILE: the default file
         if token == "--record" and (i + 1 == len(args) or args[i + 1].startswith("-")):
             args[i] = "--record="
@@ -128,4 +56,7 @@ def run(argv: list[str] | None = None) -> None:
             os._exit(code)
         sys.exit(code)
 
-    guarded(main)
+    try:
+        guarded(main)
+    finally:
+        model_spawn.discard_ahead()

@@ -1,0 +1,97 @@
+"""The `astiop` command's typer app: the console by default, and headless subcommands."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from astiop import __version__
+from astiop.cli import (
+    agent,
+    bench,
+    config_cmd,
+    console,
+    doctor,
+    emulate,
+    export,
+    locations,
+    mcp,
+    record,
+    robot,
+    ros2,
+    sim,
+)
+from astiop.cli.common import CliState
+
+app = typer.Typer(
+    help="Operator console for the LLM-controlled ASTIbot. With no command, opens the console.",
+    add_completion=False,
+    pretty_exceptions_enable=False,
+    context_settings={"help_option_names": ["-h", "--help"]},
+)
+app.add_typer(config_cmd.app, name="config")
+app.add_typer(locations.app, name="locations")
+app.add_typer(sim.app, name="sim")
+app.add_typer(bench.app, name="bench")
+app.add_typer(export.app, name="export")
+app.add_typer(ros2.app, name="ros2")
+app.command("exec")(robot.exec_command)
+app.command("estop")(robot.estop)
+app.command("chat")(agent.chat)
+app.command("models")(agent.models)
+app.command("emulate-ros2")(emulate.emulate_ros2)
+app.command("doctor")(doctor.doctor)
+app.command("record")(record.record)
+app.command("replay")(console.replay)
+app.command("mcp")(mcp.mcp)
+
+
+def _version(value: bool) -> None:
+    if value:
+        typer.echo(f"astiop {__version__}")
+        raise typer.Exit()
+
+
+@app.callback(invoke_without_command=True)
+def main(
+    ctx: typer.Context,
+    db: Path | None = typer.Option(
+        None, "--db", help="SQLite database (default: XDG data dir; env ASTIOP_DB)."
+    ),
+    model: str | None = typer.Option(
+        None,
+        "--model",
+        help="LLM spec: embedded, rules, ollama:NAME, openai:NAME@URL, dmr:NAME, gguf:PATH.",
+    ),
+    robot: str | None = typer.Option(None, "--robot", help="Robot backend: sim (default) or ros2."),
+    ros2_transport: str | None = typer.Option(
+        None,
+        "--ros2-transport",
+        help="How --robot ros2 talks: rclpy (in process), cli (the ros2 executable) or auto "
+        "(rclpy where it and the robot's message packages import).",
+    ),
+    record: str | None = typer.Option(
+        None,
+        "--record",
+        metavar="[FILE]",
+        help="Console: record the session as MCAP, to FILE or <data dir>/sessions/<time>.mcap.",
+    ),
+    version: bool = typer.Option(
+        False, "--version", callback=_version, is_eager=True, help="Print the version and exit."
+    ),
+) -> None:
+    overrides: dict = {}
+    if db is not None:
+        overrides["db"] = str(db)
+    if model is not None:
+        overrides.setdefault("llm", {})["model"] = model
+    if robot is not None:
+        overrides.setdefault("robot", {})["backend"] = robot
+    if ros2_transport is not None:
+        overrides.setdefault("robot", {})["ros2_transport"] = ros2_transport
+    ctx.obj = CliState(overrides=overrides)
+    if ctx.invoked_subcommand is None:
+        from astiop.cli.console import run_console
+
+        run_console(ctx.obj, record)
