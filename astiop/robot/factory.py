@@ -63,8 +63,8 @@ def make_robot_gateway(
     who: str = "astiop",
     discover: bool = True,
 ) -> RobotGateway:
-    """`discover=False`: do not wait for a ROS 2 robot's discovery to settle (an E-STOP sends
-    as soon as the base is found)."""
+    """`discover=False`: neither wait for a ROS 2 robot's discovery to settle nor read its whole
+    graph first (an E-STOP sends as soon as the base is found)."""
     if settings.robot.backend == "ros2":
         transport, why = ros2_transport(settings)
         if transport == "rclpy":
@@ -76,7 +76,9 @@ def make_robot_gateway(
         else:
             from astiop.robot.backends.ros2cli.backend import Ros2Backend
 
-            backend = Ros2Backend(settings.robot.ros2_executable, settings.robot.ros2_timeout_s)
+            backend = Ros2Backend(
+                settings.robot.ros2_executable, settings.robot.ros2_timeout_s, discover=discover
+            )
             backend.label = f"ros2 via the CLI: {why}"
         return RobotGateway(
             backend,

@@ -32,6 +32,7 @@ from astiop.robot.state import (
     grid_from_message,
     live_topic_stats,
 )
+from astiop.ros2.catalog import astibot_catalog
 from astiop.ros2.grammar import current_distro
 from astiop.ros2.interfaces import decode_bytes
 from astiop.ros2.printing import echo_text
@@ -50,11 +51,31 @@ GRAPH_REFRESH_S = 30.0
 ZERO_PUB_S = 1.0  # an E-STOP's ten zero Twists at 10 Hz: a second on top of the start-up
 
 
+NOTHING_LISTED: dict[str, list[tuple[str, str]]] = {
+    v: [] for v in ("topic", "service", "action", "node", "param")
+}
+
+
+def _zero_burst(type_: str) -> list[str]:
+    """`ros2 topic pub` of ten zero Twists at 10 Hz, a TwistStamped stamped now."""
+    zero = stamped_now(type_, velocity_message(type_, zero_twist()))
+    return ["topic", "pub", "-r", "10", "-t", "10", "/cmd_vel", type_, flow_yaml(zero)]
+
+
 class Ros2Backend(RobotBackend):
     name = "ros2"
     capabilities = frozenset({"commands", "teleop"})
 
-    def __init__(self, executable: str = "ros2", timeout_s: float = 10.0, *, stream: bool = True):
+    def __init__(
+        self,
+        executable: str = "ros2",
+        timeout_s: float = 10.0,
+        *,
+        stream: bool = True,
+        discover: bool = True,
+    ):
+        """`discover=False` (an E-STOP from a new process): the graph is not read first, five
+        `ros2` calls that take 7 s with the real CLI when its daemon has just started."""
         path = shutil.which(executable)
         if path is None:
             raise BackendError(
@@ -80,7 +101,8 @@ class Ros2Backend(RobotBackend):
         self._estop = EstopWork(self.events)
         self._closed = threading.Event()
         self._graph = GraphReader(self._run, timeout_s)
-        self.catalog = self._graph.read()
+        self.discovered = discover
+        self.catalog = self._graph.read() if discover else self._graph.describe(NOTHING_LISTED)
         self.refreshed_at = time.monotonic()
 
     # -- the live graph -----------------------------------------------------------------
@@ -220,14 +242,15 @@ class Ros2Backend(RobotBackend):
         if fired is not None:
             self._estop.start(lambda: self._reap(fired, "zero /cmd_vel"), "estop zero /cmd_vel")
         elif cmd_vel is not None:
-            argv = ["topic", "pub", "-r", "10", "-t", "10", cmd_vel.name, cmd_vel.type]
-            zero = stamped_now(cmd_vel.type, velocity_message(cmd_vel.type, zero_twist()))
-            self._background([*argv, flow_yaml(zero)], "zero /cmd_vel", extra_s=ZERO_PUB_S)
+            self._background(lambda: _zero_burst(cmd_vel.type), "zero /cmd_vel", ZERO_PUB_S)
+        elif not self.discovered:  # its type asked of the robot first, in the same thread
+            self._background(self._typed_zero_burst, "zero /cmd_vel", ZERO_PUB_S)
         else:
             failures.append("the robot has no /cmd_vel: no zero Twist was sent")
-        if "/stop" in self.catalog.services:
-            argv = ["service", "call", "/stop", self.catalog.services["/stop"].type, "{}"]
-            self._background(argv, "/stop")
+        stop = self.catalog.services.get("/stop")
+        if stop is not None or not self.discovered:  # not read yet: the catalog's type
+            stop_type = stop.type if stop else astibot_catalog().services["/stop"].type
+            self._background(lambda: ["service", "call", "/stop", stop_type, "{}"], "/stop")
         else:
             failures.append("the robot has no /stop service: goals were canceled directly")
         self._cancel_goals()
@@ -237,11 +260,37 @@ class Ros2Backend(RobotBackend):
     def settle_estop(self, timeout_s: float) -> list[str]:
         """The zero Twist's `ros2 topic pub` and the `/stop` call run to their end (a real `ros2`
         takes 0.7-3 s to start): an `astiop estop` must not say it stopped the robot before."""
-        return self._estop.settle(timeout_s + ZERO_PUB_S)
+        lookup_s = 0.0 if self.discovered else timeout_s  # `ros2 topic type` first
+        return self._estop.settle(lookup_s + timeout_s + ZERO_PUB_S)
 
-    def _background(self, argv: list[str], what: str, extra_s: float = 0.0) -> None:
+    def _typed_zero_burst(self) -> list[str]:
+        """The zero burst in /cmd_vel's type as the robot's graph has it (ros2topic's `topic
+        type` prints it: ros2topic/verb/type.py, humble and jazzy). Asked again until found: a
+        daemon it had to start has discovered nothing yet (its first answer spins 0.5 s on its
+        own: ros2cli/node/direct.py), and the next call asks that daemon."""
+        deadline = time.monotonic() + self.timeout_s
+        while True:
+            left = deadline - time.monotonic()
+            run = self._run(["topic", "type", "/cmd_vel"], max(left, 0.1))
+            types = run.out.split() if run.returncode == 0 else []
+            if types:
+                return _zero_burst(types[0])
+            if run.stopped or time.monotonic() + 0.1 >= deadline:
+                raise BackendError(
+                    f"no /cmd_vel on the robot's graph in {self.timeout_s:g} s: "
+                    "no zero Twist was sent"
+                )
+            time.sleep(0.1)
+
+    def _background(self, argv_of, what: str, extra_s: float = 0.0) -> None:
+        """`ros2 ARGV` in a thread of the E-STOP's; `argv_of()` may itself ask the robot."""
+
         def go() -> None:
-            run = self._run(argv, self.timeout_s + extra_s)
+            try:
+                run = self._run(argv_of(), self.timeout_s + extra_s)
+            except BackendError as exc:
+                self.events.add("estop", "error", f"E-STOP {what}: {exc}")
+                return
             if run.returncode != 0 or run.stopped:
                 why = run.err.strip()[-200:] or ("timed out" if run.stopped else "failed")
                 self.events.add("estop", "error", f"E-STOP {what}: {why}")
