@@ -7,6 +7,8 @@ import socket
 import subprocess
 import sys
 
+import pytest
+
 from tests.cli_runner import run_cli
 
 
@@ -188,10 +190,35 @@ def test_astiop_chat_starts_a_model_process_first_and_ends_it_when_unused(tmp_pa
 
     real = model_spawn._popen
     monkeypatch.setattr(model_spawn, "_popen", popen)
-    out = astiop("--db", str(tmp_path / "a.db"), "models", "--json")
-    assert out.returncode == 0 and started == []  # only chat serves a model
-    # the global options' values are not taken for the command
-    out = astiop("--db", str(tmp_path / "a.db"), "--model", "rules", "chat", "battery?", "--json")
+    db = ("--db", str(tmp_path / "a.db"))
+    assert astiop(*db, "models", "--json").returncode == 0
+    assert astiop(*db, "--model", "rules", "chat", "battery?", "--json").returncode == 0
+    assert started == []  # only a chat that may serve a local model starts one
+    monkeypatch.setenv("ASTIOP_MODEL", "rules")  # the settings, read later, name another model
+    out = astiop(*db, "chat", "battery?", "--json")
     assert out.returncode == 0, out.stderr
     [ahead] = started
-    assert ahead.wait(10) == 0  # not wanted by the rules planner: it ended with the command
+    assert ahead.returncode is not None  # not wanted: ended and reaped with the command
+
+
+@pytest.mark.parametrize(
+    "argv, command, model",
+    [
+        (["chat", "where is it?"], "chat", None),
+        (["--db", "chat", "models"], "models", None),  # "chat" is --db's value
+        (["--model=rules", "--robot", "sim", "chat", "x"], "chat", "rules"),
+        (["--record", "chat", "x"], "x", None),  # as typer reads it: a recording named chat
+        (["--record", "--db", "d", "chat", "-m", "ollama:q", "x"], "chat", "ollama:q"),
+        (["--version"], None, None),
+    ],
+)
+def test_the_command_and_model_are_read_before_typer_parses_them(argv, command, model):
+    import typer
+
+    from astiop.cli import _VALUED, _command_and_model
+    from astiop.cli.commands import app
+
+    params = typer.main.get_command(app).params  # typer's own click: options known by their kind
+    valued = {o for p in params if p.param_type_name == "option" and not p.is_flag for o in p.opts}
+    assert valued == set(_VALUED)  # a new global option with a value is known here too
+    assert _command_and_model(argv) == (command, model)

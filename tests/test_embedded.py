@@ -183,7 +183,10 @@ def test_a_model_process_started_ahead_is_the_one_that_serves():
 
     model_spawn.start_ahead()  # as `astiop chat` does before its imports
     ahead = model_spawn._ahead
-    s = EmbeddedServer(smollm2_path(), threads=1, n_ctx=512, prompt_cache=False).start()
+    try:
+        s = EmbeddedServer(smollm2_path(), threads=1, n_ctx=512, prompt_cache=False).start()
+    finally:
+        model_spawn.discard_ahead()  # none left for another test in this worker
     try:
         assert s._proc is ahead and health(s.port) == 200
     finally:

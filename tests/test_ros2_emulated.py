@@ -163,6 +163,20 @@ def test_astiop_estop_ends_after_its_zero_twists_and_stop_went_out(monkeypatch, 
         assert sorted(calls[:2]) == first and calls[2] == ["topic", "pub", "-r"], calls
 
 
+def test_astiop_estop_on_a_robot_without_stop_says_so_and_still_zeroes_cmd_vel(
+    monkeypatch, tmp_path
+):
+    with emulated_robot(missing=("/stop",), daemon_stopped=True) as folder:
+        on_path(monkeypatch, folder)
+        monkeypatch.setenv("ASTIOP_ROBOT__ROS2_TIMEOUT_S", "2")
+        cli = [sys.executable, "-m", "astiop", "--db", str(tmp_path / "e.db"), "--robot", "ros2"]
+        out = subprocess.run([*cli, "estop"], capture_output=True, text=True, timeout=60)
+        assert out.returncode == 1 and "latched (with failures above)" in out.stdout
+        assert "E-STOP /stop: nothing answered it in 2 s" in out.stderr, out.stderr
+        zeros = [t for t in cmd_vel_received(folder) if t["twist"]["linear"]["x"] == 0.0]
+        assert len(zeros) == 10, zeros
+
+
 def test_teleop_holds_one_publisher_and_lapses(robot):
     gateway = make_gateway()
     try:

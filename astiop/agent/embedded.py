@@ -63,6 +63,12 @@ def free_port() -> int:
 FIT_ABOVE_BYTES = 1 << 30  # llama.cpp fits a model to memory by loading it once more
 
 
+def _hash_files(directory: Path) -> None:
+    """`check_files` in a thread of its own: a failure means only that a restore hashes."""
+    with contextlib.suppress(Exception):
+        check_files(directory)
+
+
 class EmbeddedServer:
     """The model's server in a process of its own (`model_process`): `launch()` starts it and
     returns at once, `start()` waits until it serves; it stops with `stop()`, or when this
@@ -145,7 +151,7 @@ class EmbeddedServer:
             pass  # it ended: start() says how
         if self._saving:  # the cache's files hashed while the model loads (hashlib frees the GIL)
             self._hashing = threading.Thread(
-                target=check_files, args=(self.cache_dir,), daemon=True
+                target=_hash_files, args=(self.cache_dir,), daemon=True
             )
             self._hashing.start()
 
@@ -236,7 +242,7 @@ class EmbeddedServer:
             self._stop_locked(wait_s)
 
     def _stop_locked(self, wait_s: float = 5.0) -> None:
-        proc, self._proc, self._ready = self._proc, None, False
+        proc, self._proc, self._ready, self._hashing = self._proc, None, False, None
         if proc is None:
             return
         with contextlib.suppress(OSError):

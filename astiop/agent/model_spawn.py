@@ -49,11 +49,15 @@ def spawn() -> subprocess.Popen:
 
 
 def discard_ahead() -> None:
-    """Ends a process started ahead and not used (the command served no embedded model)."""
+    """Ends a process started ahead and not used (the command served no embedded model): it
+    holds nothing yet, so it is killed and reaped rather than left to finish its imports."""
     global _ahead
     proc, _ahead = _ahead, None
     if proc is not None:
+        with contextlib.suppress(OSError):
+            proc.kill()
         _close(proc)
+        proc.wait()
 
 
 def _close(proc: subprocess.Popen) -> None:

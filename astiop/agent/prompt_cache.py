@@ -96,12 +96,17 @@ def intact(path: Path, digest: str) -> bool:
 def check_files(directory: Path) -> None:
     """Hashes the files the indexes name, e.g. while the model loads, so a restore need not."""
     for index in Path(directory).glob("slots-*.json"):
-        data = _read_json(index)
-        for raw in data.get("slots", []) if isinstance(data, dict) else []:
+        for raw in _slots_of(_read_json(index)):
             name = raw.get("file") if isinstance(raw, dict) else None
             if isinstance(name, str) and _STATE_FILE.match(name):
                 with contextlib.suppress(OSError):
                     intact(Path(directory) / name, name[17:49])
+
+
+def _slots_of(index: Any) -> list:
+    """An index's list of slots, or none when it is not one."""
+    slots = index.get("slots") if isinstance(index, dict) else None
+    return slots if isinstance(slots, list) else []
 
 
 def _read_json(path: Path) -> Any:
@@ -352,9 +357,7 @@ class PromptCache:
 
     # -- the index -----------------------------------------------------------------------
     def _read_index(self) -> list[SlotFile | None]:
-        data = _read_json(self.index_path)
-        raw = data.get("slots") if isinstance(data, dict) else None
-        raw = raw if isinstance(raw, list) else []
+        raw = _slots_of(_read_json(self.index_path))
         entries = [SlotFile.parse(r, self.build) for r in raw[: len(self._slots)]]
         return entries + [None] * (len(self._slots) - len(entries))
 
@@ -375,8 +378,7 @@ class PromptCache:
                     continue
             except OSError:
                 continue
-            data = _read_json(index)
-            for raw in data.get("slots", []) if isinstance(data, dict) else []:
+            for raw in _slots_of(_read_json(index)):
                 if isinstance(raw, dict) and isinstance(raw.get("file"), str):
                     named.add(raw["file"])
         for path in self.directory.glob("*.bin"):

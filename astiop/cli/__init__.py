@@ -5,20 +5,35 @@ from __future__ import annotations
 import os
 import sys
 
-_VALUED = ("--db", "--model", "--robot", "--ros2-transport")  # global options with a value
+# the app's global options that take a value; `--record` takes one only if one follows (run())
+_VALUED = ("--db", "--model", "--robot", "--ros2-transport", "--record")
+SERVED_ELSEWHERE = ("rules", "ollama:", "openai:", "dmr:")  # specs with no model process here
 
 
-def _command(args: list[str]) -> str | None:
-    """The subcommand named, read before any option is parsed."""
-    after_option = False
-    for token in args:
-        if after_option:
-            after_option = False
-        elif token in _VALUED:
-            after_option = True
-        elif not token.startswith("-"):
-            return token
-    return None
+def _command_and_model(args: list[str]) -> tuple[str | None, str | None]:
+    """The subcommand and the last --model/-m value, read before typer parses the options."""
+    command = model = None
+    i = 0
+    while i < len(args):
+        token = args[i]
+        name, eq, value = token.partition("=")
+        following = args[i + 1] if i + 1 < len(args) else None
+        takes = not eq and (name in _VALUED or name == "-m")
+        if name == "--record" and (following is None or following.startswith("-")):
+            takes = False
+        if name in ("--model", "-m"):
+            model = value if eq else following
+        elif command is None and not token.startswith("-"):
+            command = token
+        i += 2 if takes else 1
+    return command, model
+
+
+def _serves_a_local_model(args: list[str]) -> bool:
+    """`astiop chat`, and no flag names a model served elsewhere (the settings may still: then
+    the process started ahead ends unused)."""
+    command, model = _command_and_model(args)
+    return command == "chat" and not (model or "").strip().startswith(SERVED_ELSEWHERE)
 
 
 def run(argv: list[str] | None = None) -> None:
@@ -27,7 +42,7 @@ def run(argv: list[str] | None = None) -> None:
     args = list(sys.argv[1:] if argv is None else argv)
     from astiop.agent import model_spawn
 
-    if _command(args) == "chat":  # the embedded model's process starts before our imports
+    if _serves_a_local_model(args):  # the model's process starts before our imports
         model_spawn.start_ahead()
     from astiop.cli.commands import app
     from astiop.cli.common import Ending

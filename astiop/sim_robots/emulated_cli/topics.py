@@ -37,8 +37,7 @@ class TopicVerbs:
 
     def _topic_type(self, call: Call, a: dict) -> int:
         t = self.topics().get(a["topic_name"])
-        if t is None:
-            call.err("Unknown topic '{}'\n".format(a["topic_name"]))
+        if t is None:  # nothing printed (ros2topic/verb/type.py)
             return 1
         call.out(t + "\n")
         return 0

@@ -56,6 +56,11 @@ NOTHING_LISTED: dict[str, list[tuple[str, str]]] = {
 }
 
 
+def _waited_for_service(out: str) -> bool:
+    """`ros2 service call` found no server of its type (ros2service/verb/call.py waits)."""
+    return "waiting for service" in out and "response:" not in out
+
+
 def _zero_burst(type_: str) -> list[str]:
     """`ros2 topic pub` of ten zero Twists at 10 Hz, a TwistStamped stamped now."""
     zero = stamped_now(type_, velocity_message(type_, zero_twist()))
@@ -74,8 +79,8 @@ class Ros2Backend(RobotBackend):
         stream: bool = True,
         discover: bool = True,
     ):
-        """`discover=False` (an E-STOP from a new process): the graph is not read first, five
-        `ros2` calls that take 7 s with the real CLI when its daemon has just started."""
+        """`discover=False` (an E-STOP from a new process): the graph is not read first (a
+        `daemon start`, then up to three rounds of five list calls: 10-25 s with the real CLI)."""
         path = shutil.which(executable)
         if path is None:
             raise BackendError(
@@ -115,7 +120,7 @@ class Ros2Backend(RobotBackend):
             self.catalog = self._graph.describe(self._graph.lists())
         except BackendError:
             return False
-        self.refreshed_at = time.monotonic()
+        self.refreshed_at, self.discovered = time.monotonic(), True
         return True
 
     def _refresh_loop(self) -> None:
@@ -260,7 +265,7 @@ class Ros2Backend(RobotBackend):
     def settle_estop(self, timeout_s: float) -> list[str]:
         """The zero Twist's `ros2 topic pub` and the `/stop` call run to their end (a real `ros2`
         takes 0.7-3 s to start): an `astiop estop` must not say it stopped the robot before."""
-        lookup_s = 0.0 if self.discovered else timeout_s  # `ros2 topic type` first
+        lookup_s = 0.0 if self.discovered else self.timeout_s  # `ros2 topic type` first
         return self._estop.settle(lookup_s + timeout_s + ZERO_PUB_S)
 
     def _typed_zero_burst(self) -> list[str]:
@@ -275,6 +280,8 @@ class Ros2Backend(RobotBackend):
             types = run.out.split() if run.returncode == 0 else []
             if types:
                 return _zero_burst(types[0])
+            if run.err.strip():  # not "not found" (that prints nothing): ros2 itself failed
+                raise BackendError(f"ros2 topic type: {run.err.strip()[-200:]}")
             if run.stopped or time.monotonic() + 0.1 >= deadline:
                 raise BackendError(
                     f"no /cmd_vel on the robot's graph in {self.timeout_s:g} s: "
@@ -293,6 +300,8 @@ class Ros2Backend(RobotBackend):
                 return
             if run.returncode != 0 or run.stopped:
                 why = run.err.strip()[-200:] or ("timed out" if run.stopped else "failed")
+                if _waited_for_service(run.out):
+                    why = f"nothing answered it in {self.timeout_s + extra_s:g} s"
                 self.events.add("estop", "error", f"E-STOP {what}: {why}")
 
         self._estop.start(go, f"estop {what}")
@@ -336,8 +345,7 @@ class Ros2Backend(RobotBackend):
             rate = cmd.options.get("rate", 1.0)
             timeout = max(timeout, (cmd.options["times"] - 1) / rate + timeout)
         run = self._run(argv, timeout)
-        waited = "waiting for service" in run.out and "response:" not in run.out
-        if cmd.key == ("service", "call") and waited:
+        if cmd.key == ("service", "call") and _waited_for_service(run.out):
             raise BackendError(f"service {cmd.name} is not available (waited {timeout:g} s)")
         if run.stopped:
             raise BackendError(f"ros2 {' '.join(argv[:3])} timed out after {timeout:g} s")
