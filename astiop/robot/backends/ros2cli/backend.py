@@ -280,11 +280,11 @@ class Ros2Backend(RobotBackend):
             types = run.out.split() if run.returncode == 0 else []
             if types:
                 return _zero_burst(types[0])
-            if run.err.strip():  # not "not found" (that prints nothing): ros2 itself failed
-                raise BackendError(f"ros2 topic type: {run.err.strip()[-200:]}")
             if run.stopped or time.monotonic() + 0.1 >= deadline:
+                # stderr is no failure by itself (rcl warns there), but it may say why
+                said = f" ({run.err.strip()[-200:]})" if run.err.strip() else ""
                 raise BackendError(
-                    f"no /cmd_vel on the robot's graph in {self.timeout_s:g} s: "
+                    f"no /cmd_vel on the robot's graph in {self.timeout_s:g} s{said}: "
                     "no zero Twist was sent"
                 )
             time.sleep(0.1)
