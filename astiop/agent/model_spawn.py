@@ -2,9 +2,9 @@
 
 `astiop chat` starts one first thing, before its own imports (~0.3 s of them): the child's Python
 and xllamacpp load meanwhile, then it waits for its settings on stdin. `spawn()` hands that
-process over when the model is wanted; unused, it ends when its stdin closes (`discard_ahead`,
-or this process ending however it ends). Only the standard library here: it is imported before
-anything else.
+process over when the model is wanted. Unused, it is killed (`discard_ahead`), or it ends when
+its stdin closes, with this process, however that ends. Only the standard library here: it is
+imported before anything else.
 """
 
 from __future__ import annotations
