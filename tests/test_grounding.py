@@ -250,3 +250,27 @@ def test_the_parts_of_a_sentence_are_held_one_by_one():
     for answer, (kept, dropped) in cases.items():
         text, reason, n = grounding.grounded(answer, facts, [goto])
         assert (text, reason, n) == (kept, None, dropped), answer
+
+
+def test_a_goal_no_result_speaks_of_is_not_said():
+    """Seen on the console: a bare /stop answered "The robot stopped, and its goal was
+    stopped." with no goal anywhere; a goal the robot reported stays."""
+    stop = Execution(
+        "ros2 service call /stop std_srvs/srv/Trigger",
+        True,
+        kind="actuate",
+        executed=True,
+        values={"success": True, "message": "stopped"},
+    )
+    facts = grounding.facts_of("stop the goal", [stop])  # the request's words are no report
+    text, reason, n = grounding.grounded(
+        "The robot stopped, and its goal was stopped.", facts, [stop]
+    )
+    assert (text, reason, n) == ("The robot stopped.", None, 1)
+    canceled = Execution(
+        stop.command, True, kind="actuate", executed=True,
+        values={"success": True, "message": "stopped; goal canceled"},
+    )  # fmt: skip
+    facts = grounding.facts_of("stop", [canceled])
+    answer = "The robot stopped, and its goal was canceled."
+    assert grounding.grounded(answer, facts, [canceled]) == (answer, None, 0)

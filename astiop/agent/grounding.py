@@ -93,6 +93,7 @@ OBSTACLE_KINDS = re.compile(
     r"wall of boxes|crate|animal)s?\b",
     re.I,
 )
+_GOAL = re.compile(r"\bgoals?\b", re.I)
 _PLACE_IN_COMMAND = re.compile(r"name:\s*'?([\w-]+)")
 _PLACE_IN_REPORT = re.compile(
     r"(?:goal accepted|arrived|still going to|stopped short of):? ([\w-]+)"
@@ -139,6 +140,7 @@ class Facts:
         default_factory=set
     )  # named places in this turn's commands and reports
     text: str = ""  # everything the results and the commands say, lower case (for names)
+    said: str = ""  # the same without the request: what the robot and astiop said
     quantities: list[tuple[float, str]] = field(default_factory=list)  # (value, unit) reported
     directions: set[str] | None = None  # the directions astiop commanded, when it published
 
@@ -210,6 +212,7 @@ def facts_of(
             facts.measured += extra
         _words(ex, facts)
     facts.text = " ".join(t for t in texts if t).lower()
+    facts.said = " ".join(t for t in texts[1:] if t).lower()
     if outcome == "succeeded":
         facts.words |= {"arrived", "succeeded", "stopped"}
     elif outcome:
@@ -448,12 +451,15 @@ def sentences(answer: str) -> list[str]:
 
 
 def unnamed(sentence: str, facts: Facts) -> str | None:
-    """A name in the sentence that nothing in this turn's results or commands mentions."""
+    """A name in the sentence that nothing in this turn's results or commands mentions, or a
+    goal when none of them speaks of one ("its goal was stopped" after a bare /stop)."""
     for m in _NAMED.finditer(sentence):
         name = m.group().lower()
         spaced = re.sub(r"(?<=[a-z0-9])(?=[A-Z])", " ", m.group()).lower()
         if name not in facts.text and spaced not in facts.text:
             return f"it names '{m.group()}', which no result mentions"
+    if (m := _GOAL.search(sentence)) and not _GOAL.search(facts.said):
+        return f"it speaks of a {m.group().lower()}, which no result mentions"
     return None
 
 
