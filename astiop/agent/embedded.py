@@ -245,10 +245,7 @@ class EmbeddedServer:
         proc, self._proc, self._ready, self._hashing = self._proc, None, False, None
         if proc is None:
             return
-        with contextlib.suppress(OSError):
-            proc.stdin.close()  # it ends when its stdin does
-        with contextlib.suppress(OSError):
-            proc.stdout.close()
+        model_spawn.close_pipes(proc)
         if wait_s <= 0:
             return
         try:

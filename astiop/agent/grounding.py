@@ -140,7 +140,7 @@ class Facts:
         default_factory=set
     )  # named places in this turn's commands and reports
     text: str = ""  # everything the results and the commands say, lower case (for names)
-    said: str = ""  # the same without the request: what the robot and astiop said
+    goal_said: bool = False  # a result or command (not the request) speaks of a goal
     quantities: list[tuple[float, str]] = field(default_factory=list)  # (value, unit) reported
     directions: set[str] | None = None  # the directions astiop commanded, when it published
 
@@ -212,7 +212,7 @@ def facts_of(
             facts.measured += extra
         _words(ex, facts)
     facts.text = " ".join(t for t in texts if t).lower()
-    facts.said = " ".join(t for t in texts[1:] if t).lower()
+    facts.goal_said = any(_GOAL.search(t) for t in texts[1:] if t)
     if outcome == "succeeded":
         facts.words |= {"arrived", "succeeded", "stopped"}
     elif outcome:
@@ -458,7 +458,7 @@ def unnamed(sentence: str, facts: Facts) -> str | None:
         spaced = re.sub(r"(?<=[a-z0-9])(?=[A-Z])", " ", m.group()).lower()
         if name not in facts.text and spaced not in facts.text:
             return f"it names '{m.group()}', which no result mentions"
-    if (m := _GOAL.search(sentence)) and not _GOAL.search(facts.said):
+    if (m := _GOAL.search(sentence)) and not facts.goal_said:
         return f"it speaks of a {m.group().lower()}, which no result mentions"
     return None
 

@@ -44,7 +44,7 @@ def spawn() -> subprocess.Popen:
     if proc is not None and proc.poll() is None:
         return proc
     if proc is not None:
-        _close(proc)
+        close_pipes(proc)
     return _popen()
 
 
@@ -56,11 +56,12 @@ def discard_ahead() -> None:
     if proc is not None:
         with contextlib.suppress(OSError):
             proc.kill()
-        _close(proc)
+        close_pipes(proc)
         proc.wait()
 
 
-def _close(proc: subprocess.Popen) -> None:
+def close_pipes(proc: subprocess.Popen) -> None:
+    """Its stdin and stdout closed: a model process ends when its stdin does."""
     for pipe in (proc.stdin, proc.stdout):
         with contextlib.suppress(OSError):
-            pipe.close()  # it ends when its stdin does
+            pipe.close()

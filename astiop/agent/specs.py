@@ -119,7 +119,7 @@ class LLMEndpoint:
             from astiop.agent.llm import OllamaClient, OpenAIClient  # after `launch`: httpx
 
             spec = self.spec
-            if spec.kind in ("embedded", "gguf"):
+            if self.local:
                 self.launch()
                 self._client = self.server.start().client(self.timeout_s)
             elif spec.kind == "ollama":

@@ -5,13 +5,23 @@ from __future__ import annotations
 import os
 import sys
 
-# the app's global options that take a value; `--record` takes one only if one follows (run())
+# the app's global options that take a value (a bare `--record` is made `--record=` first)
 _VALUED = ("--db", "--model", "--robot", "--ros2-transport", "--record")
 SERVED_ELSEWHERE = ("rules", "ollama:", "openai:", "dmr:")  # specs with no model process here
 
 
+def _with_record_file(args: list[str]) -> list[str]:
+    """`--record` with no FILE after it: `--record=`, the default file."""
+    return [
+        "--record=" if t == "--record" and (i + 1 == len(args) or args[i + 1].startswith("-"))
+        else t
+        for i, t in enumerate(args)
+    ]  # fmt: skip
+
+
 def _command_and_model(args: list[str]) -> tuple[str | None, str | None]:
     """The subcommand and the last --model/-m value, read before typer parses the options."""
+    args = _with_record_file(args)
     command = model = None
     i = 0
     while i < len(args):
@@ -19,8 +29,6 @@ def _command_and_model(args: list[str]) -> tuple[str | None, str | None]:
         name, eq, value = token.partition("=")
         following = args[i + 1] if i + 1 < len(args) else None
         takes = not eq and (name in _VALUED or name == "-m")
-        if name == "--record" and (following is None or following.startswith("-")):
-            takes = False
         if name in ("--model", "-m"):
             model = value if eq else following
         elif command is None and not token.startswith("-"):
@@ -39,7 +47,7 @@ def _serves_a_local_model(args: list[str]) -> bool:
 def run(argv: list[str] | None = None) -> None:
     """The `astiop` executable (argv None: this process is it), or a command run in a process
     that goes on (tests): the app, with one line (never a traceback) for any failure."""
-    args = list(sys.argv[1:] if argv is None else argv)
+    args = _with_record_file(list(sys.argv[1:] if argv is None else argv))
     from astiop.agent import model_spawn
 
     if _serves_a_local_model(args):  # the model's process starts before our imports
@@ -49,9 +57,6 @@ def run(argv: list[str] | None = None) -> None:
     from astiop.cli.errors import guarded, usage
 
     Ending.at_once = False
-    for i, token in enumerate(args):  # `--record` with no FILE: the default file
-        if token == "--record" and (i + 1 == len(args) or args[i + 1].startswith("-")):
-            args[i] = "--record="
 
     def main() -> None:
         try:

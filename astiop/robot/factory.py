@@ -68,11 +68,9 @@ def make_robot_gateway(
     if settings.robot.backend == "ros2":
         transport, why = ros2_transport(settings)
         if transport == "rclpy":
-            from astiop.robot.backends.rclpy.backend import DISCOVERY_S, RclpyBackend
+            from astiop.robot.backends.rclpy.backend import RclpyBackend
 
-            backend = RclpyBackend(
-                settings.robot.ros2_timeout_s, discovery_s=DISCOVERY_S if discover else 0.0
-            )
+            backend = RclpyBackend(settings.robot.ros2_timeout_s, discover=discover)
         else:
             from astiop.robot.backends.ros2cli.backend import Ros2Backend
 

@@ -18,6 +18,19 @@ from astiop.ros2.render import STAMPED
 
 # verb -> sorted (name, type) pairs; "node": (name, ""); "param": ("/node name", type)
 GraphLists = dict[str, list[tuple[str, str]]]
+VERBS = ("topic", "service", "action", "node", "param")  # what a graph read lists
+
+
+def nothing_listed() -> GraphLists:
+    """The lists of a graph not read (yet)."""
+    return {verb: [] for verb in VERBS}
+
+
+def stop_service_type(catalog: Catalog) -> str:
+    """/stop's type as the graph has it, else as the robot's catalog names it (a process that
+    did not read the graph: an E-STOP)."""
+    spec = catalog.services.get("/stop") or astibot_catalog().services["/stop"]
+    return spec.type
 
 
 def _params(known: Catalog, listed: list[tuple[str, str]]) -> dict[tuple[str, str], ParamSpec]:

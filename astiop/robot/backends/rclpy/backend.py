@@ -10,7 +10,7 @@ from typing import Any
 
 from astiop.robot.backend import BackendError, RobotBackend
 from astiop.robot.backends.event_log import EstopWork, EventLog
-from astiop.robot.backends.live_catalog import describe_graph
+from astiop.robot.backends.live_catalog import describe_graph, stop_service_type
 from astiop.robot.backends.rclpy.graph import read_lists, read_params
 from astiop.robot.backends.rclpy.node import ros_process
 from astiop.robot.backends.rclpy.verbs import RclpyVerbs
@@ -53,7 +53,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
     capabilities = frozenset({"commands", "teleop"})
     refresh_every_s = 0.0  # the graph is this process's discovery cache: reading it is free
 
-    def __init__(self, timeout_s: float = 10.0, *, discovery_s: float = DISCOVERY_S):
+    def __init__(self, timeout_s: float = 10.0, *, discover: bool = True):
         self.timeout_s = timeout_s
         self.distro = current_distro()
         self.proc = ros_process()
@@ -78,7 +78,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         self.t0 = time.monotonic()
         self.events = EventLog(self.t0)
         self._estop = EstopWork(self.events)
-        self._lists = self._discover(discovery_s)
+        self._lists = self._discover(DISCOVERY_S if discover else 0.0)
         self._params: list[tuple[str, str]] = []  # read by start(), or when a command needs them
         self._params_of: dict[str, list[tuple[str, str]]] = {}  # node -> its parameters
         self.catalog: Catalog = describe_graph({**self._lists, "param": self._params})
@@ -386,8 +386,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
             self._estop.start(self._zero_burst, "estop-zero")
         except Exception as exc:  # noqa: BLE001 - /stop and the cancels go out regardless
             failures.append(f"{exc}: no zero Twist was sent")
-        spec = self.catalog.services.get("/stop")  # a young process may not have seen it yet
-        stop_type = spec.type if spec else "std_srvs/srv/Trigger"
+        stop_type = stop_service_type(self.catalog)  # a young process may not have seen it yet
         self._estop.start(lambda: self._call_stop(stop_type), "estop-stop")
         self._cancel_goals()
         self._estop.said(failures)

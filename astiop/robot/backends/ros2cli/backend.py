@@ -14,9 +14,16 @@ from typing import Any
 
 from astiop.robot.backend import BackendError, RobotBackend
 from astiop.robot.backends.event_log import EstopWork, EventLog
+from astiop.robot.backends.live_catalog import nothing_listed, stop_service_type
 from astiop.robot.backends.ros2cli import process as ros2_process
 from astiop.robot.backends.ros2cli.graph import GraphReader
-from astiop.robot.backends.ros2cli.motion import STDIN_DISTROS, ArmedStop, TeleopPublisher
+from astiop.robot.backends.ros2cli.motion import (
+    ESTOP_BURST,
+    STDIN_DISTROS,
+    ArmedStop,
+    TeleopPublisher,
+    zero_message,
+)
 from astiop.robot.backends.ros2cli.replies import (
     FAILED_WITH_STATUS_0,
     parse_response,
@@ -32,17 +39,10 @@ from astiop.robot.state import (
     grid_from_message,
     live_topic_stats,
 )
-from astiop.ros2.catalog import astibot_catalog
 from astiop.ros2.grammar import current_distro
 from astiop.ros2.interfaces import decode_bytes
 from astiop.ros2.printing import echo_text
-from astiop.ros2.render import (
-    flow_yaml,
-    sent_argv,
-    stamped_now,
-    velocity_message,
-    zero_twist,
-)
+from astiop.ros2.render import flow_yaml, sent_argv
 from astiop.ros2.validation import Checked
 
 ARRAYS = {"/scan", "/plan", "/obstacles"}  # echoed in full: ros2 truncates at 128 items
@@ -51,20 +51,14 @@ GRAPH_REFRESH_S = 30.0
 ZERO_PUB_S = 1.0  # an E-STOP's ten zero Twists at 10 Hz: a second on top of the start-up
 
 
-NOTHING_LISTED: dict[str, list[tuple[str, str]]] = {
-    v: [] for v in ("topic", "service", "action", "node", "param")
-}
-
-
 def _waited_for_service(out: str) -> bool:
     """`ros2 service call` found no server of its type (ros2service/verb/call.py waits)."""
     return "waiting for service" in out and "response:" not in out
 
 
 def _zero_burst(type_: str) -> list[str]:
-    """`ros2 topic pub` of ten zero Twists at 10 Hz, a TwistStamped stamped now."""
-    zero = stamped_now(type_, velocity_message(type_, zero_twist()))
-    return ["topic", "pub", "-r", "10", "-t", "10", "/cmd_vel", type_, flow_yaml(zero)]
+    """`ros2 topic pub` of the E-STOP's zero Twists."""
+    return ["topic", "pub", *ESTOP_BURST, "/cmd_vel", type_, flow_yaml(zero_message(type_))]
 
 
 class Ros2Backend(RobotBackend):
@@ -107,7 +101,7 @@ class Ros2Backend(RobotBackend):
         self._closed = threading.Event()
         self._graph = GraphReader(self._run, timeout_s)
         self.discovered = discover
-        self.catalog = self._graph.read() if discover else self._graph.describe(NOTHING_LISTED)
+        self.catalog = self._graph.read() if discover else self._graph.describe(nothing_listed())
         self.refreshed_at = time.monotonic()
 
     # -- the live graph -----------------------------------------------------------------
@@ -252,9 +246,8 @@ class Ros2Backend(RobotBackend):
             self._background(self._typed_zero_burst, "zero /cmd_vel", ZERO_PUB_S)
         else:
             failures.append("the robot has no /cmd_vel: no zero Twist was sent")
-        stop = self.catalog.services.get("/stop")
-        if stop is not None or not self.discovered:  # not read yet: the catalog's type
-            stop_type = stop.type if stop else astibot_catalog().services["/stop"].type
+        if "/stop" in self.catalog.services or not self.discovered:
+            stop_type = stop_service_type(self.catalog)  # not read yet: the catalog's type
             self._background(lambda: ["service", "call", "/stop", stop_type, "{}"], "/stop")
         else:
             failures.append("the robot has no /stop service: goals were canceled directly")

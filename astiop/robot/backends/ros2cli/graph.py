@@ -8,7 +8,7 @@ from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 
 from astiop.robot.backend import BackendError
-from astiop.robot.backends.live_catalog import describe_graph
+from astiop.robot.backends.live_catalog import VERBS, describe_graph
 from astiop.ros2.catalog import Catalog
 
 _LISTED = re.compile(r"^(?P<name>/\S*)\s+\[(?P<type>[^\]]+)\]\s*$")
@@ -35,9 +35,8 @@ class GraphReader:
         return self.describe(lists)
 
     def lists(self) -> dict[str, list[tuple[str, str]]]:
-        verbs = ("topic", "service", "action", "node", "param")
-        with ThreadPoolExecutor(len(verbs)) as pool:  # each call pays ros2's start-up
-            return dict(zip(verbs, pool.map(self._listed, verbs)))
+        with ThreadPoolExecutor(len(VERBS)) as pool:  # each call pays ros2's start-up
+            return dict(zip(VERBS, pool.map(self._listed, VERBS)))
 
     def _listed(self, verb: str) -> list[tuple[str, str]]:
         if verb == "param":

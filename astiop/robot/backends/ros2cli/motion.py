@@ -26,6 +26,11 @@ TELEOP_RATE_HZ = 10
 ESTOP_BURST = ("-r", "10", "-t", "10")  # a zero Twist at 10 Hz for 1 s
 
 
+def zero_message(type_: str) -> dict:
+    """A zero Twist in /cmd_vel's type, a TwistStamped stamped now."""
+    return stamped_now(type_, velocity_message(type_, zero_twist()))
+
+
 class TeleopPublisher:
     def __init__(self, executable: str, topic: str, type_: str, lapse_s: float = 0.5):
         self.executable = executable
@@ -80,7 +85,7 @@ class TeleopPublisher:
                 if lapsed:
                     self._replace(None)
             if lapsed:  # motion lapsed: say so to the base too
-                zero = stamped_now(self.type, velocity_message(self.type, zero_twist()))
+                zero = zero_message(self.type)
                 argv = ["topic", "pub", "--once", self.topic, self.type, flow_yaml(zero)]
                 ros2_process.run(self.executable, argv, 10.0)
 
@@ -102,7 +107,7 @@ class ArmedStop:
     def __init__(self, executable: str, topic: str, type_: str):
         self.executable = executable
         self.argv = ["topic", "pub", "--stdin", *ESTOP_BURST, topic, type_]
-        self.zero = stamped_now(type_, velocity_message(type_, zero_twist()))
+        self.zero = zero_message(type_)
         self._proc: subprocess.Popen | None = None
 
     def arm(self) -> None:
