@@ -161,6 +161,10 @@ def test_astiop_estop_ends_after_its_zero_twists_and_stop_went_out(monkeypatch, 
         calls = [c[:3] for c in ros2_calls(folder)]
         first = [["service", "call", "/stop"], ["topic", "type", "/cmd_vel"]]
         assert sorted(calls[:2]) == first and calls[2] == ["topic", "pub", "-r"], calls
+        # again, the E-STOP latched already: each step goes out once, not once more for the latch
+        out = subprocess.run([*cli, "estop"], capture_output=True, text=True, timeout=60)
+        assert out.returncode == 0, out.stderr
+        assert sorted(c[:3] for c in ros2_calls(folder)[3:]) == sorted(calls), ros2_calls(folder)
 
 
 def test_astiop_estop_on_a_robot_without_stop_says_so_and_still_zeroes_cmd_vel(

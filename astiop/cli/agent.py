@@ -55,7 +55,7 @@ def chat(
     try:
         gateway = make_robot_gateway(settings, st.store)
     except BackendError as exc:
-        endpoint.close()
+        endpoint.close(wait_s=0)  # the model's process ends on its own
         fail(str(exc))
 
     def ask(checked) -> bool:

@@ -110,7 +110,9 @@ def estop(
     from astiop.robot.backend import BackendError
 
     try:
-        gateway = make_robot_gateway(st.settings, st.store, who="estop", discover=False)
+        gateway = make_robot_gateway(
+            st.settings, st.store, who="estop", discover=False, restore_latch=False
+        )
     except BackendError as exc:
         st.store.latch_estop("estop")  # no robot reached: still hold every other process
         fail(f"E-STOP latched in the database, but the robot was not reached: {exc}", code=1)

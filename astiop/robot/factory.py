@@ -32,12 +32,15 @@ def make_sim_gateway(
     realtime: bool = False,
     sim: Simulator | None = None,
     who: str = "astiop",
+    restore_latch: bool = True,
 ) -> RobotGateway:
     from astiop.robot.backends.sim.backend import SimBackend
 
     sim = sim or Simulator(seed=settings.sim.seed, v_max=settings.robot.max_linear_speed)
     backend = SimBackend(sim, store, realtime=realtime, speed=settings.sim.speed)
-    return RobotGateway(backend, make_safety(settings, store), store=store, who=who)
+    return RobotGateway(
+        backend, make_safety(settings, store), store=store, who=who, restore_latch=restore_latch
+    )
 
 
 def ros2_transport(settings: Settings) -> tuple[str, str]:
@@ -62,9 +65,10 @@ def make_robot_gateway(
     realtime: bool = False,
     who: str = "astiop",
     discover: bool = True,
+    restore_latch: bool = True,
 ) -> RobotGateway:
     """`discover=False`: neither wait for a ROS 2 robot's discovery to settle nor read its whole
-    graph first (an E-STOP sends as soon as the base is found)."""
+    graph first (an E-STOP sends as soon as the base is found); `restore_latch`: `RobotGateway`."""
     if settings.robot.backend == "ros2":
         transport, why = ros2_transport(settings)
         if transport == "rclpy":
@@ -84,5 +88,8 @@ def make_robot_gateway(
             settings.robot.ros2_timeout_s,
             store=store,
             who=who,
+            restore_latch=restore_latch,
         )
-    return make_sim_gateway(settings, store, realtime=realtime, who=who)
+    return make_sim_gateway(
+        settings, store, realtime=realtime, who=who, restore_latch=restore_latch
+    )

@@ -34,7 +34,10 @@ class RobotGateway:
         *,
         store: Store | None = None,
         who: str = "astiop",
+        restore_latch: bool = True,
     ):
+        """`restore_latch=False`: a latched E-STOP is not sent again here (`astiop estop`
+        sends it at once itself: twice, every step went out twice)."""
         self.backend = backend
         self.safety = safety or SafetyPolicy()
         self.timeout_s = timeout_s
@@ -45,7 +48,7 @@ class RobotGateway:
         self._journal_lock = threading.Lock()
         self._latch_lock = threading.Lock()
         self._latch_seen = self.latched
-        if self._latch_seen and not backend.e_stopped:
+        if restore_latch and self._latch_seen and not backend.e_stopped:
             backend.estop()  # a restart keeps the E-STOP until it is released
 
     @property

@@ -432,7 +432,9 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
             self.events.add("estop", "error", f"E-STOP /stop: {exc}")
 
     def settle_estop(self, timeout_s: float) -> list[str]:
-        return self._estop.settle(timeout_s)
+        # /stop waits for its server, then for the answer: each may take the timeout (the
+        # burst ends sooner: its timeout and a second)
+        return self._estop.settle(2 * timeout_s)
 
     def release_estop(self) -> None:
         self._e_stopped = False

@@ -42,7 +42,7 @@ from astiop.robot.state import (
 from astiop.ros2.grammar import current_distro
 from astiop.ros2.interfaces import decode_bytes
 from astiop.ros2.printing import echo_text
-from astiop.ros2.render import flow_yaml, sent_argv
+from astiop.ros2.render import STAMPED, flow_yaml, sent_argv
 from astiop.ros2.validation import Checked
 
 ARRAYS = {"/scan", "/plan", "/obstacles"}  # echoed in full: ros2 truncates at 128 items
@@ -271,8 +271,8 @@ class Ros2Backend(RobotBackend):
             left = deadline - time.monotonic()
             run = self._run(["topic", "type", "/cmd_vel"], max(left, 0.1))
             types = run.out.split() if run.returncode == 0 else []
-            if types:
-                return _zero_burst(types[0])
+            if types:  # a TwistStamped base's, when a Twist is listed too (as describe_graph)
+                return _zero_burst(STAMPED if STAMPED in types else types[0])
             if run.stopped or time.monotonic() + 0.1 >= deadline:
                 # stderr is no failure by itself (rcl warns there), but it may say why
                 said = f" ({run.err.strip()[-200:]})" if run.err.strip() else ""
