@@ -212,7 +212,8 @@ def facts_of(
             facts.measured += extra
         _words(ex, facts)
     facts.text = " ".join(t for t in texts if t).lower()
-    facts.goal_said = any(_GOAL.search(t) for t in texts[1:] if t)
+    # a job the robot accepted (a trip, a dock) is a goal, whether or not a result says so
+    facts.goal_said = "accepted" in facts.words or any(_GOAL.search(t) for t in texts[1:] if t)
     if outcome == "succeeded":
         facts.words |= {"arrived", "succeeded", "stopped"}
     elif outcome:
