@@ -122,15 +122,21 @@ class AstiopApp(App):
             )
 
     def on_unmount(self) -> None:
-        self._sampler.halt.set()
-        self._approvals.halt.set()
-        self._sampler.join(2.0)
-        if self._approvals.is_alive():
-            self._approvals.join(2.0)
-        if self.recorder is not None:
-            self.recorder.stop()
-        self.services.gateway.close()
-        self.services.endpoint.close()
+        # The robot and the model are let go whatever fails before (a recording that cannot
+        # be finished, a thread that will not stop).
+        try:
+            self._sampler.halt.set()
+            self._approvals.halt.set()
+            self._sampler.join(2.0)
+            if self._approvals.is_alive():
+                self._approvals.join(2.0)
+            if self.recorder is not None:
+                self.recorder.stop()
+        finally:
+            try:
+                self.services.gateway.close()
+            finally:
+                self.services.endpoint.close()
 
     def broadcast(self, message_factory) -> None:
         for screen in list(self.listeners):
@@ -152,6 +158,8 @@ class AstiopApp(App):
         for ev in msg.events:
             if ev.severity in ("warning", "error"):
                 self.notify(ev.message, severity=ev.severity, title=ev.kind, markup=False)
+            elif ev.kind == "robot":  # contact with the robot is back: said as loudly as lost
+                self.notify(ev.message, title=ev.kind, markup=False)
         if self.screen_stack and self.screen in self.listeners:  # none while shutting down
             self.screen.post_message(RobotStateSampled(msg.state, msg.events, msg.stats))
 
@@ -232,7 +240,9 @@ class AstiopApp(App):
         store = self.services.store
         path = path or default_path(store.path.parent)
         try:
-            self.recorder = SessionRecorder(path, self.services.gateway, store).start()
+            said = partial(self.notify, severity="error", title="recording", markup=False)
+            recorder = SessionRecorder(path, self.services.gateway, store, on_error=said)
+            self.recorder = recorder.start()
         except RecordingError as exc:
             self.notify(str(exc), severity="error", title="recording", markup=False)
             return
@@ -243,7 +253,12 @@ class AstiopApp(App):
         if self.recorder is None:
             return
         recorder, self.recorder = self.recorder, None
-        counts = recorder.stop()
+        try:
+            counts = recorder.stop()
+        except RecordingError as exc:  # the file could not be finished: said, not raised
+            self.refresh_subtitle()
+            self.notify(str(exc), severity="error", title="recording", markup=False)
+            return
         self.refresh_subtitle()
         self.notify(
             f"{recorder.path}: {sum(counts.values())} messages",
@@ -302,7 +317,8 @@ class AstiopApp(App):
         self.call_from_thread(self.notify, text, severity="error", title="E-STOP", markup=False)
 
     def action_release_estop(self) -> None:
-        if not self.services.gateway.e_stopped:
+        robot_holds = self.robot_state.state_word == "e_stopped"
+        if not (self.services.gateway.e_stopped or robot_holds):  # a /stop the robot latched
             self.notify("The e-stop is not engaged.")
             return
 
@@ -313,8 +329,12 @@ class AstiopApp(App):
         self.push_screen(ConfirmModal("Release the e-stop? The robot may move again."), done)
 
     def _release(self) -> None:
-        self.services.gateway.release_estop()
-        self.call_from_thread(self.notify, "E-stop released.")
+        failures = self.services.gateway.release_estop()
+        if failures:  # the latch let go; the robot's own stop did not
+            text = "E-stop released here; the robot still holds:\n" + "\n".join(failures)
+            self.call_from_thread(self.notify, text, severity="error", markup=False)
+        else:
+            self.call_from_thread(self.notify, "E-stop released.")
 
     def confirm_from_thread(self, checked: Checked, timeout_s: float | None = None) -> bool:
         """The gateway's confirmation hook, called from a worker thread: ask with a modal that

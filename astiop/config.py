@@ -106,6 +106,10 @@ class Settings(BaseSettings):
         return (init_settings, _Environment(os.environ), file)
 
 
+# Variables astiop reads that are not settings: where the settings file is, and a secret that
+# must never be shown with the settings (`astiop mcp --http`'s bearer token).
+NOT_SETTINGS = {"ASTIOP_CONFIG", "ASTIOP_MCP_TOKEN"}
+
 # Short names for the variables an operator sets most; any key is ASTIOP_SECTION__KEY.
 _ENV_SHORTCUTS = {
     "ASTIOP_DB": "ASTIOP_DB",
@@ -162,7 +166,7 @@ def _switches(data: dict[str, Any], model: Any) -> dict[str, Any]:
 def _unknown_variable(env: Mapping[str, str]) -> str | None:
     """The first ASTIOP_* variable that names no setting (a typo must not pass unnoticed)."""
     for name in env:
-        if not name.startswith("ASTIOP_") or name == "ASTIOP_CONFIG":
+        if not name.startswith("ASTIOP_") or name in NOT_SETTINGS:
             continue
         model: Any = Settings
         for part in _ENV_SHORTCUTS.get(name, name)[len("ASTIOP_") :].lower().split("__"):

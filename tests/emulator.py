@@ -36,8 +36,12 @@ def emulated_robot(
     missing: tuple[str, ...] = (),
     speed: float = 1.0,
     daemon_stopped: bool = False,
+    folder: Path | None = None,
+    processes: list | None = None,
 ):
-    folder = Path(tempfile.mkdtemp(prefix="emu-", dir="/tmp"))  # short: a Unix socket path
+    """`processes`: the robot's process is appended (a test that kills it); `folder`: the one
+    a killed robot ran in (its `ros2` is still on PATH), for it to come back."""
+    folder = folder or Path(tempfile.mkdtemp(prefix="emu-", dir="/tmp"))  # short: a socket path
     argv = [
         sys.executable,
         "-m",
@@ -57,6 +61,8 @@ def emulated_robot(
     if daemon_stopped:
         argv.append("--daemon-stopped")
     proc = subprocess.Popen(argv, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True)
+    if processes is not None:
+        processes.append(proc)
     try:
         deadline = time.monotonic() + 30
         while not _answers(folder / "robot.sock"):

@@ -24,6 +24,7 @@ from astiop.store import LocationError, Store, StoreError
 from tests.cli_runner import run_cli
 from tests.scripted_llm import ScriptedLLM
 from tests.test_agent import make_agent
+from tests.unprivileged import astiop_unprivileged, reachable_folder, run_unprivileged
 
 TWIST = "ros2 topic pub --once /cmd_vel geometry_msgs/msg/Twist"
 
@@ -127,39 +128,88 @@ def test_a_bad_model_spec_is_one_reason(spec, why):
 
 
 # -- the database ----------------------------------------------------------------------
-def test_a_read_only_database_reads_and_refuses_writes(tmp_path):
-    db = tmp_path / "ro.db"
+# The user opens the store itself: what it may read and that a write is refused, said as JSON.
+AS_THE_USER = """
+import json, sys
+from astiop.store import Store, StoreError
+path = sys.argv[1]
+try:
+    open(path, "r+b").close()
+    writes_the_file = True  # the mechanism failed: this user writes through the file's mode
+except PermissionError:
+    writes_the_file = False
+store = Store(path)
+names = [loc.name for loc in store.list_locations()]
+try:
+    store.add_location("x1", 5, 5)
+    refused = ""
+except StoreError as exc:
+    refused = str(exc)
+store.close()
+print(json.dumps({"writes_the_file": writes_the_file, "readonly": store.readonly,
+                  "names": names, "refused": refused}))
+"""
+
+
+@pytest.fixture
+def shared_tmp():
+    with reachable_folder() as folder:
+        yield folder
+
+
+def store_as_the_user(db) -> dict:
+    r = run_unprivileged("-c", AS_THE_USER, str(db))
+    assert r.returncode == 0, r.stderr
+    return json.loads(r.stdout)
+
+
+def test_a_read_only_database_reads_and_refuses_writes(shared_tmp):
+    """Run by a user whom file modes bind (tests/unprivileged.py): its folder is the user's to
+    write, the file is not."""
+    folder = shared_tmp / "open"
+    folder.mkdir()
+    db = folder / "ro.db"
     Store(db).close()
     before = digest(db)
     db.chmod(0o444)
+    folder.chmod(0o777)
     try:
-        if os.access(db, os.W_OK):
-            pytest.skip("running as a user who can write read-only files")
-        store = Store(db)
-        assert store.readonly and store.list_locations()
-        with pytest.raises(StoreError, match="read-only"):
-            store.add_location("x1", 5, 5)
-        r = cli("locations", "add", "x1", "5", "5", db=db)
+        seen = store_as_the_user(db)
+        assert not seen["writes_the_file"], "the test's user writes a read-only file"
+        assert seen["readonly"] and "charging_dock" in seen["names"]
+        assert "read-only" in seen["refused"]
+        r = astiop_unprivileged("--db", str(db), "locations", "add", "x1", "5", "5")
         one_line(r)
         assert "read-only" in r.stderr
-        assert cli("locations", "list", db=db).returncode == 0
+        listed = astiop_unprivileged("--db", str(db), "locations", "list")
+        assert listed.returncode == 0 and "charging_dock" in listed.stdout, listed.stderr
     finally:
         db.chmod(0o644)
+        folder.chmod(0o755)
     assert digest(db) == before
 
 
-def test_a_read_only_folder_still_reads(tmp_path):
-    folder = tmp_path / "ro"
+def test_a_read_only_folder_still_reads(shared_tmp):
+    """The file is the user's to write, its folder is not (WAL's side files live there)."""
+    folder = shared_tmp / "ro"
     folder.mkdir()
-    Store(folder / "a.db").close()
+    db = folder / "a.db"
+    Store(db).close()
+    before = digest(db)
+    db.chmod(0o666)
     folder.chmod(0o555)
     try:
-        if os.access(folder, os.W_OK):
-            pytest.skip("running as a user who can write read-only folders")
-        assert cli("locations", "list", db=folder / "a.db").returncode == 0
-        one_line(cli("locations", "add", "x1", "5", "5", db=folder / "a.db"))
+        seen = store_as_the_user(db)
+        assert seen["readonly"] and "charging_dock" in seen["names"]
+        assert "read-only" in seen["refused"]
+        listed = astiop_unprivileged("--db", str(db), "locations", "list")
+        assert listed.returncode == 0 and "charging_dock" in listed.stdout, listed.stderr
+        one_line(astiop_unprivileged("--db", str(db), "locations", "add", "x1", "5", "5"))
+        assert sorted(p.name for p in folder.iterdir()) == ["a.db"]
     finally:
         folder.chmod(0o755)
+        db.chmod(0o644)
+    assert digest(db) == before
 
 
 @pytest.mark.parametrize("offset", [4096, "middle"])
@@ -366,7 +416,8 @@ async def test_a_reply_cut_off_mid_stream_is_kept_with_the_turn(store):
 
 
 def test_a_database_astiop_may_not_write_is_opened_read_only(tmp_path, monkeypatch):
-    """As root the permission tests above cannot fail; this one drives the same path."""
+    """Once astiop decides it may not write (the tests above make it decide, as a user whom file
+    modes bind), every write is refused: by astiop first, and by SQLite too."""
     import astiop.store as store_module
 
     db = tmp_path / "ro.db"

@@ -174,6 +174,25 @@ def test_gate_refuses_a_plan_that_does_not_do_what_was_asked(request_text, plan,
     assert refused is not None and reason in refused
 
 
+RELEASE = f"ros2 service call /release {TRIGGER}"
+
+
+@pytest.mark.parametrize("text", [t for t, _ in INTENTS])
+def test_release_is_the_operators_never_the_models(text):
+    """The robot's /release lets a held robot move again: no request's plan may call it, and
+    the model is never told of it (its prompt, its tools); the catalog has it."""
+    from astiop.agent.prompts import command_prompt, tool_prompt
+    from astiop.agent.tools import build_tools
+
+    catalog = astibot_catalog()
+    assert catalog.services["/release"].actuating
+    refused = gate(text, RELEASE)
+    assert refused is not None and RELEASE in refused
+    tools = build_tools(catalog, LOCS)
+    assert not [t for t in tools if "/release" in (t.command or "") or "release" in t.id]
+    assert "/release" not in command_prompt(catalog, LOCS) + tool_prompt(tools)
+
+
 PASS = [
     ("Cancel the current mission", [STOP, ZERO]),
     ("Drive to shipping", [f'{GOTO} "{{x: 37.6, y: 4.0, theta: 0.0}}"']),

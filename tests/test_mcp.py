@@ -7,22 +7,28 @@ from __future__ import annotations
 import json
 import os
 import socket
+import sqlite3
 import subprocess
 import sys
 import threading
 import time
+from dataclasses import replace
+from pathlib import Path
 
 import httpx
 import pytest
 from mcp import Client, StdioServerParameters
+from mcp.server.mcpserver.exceptions import ToolError
 from mcp.types import Implementation
 
 from astiop.config import load_settings
-from astiop.mcp.approval import NO_CONSOLE
+from astiop.mcp.approval import NO_CONSOLE, Policy
 from astiop.mcp.server import AstiopMCP
-from astiop.mcp.tools import TOOL_CLASSES, RobotTools
-from astiop.robot.factory import make_sim_gateway
-from astiop.robot.gateway import ESTOP_REASON
+from astiop.mcp.tools import CALL, TOOL_CLASSES, Call, Refused, RobotTools
+from astiop.robot.backends.sim.backend import SimBackend
+from astiop.robot.factory import make_safety, make_sim_gateway
+from astiop.robot.gateway import ESTOP_REASON, RobotGateway
+from astiop.sim.simulator import Simulator
 from astiop.store import Store
 
 ENV = {**os.environ, "ASTIOP_SIM__SPEED": "20", "ASTIOP_LLM__THREADS": "1"}
@@ -62,6 +68,99 @@ async def test_every_tool_has_a_class_and_read_only_registers_no_actuation(store
     server = AstiopMCP(robot)
     server.add_tool(lambda: "x", name="sneaky", description="no class")
     assert unclassified(await server.list_tools()) == ["sneaky"]
+
+
+# -- ros2_query runs the review it made --------------------------------------------------------
+DOCK = "ros2 service call /dock std_srvs/srv/Trigger"
+
+
+class DockComesUp(SimBackend):
+    """A robot whose graph is read as a live one's is (refresh): the node serving /dock comes up
+    just after the first read, so a second review sees an actuating service the first did not."""
+
+    refresh_every_s = 0.0
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.whole = self.catalog
+        services = {n: s for n, s in self.whole.services.items() if n != "/dock"}
+        self.catalog = replace(self.whole, services=services)
+        self.reads = 0
+
+    def refresh(self) -> bool:
+        self.reads += 1
+        self.refreshed_at = time.monotonic()
+        if self.reads >= 2:
+            self.catalog = self.whole
+        return True
+
+
+def test_ros2_query_runs_its_own_review_so_a_service_that_appears_meanwhile_never_runs(store):
+    """With confirm_actuation off, a second review that found /dock would have docked the robot
+    from a read-only tool; the one review says there is no /dock, and nothing is sent."""
+    settings = load_settings({"robot": {"confirm_actuation": False}})
+    backend = DockComesUp(Simulator(seed=0), store)
+    gateway = RobotGateway(backend, make_safety(settings, store), store=store)
+    robot = RobotTools(gateway, store, Policy())
+    call = Call("pytest", "ros2_query", store.start_interaction(model="m", mode="mcp", prompt="q"))
+    token = CALL.set(call)
+    try:
+        with pytest.raises(Refused, match="^there is no service /dock"):
+            robot.ros2_query(DOCK)
+    finally:
+        CALL.reset(token)
+    assert backend.sim.goal is None  # the robot was not sent to its dock
+    with store.db.conn as conn:
+        rows = conn.execute(
+            "SELECT command, executed FROM commands WHERE interaction_id = ?",
+            [call.interaction_id],
+        ).fetchall()
+    assert rows == [(DOCK, 0)]
+    # the scenario is real: the service is there now, and acts on the robot
+    assert gateway.review(DOCK).checked.kind == "actuate"
+    with pytest.raises(Refused, match="acts on the robot: use ros2_command"):
+        robot.ros2_query(DOCK)
+
+
+# -- the audit trail: a store that cannot write still serves, and says so -------------------
+def refuse_inserts(db, table: str) -> None:
+    """A real SQLite failure on every write to `table`, as a full disk or a broken file gives."""
+    with sqlite3.connect(db) as conn:
+        conn.execute(
+            f"CREATE TRIGGER refuse_{table} BEFORE INSERT ON {table} "
+            "BEGIN SELECT RAISE(ABORT, 'disk I/O error (test)'); END"
+        )
+
+
+async def test_a_command_the_store_cannot_record_is_said_not_swallowed(store, capsys):
+    refuse_inserts(store.path, "commands")
+    server = AstiopMCP(RobotTools(make_sim_gateway(load_settings({}), store), store, Policy()))
+    for _ in range(2):
+        result = await server.call_tool("read_topic", {"topic": "/battery_status"})
+        texts = [c.text for c in result.content]
+        assert not result.is_error and "percentage:" in texts[0]
+        assert texts[1].startswith("note: not in astiop's audit trail: the command ")
+        assert "disk I/O error (test)" in texts[1] and "\n" not in texts[1]
+    # refused calls say it in their one line too
+    with pytest.raises(ToolError, match=r"^there is no topic /nope.*; note: not in astiop's"):
+        await server.call_tool("read_topic", {"topic": "/nope"})
+    said = capsys.readouterr().err.splitlines()
+    assert len(said) == 1  # the operator reads it once, not once per call
+    assert said[0].startswith("astiop mcp: the audit trail could not record the command ")
+    with store.db.conn as conn:
+        calls = conn.execute("SELECT status FROM interactions ORDER BY id").fetchall()
+    assert calls == [("done",), ("done",), ("error",)]  # the calls themselves are kept
+
+
+async def test_a_call_the_store_cannot_record_is_still_served_and_says_so(store, capsys):
+    refuse_inserts(store.path, "interactions")
+    server = AstiopMCP(RobotTools(make_sim_gateway(load_settings({}), store), store, Policy()))
+    result = await server.call_tool("robot_state", {})
+    assert not result.is_error and json.loads(result.content[0].text)["robot"] == "sim"
+    assert result.content[1].text.startswith(
+        "note: not in astiop's audit trail: the call was not recorded: "
+    )
+    assert "disk I/O error (test)" in capsys.readouterr().err
 
 
 # -- stdio: reads, refusals, hostile clients, the record ------------------------------------
@@ -232,9 +331,9 @@ def free_port() -> int:
         return sock.getsockname()[1]
 
 
-def http_server(db, port: int, *flags: str) -> subprocess.Popen:
+def http_server(db, port: int, *flags: str, env: dict | None = None) -> subprocess.Popen:
     args = [sys.executable, "-m", "astiop", "--db", str(db), "mcp", "--http", *flags]
-    proc = subprocess.Popen(args, env=ENV, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL)
+    proc = subprocess.Popen(args, env=env or ENV, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL)
     deadline = time.monotonic() + 30
     while time.monotonic() < deadline:
         try:
@@ -263,24 +362,48 @@ async def test_http_loopback_serves_and_a_token_is_required_when_given(tmp_path)
         proc.wait(10)
 
     token = "s3cret-token-0123456789"
+    token_file = tmp_path / "token"
+    token_file.write_text(token + "\n")  # as `echo` writes it
+    token_file.chmod(0o600)
     port = free_port()
-    proc = http_server(tmp_path / "b.db", port, f"127.0.0.1:{port}", "--token", token)
+    proc = http_server(
+        tmp_path / "b.db", port, f"127.0.0.1:{port}", "--token-file", str(token_file)
+    )
     try:
-        hello = {"jsonrpc": "2.0", "id": 1, "method": "ping"}
-        refused = httpx.post(f"http://127.0.0.1:{port}/mcp", json=hello)
-        assert refused.status_code == 401
-        import httpx2
-        from mcp.client.streamable_http import streamable_http_client
+        assert token.encode() not in Path(f"/proc/{proc.pid}/cmdline").read_bytes()  # `ps`
+        await needs_the_token(port, token)
+    finally:
+        proc.terminate()
+        proc.wait(10)
 
-        headers = {"Authorization": f"Bearer {token}"}
-        async with (
-            httpx2.AsyncClient(headers=headers) as http,
-            Client(
-                streamable_http_client(f"http://127.0.0.1:{port}/mcp", http_client=http),
-                client_info=ME,
-            ) as client,
-        ):
-            assert not (await call(client, "list_locations"))[0]
+
+async def needs_the_token(port: int, token: str) -> None:
+    """Refused (401) without the token and with a wrong one; served with it."""
+    import httpx2
+    from mcp.client.streamable_http import streamable_http_client
+
+    hello = {"jsonrpc": "2.0", "id": 1, "method": "ping"}
+    url = f"http://127.0.0.1:{port}/mcp"
+    assert httpx.post(url, json=hello).status_code == 401
+    wrong = {"Authorization": f"Bearer {token}x"}
+    assert httpx.post(url, json=hello, headers=wrong).status_code == 401
+    headers = {"Authorization": f"Bearer {token}"}
+    async with (
+        httpx2.AsyncClient(headers=headers) as http,
+        Client(streamable_http_client(url, http_client=http), client_info=ME) as client,
+    ):
+        assert not (await call(client, "list_locations"))[0]
+
+
+@pytest.mark.slow
+async def test_http_token_from_the_environment(tmp_path):
+    token = "env-token-0123456789abcdef"
+    port = free_port()
+    env = {**ENV, "ASTIOP_MCP_TOKEN": token}
+    proc = http_server(tmp_path / "e.db", port, f"127.0.0.1:{port}", env=env)
+    try:
+        assert token.encode() not in Path(f"/proc/{proc.pid}/cmdline").read_bytes()
+        await needs_the_token(port, token)
     finally:
         proc.terminate()
         proc.wait(10)
@@ -293,6 +416,60 @@ def test_http_off_the_loopback_needs_a_token(tmp_path):
     )
     assert out.returncode == 2
     assert out.stderr.strip().splitlines() == [
-        "astiop: --http on 0.0.0.0 (not the loopback) needs --token TOKEN: anyone who reaches "
-        "it could ask the robot to move"
+        "astiop: --http on 0.0.0.0 (not the loopback) needs a token (--token-file F (mode 600) "
+        "or ASTIOP_MCP_TOKEN): anyone who reaches it could ask the robot to move"
     ]
+
+
+def refused(tmp_path, *flags: str, env: dict | None = None) -> str:
+    """`astiop mcp FLAGS`'s one line, for a start that must be refused before serving."""
+    args = [sys.executable, "-m", "astiop", "--db", str(tmp_path / "r.db"), "mcp", *flags]
+    out = subprocess.run(args, env=env or ENV, capture_output=True, text=True, timeout=30)
+    assert out.returncode == 2, out
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("astiop: "), out.stderr
+    return lines[0][len("astiop: ") :]
+
+
+def test_a_token_on_the_command_line_is_refused(tmp_path):
+    token = "on-the-command-line-0123456789"
+    why = refused(tmp_path, "--http", "127.0.0.1:9", "--token", token)
+    assert why == (
+        "--token would show the token to every user in `ps`: give it as --token-file F "
+        "(mode 600) or ASTIOP_MCP_TOKEN"
+    )
+    assert token not in why
+
+
+def test_a_bad_token_file_or_variable_is_refused_in_one_line(tmp_path):
+    def token_file(name: str, data: bytes, mode: int = 0o600):
+        path = tmp_path / name
+        path.write_bytes(data)
+        path.chmod(mode)
+        return str(path)
+
+    good = b"s3cret-token-0123456789\n"
+    http = ("--http", "0.0.0.0:9", "--token-file")
+    cases = {
+        token_file("open", good, 0o644): "may be read or changed by other users (mode 0644): "
+        "chmod 600",
+        token_file("group", good, 0o640): "(mode 0640)",
+        token_file("empty", b""): "is empty",
+        token_file("newline", b"\n"): "is empty",
+        token_file("short", b"0123456789\n"): "the token is 10 characters; it needs 16",
+        token_file("spaced", b"s3cret token 0123456789\n"): "printable ASCII with no spaces",
+        token_file("lines", good + b"another\n"): "holds more than one line",
+        token_file("binary", b"\xff" * 20): "is not text",
+        token_file("big", b"x" * 5000): "is larger than 4096 bytes",
+        str(tmp_path / "missing"): "cannot read: No such file or directory",
+        str(tmp_path): "is a folder, not a file",
+    }
+    for path, reason in cases.items():
+        why = refused(tmp_path, *http, path)
+        assert why.startswith(f"--token-file {path}") and reason in why, (path, why)
+        assert "s3cret" not in why
+    short = {**ENV, "ASTIOP_MCP_TOKEN": "s3cret"}
+    why = refused(tmp_path, "--http", "0.0.0.0:9", env=short)
+    assert why == "ASTIOP_MCP_TOKEN: the token is 6 characters; it needs 16"
+    why = refused(tmp_path, "--token-file", token_file("stdio", good))
+    assert why == "--token-file goes with --http (stdio needs none)"

@@ -140,3 +140,130 @@ def test_a_recording_on_the_robot_logs_every_topic_on_its_receive_clock(tmp_path
     for topic in ("/robot_pose", "/battery_status", "/robot_status", "/scan"):
         times = rec.channels[topic].times
         assert times and all(t0 - 1 <= t / 1e9 <= t0 + 5 for t in times), topic
+
+
+def _sim_recording(tmp_path):
+    """A store, and a paused simulator behind a real gateway (stepped by the test)."""
+    from astiop.config import load_settings
+    from astiop.robot.factory import make_sim_gateway
+    from astiop.sim.simulator import Simulator
+    from astiop.store import Store
+
+    store = Store(tmp_path / "rec.db")
+    sim = Simulator(seed=0)
+    settings = load_settings({}, env={}, path=tmp_path / "none.toml")
+    return store, sim, make_sim_gateway(settings, store, sim=sim)
+
+
+def _json_messages(path, topic):
+    """(log time in s, the JSON) of each message on a JSON channel, read with mcap's reader."""
+    with open(path, "rb") as fh:
+        return [
+            (message.log_time / 1e9, json.loads(message.data))
+            for _s, _c, message in make_reader(fh).iter_messages(topics=[topic])
+        ]
+
+
+class _LinkThatDrops:
+    """The robot's gateway, whose reads fail while `dropped` is set, as a lost link's would."""
+
+    def __init__(self, gateway):
+        import threading
+
+        self._gateway = gateway
+        self.dropped = threading.Event()
+        self.failed = 0
+
+    def messages(self, names):
+        from astiop.robot.backend import BackendError
+
+        if self.dropped.is_set():
+            self.failed += 1
+            raise BackendError("the robot link dropped")
+        return self._gateway.messages(names)
+
+    def __getattr__(self, name):
+        return getattr(self._gateway, name)
+
+
+def _until(condition, what, timeout_s=60.0):
+    deadline = time.monotonic() + timeout_s
+    while not condition():
+        assert time.monotonic() < deadline, f"timed out waiting for {what}"
+        time.sleep(0.02)
+
+
+def test_a_recording_goes_on_after_failed_polls_says_so_once_and_finishes(tmp_path, capfd):
+    from astiop.recording import SessionRecorder
+
+    store, sim, gateway = _sim_recording(tmp_path)
+    link = _LinkThatDrops(gateway)
+    said = []
+    path = tmp_path / "dropped.mcap"
+    recorder = SessionRecorder(path, link, store, flush_s=0.0, on_error=said.append).start()
+    sim.step(0.5)
+    _until(lambda: recorder.counts.get("/robot_pose", 0) >= 1, "a first pose")
+    link.dropped.set()
+    _until(lambda: link.failed >= 5, "five failed polls")
+    link.dropped.clear()
+    back_at = sim.t
+    sim.step(1.0)  # the robot's clock moves on: new messages to record
+    turn = store.start_interaction(model="rules", mode="rules", prompt="where is it?")
+    store.update_interaction(turn, status="done", answer="x 5.0, y 3.5")
+    _until(lambda: recorder.counts.get("/astiop/interactions", 0) == 1, "the turn")
+    _until(lambda: recorder.counts.get("/robot_pose", 0) >= 2, "a pose after the drop")
+    link.dropped.set()  # and dropped again as the recording stops: the file is finished anyway
+    _until(lambda: link.failed >= 8, "more failed polls")
+    counts = recorder.stop()
+    assert not recorder._thread.is_alive()
+
+    assert summary(path) == counts  # a finished file: its summary is there
+    poses = [msg for topic, msg in decoded(path, ["/robot_pose"])]
+    assert len(poses) == counts["/robot_pose"] >= 2
+    with open(path, "rb") as fh:
+        pose_times = [
+            m.log_time / 1e9 for _s, _c, m in make_reader(fh).iter_messages(["/robot_pose"])
+        ]
+    assert max(pose_times) > back_at  # recorded after the polls that failed
+    assert [turn["prompt"] for _t, turn in _json_messages(path, "/astiop/interactions")] == [
+        "where is it?"
+    ]
+    assert len(said) == 1 and "the robot link dropped" in said[0]  # said once, not per poll
+    err = capfd.readouterr().err
+    assert [line for line in err.splitlines() if "the robot link dropped" in line] == [
+        f"astiop: {said[0]}"
+    ]
+    assert recorder.failures >= 8
+    gateway.close()
+    store.close()
+
+
+def test_every_turn_reaches_the_recording_once_whatever_order_turns_end_in(tmp_path):
+    from astiop.recording import SessionRecorder
+    from astiop.store import Store
+
+    store, sim, gateway = _sim_recording(tmp_path)
+    mcp = Store(tmp_path / "rec.db")  # another process's turns, on its own connection
+    before = store.start_interaction(model="rules", mode="rules", prompt="done before")
+    store.update_interaction(before, status="done")
+    across = store.start_interaction(model="rules", mode="rules", prompt="running at the start")
+    path = tmp_path / "turns.mcap"
+    recorder = SessionRecorder(path, gateway, store, flush_s=0.0)
+
+    chat = store.start_interaction(model="rules", mode="rules", prompt="chat turn")
+    call = mcp.start_interaction(model="mcp", mode="mcp", prompt="mcp call")
+    mcp.update_interaction(call, status="done")  # ends first, though it started second
+    sim.step(0.1)
+    recorder.poll()
+    store.update_interaction(chat, status="done")
+    sim.step(0.1)
+    recorder.poll()
+    recorder.poll()
+    store.update_interaction(across, status="error", error="the model server went away")
+    recorder.stop()
+
+    written = [turn["prompt"] for _t, turn in _json_messages(path, "/astiop/interactions")]
+    assert written == ["mcp call", "chat turn", "running at the start"]  # as they ended, once
+    gateway.close()
+    mcp.close()
+    store.close()

@@ -45,6 +45,7 @@ VALID = [
     "ros2 service call /goto_position astiop_msgs/srv/GotoPosition \"{name: 'shipping'}\"",
     'ros2 service call /goto_position astiop_msgs/srv/GotoPosition "{x: 20.0, y: 12.25}"',
     "ros2 service call /stop std_srvs/srv/Trigger",
+    "ros2 service call /release std_srvs/srv/Trigger",
     "ros2 service call /dock std_srvs/srv/Trigger",
     "ros2 service call /undock std_srvs/srv/Trigger",
     "ros2 service call /conveyor/load std_srvs/srv/Trigger '{}'",
@@ -301,6 +302,58 @@ def test_estop_during_navigation(gateway):
         'ros2 service call /goto_position astiop_msgs/srv/GotoPosition "{name: shipping}"',
         confirm=YES,
     ).values["success"]
+
+
+STOP = "ros2 service call /stop std_srvs/srv/Trigger"
+RELEASE = "ros2 service call /release std_srvs/srv/Trigger"
+BACK_UP = "ros2 topic pub -r 10 -t 10 /cmd_vel geometry_msgs/msg/Twist '{linear: {x: -0.3}}'"
+
+
+def _undocked(sim) -> None:
+    sim.undock()
+    assert sim.run_goal(60).status == "succeeded"  # it faces west: backing up is +x
+
+
+def test_stop_holds_the_robot_until_release(gateway):
+    sim = gateway.backend.sim
+    _undocked(sim)
+    assert gateway.run(STOP).values["success"]
+    rest = sim.pose
+    held = gateway.run(BACK_UP, confirm=YES)
+    assert held.error and "latched" in held.error and "/release" in held.error
+    goal = gateway.run(
+        'ros2 service call /goto_position astiop_msgs/srv/GotoPosition "{name: shipping}"',
+        confirm=YES,
+    )
+    assert goal.values["success"] is False and "latched" in goal.values["message"]
+    sim.step(2.0)
+    assert sim.speed() == 0.0 and math.dist(rest[:2], sim.pose[:2]) < 1e-6
+    status = gateway.run("ros2 topic echo /robot_status --once").values
+    assert status["state"] == "e_stopped" and status["e_stopped"] is False  # held, not E-STOP
+    assert not gateway.run(RELEASE).executed, "it lets the robot move: confirmed first"
+    released = gateway.run(RELEASE, confirm=YES)
+    assert released.values == {"success": True, "message": "released: the robot may move again"}
+    moved = gateway.run(BACK_UP, confirm=YES)
+    assert moved.executed and not moved.error
+    assert sim.speed() > 0.2 and sim.pose[0] > rest[0] + 0.1
+
+
+def test_the_operators_release_lets_go_of_a_stop_the_store_never_latched(store):
+    """The console's ctrl+r (gateway.release_estop) after a bare /stop: the robot's latch goes
+    too. While the E-STOP is latched, /release itself is held like any other actuation."""
+    sim = Simulator(seed=0)
+    gateway = RobotGateway(SimBackend(sim, store), SafetyPolicy(), store=store)
+    _undocked(sim)
+    gateway.run(STOP)
+    assert sim.stop_latched and store.estop_latch() is None
+    gateway.release_estop()
+    assert not sim.held
+    assert gateway.run(BACK_UP, confirm=YES).executed and sim.speed() > 0.2
+    gateway.estop()
+    refused = gateway.run(RELEASE, confirm=YES)
+    assert not refused.executed and "E-STOP" in refused.reason and sim.e_stopped
+    gateway.release_estop()
+    assert not sim.held and gateway.run(BACK_UP, confirm=YES).executed and sim.speed() > 0.2
 
 
 def test_obstacles_topic_reports_a_person(gateway):

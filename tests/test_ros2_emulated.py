@@ -344,6 +344,44 @@ def test_a_goal_with_feedback_is_followed_to_its_result(robot):
         gateway.close()
 
 
+def test_the_emulated_robot_holds_after_stop_until_release(robot):
+    """Driven with its own `ros2`, as any client would: after /stop the base ignores /cmd_vel
+    and refuses goals, read from its own /odom and /robot_status; /release lets it move."""
+    import yaml
+
+    def ros2(*argv: str) -> str:
+        out = subprocess.run(["ros2", *argv], capture_output=True, text=True, timeout=60)
+        assert out.returncode == 0, out.stderr
+        return out.stdout
+
+    def echo(topic: str) -> dict:
+        return yaml.safe_load(ros2("topic", "echo", topic, "--once").split("---")[0])
+
+    def back_up() -> None:  # it faces west after undocking: backwards is +x
+        ros2("topic", "pub", "-t", "15", "-r", "10", "/cmd_vel", "geometry_msgs/msg/Twist",
+             "{linear: {x: -0.3}}")  # fmt: skip
+
+    trigger = ("std_srvs/srv/Trigger",)
+    assert "/release" in ros2("service", "list").split()
+    ros2("service", "call", "/undock", *trigger)
+    assert until(lambda: echo("/robot_status")["state"] == "idle", 60)
+    assert "success=True" in ros2("service", "call", "/stop", *trigger)
+    rest = echo("/odom")["pose"]["pose"]["position"]
+    back_up()
+    odom = echo("/odom")
+    assert odom["twist"]["twist"]["linear"]["x"] == 0.0
+    assert abs(odom["pose"]["pose"]["position"]["x"] - rest["x"]) < 1e-3
+    assert cmd_vel_received(robot), "the Twists arrived; the base ignored them"
+    goal = ros2(
+        "service", "call", "/goto_position", "astiop_msgs/srv/GotoPosition", "{x: 6.0, y: 3.0}"
+    )
+    assert "success=False" in goal and "latched" in goal
+    assert echo("/robot_status")["state"] == "e_stopped"
+    assert "success=True" in ros2("service", "call", "/release", *trigger)
+    back_up()
+    assert echo("/odom")["pose"]["pose"]["position"]["x"] > rest["x"] + 0.2
+
+
 def test_the_emulated_ros2_refuses_what_real_ros2_refuses(robot):
     def ros2(*argv: str) -> subprocess.CompletedProcess:
         return subprocess.run(["ros2", *argv], capture_output=True, text=True, timeout=20)

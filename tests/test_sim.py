@@ -73,7 +73,9 @@ def test_collision_stops_the_robot_and_raises_a_fault():
     assert sim.pose[1] + ROBOT_LENGTH / 2 < 6.5 + 0.01
     with pytest.raises(GoalError, match="fault"):
         sim.goto(2.5, 3.0, 0.0)
-    sim.stop()
+    sim.stop()  # acknowledges the fault, and holds the base until /release
+    assert not sim.fault and sim.snapshot().state == "e_stopped"
+    sim.release()
     assert sim.snapshot().state == "idle"
 
 
@@ -145,6 +147,64 @@ def test_estop_during_navigation_wins():
     with pytest.raises(GoalError):
         sim.set_cmd_vel(0.5, 0, 0)
     sim.release_estop()
+    sim.goto(8.0, 22.6, math.pi / 2)
+    assert sim.run_goal(200).status == "succeeded"
+
+
+def _events(sim, words: str) -> list[str]:
+    return [e.message for e in sim.events_since(0) if words in e.message]
+
+
+def test_stop_latches_the_base_until_release():
+    sim = Simulator(start="assembly_station", seed=0, lidar_enabled=False)
+    sim.set_cmd_vel(0.0, 0.4, 0.0, timeout=2.0)
+    sim.step(1.0)
+    assert sim.speed() > 0.3
+    assert sim.stop() == "stopped"
+    sim.step(1.5)  # a controlled stop: the base ramps down at its deceleration
+    rest = sim.pose
+    for _ in range(20):  # /cmd_vel at 10 Hz for 2 s: refused, the base stays at rest
+        with pytest.raises(GoalError, match="latched"):
+            sim.set_cmd_vel(0.0, 0.4, 0.0)
+        sim.set_cmd_vel(0.0, 0.0, 0.0)  # a zero Twist agrees with the hold: no complaint
+        sim.step(0.1)
+        assert sim.speed() == 0.0
+    assert math.dist(rest[:2], sim.pose[:2]) < 1e-6
+    for job in (lambda: sim.goto(20.0, 12.25, 0.0), sim.dock, lambda: sim.conveyor_transfer(1)):
+        with pytest.raises(GoalError, match="latched"):
+            job()
+    state = sim.snapshot()
+    assert state.state == "e_stopped" and state.lamp == "red" and state.active_goal == ""
+    assert state.stop_latched and not state.e_stopped  # held by /stop, not by the E-STOP input
+    assert _events(sim, "stop latched") == ["stop latched: /release to move again"]
+    assert len(_events(sim, "/cmd_vel ignored")) == 1, "said once per hold, not per Twist"
+    sim.stop()  # a second /stop while held: still one hold
+    assert len(_events(sim, "stop latched")) == 1
+    assert sim.release() == "released: the robot may move again"
+    assert sim.snapshot().state == "idle" and not sim.snapshot().stop_latched
+    sim.set_cmd_vel(0.0, 0.4, 0.0, timeout=2.0)
+    sim.step(1.0)
+    assert sim.speed() > 0.3 and math.dist(rest[:2], sim.pose[:2]) > 0.1
+    assert not sim.fault
+    sim.stop()  # the next hold says so again
+    with pytest.raises(GoalError, match="latched"):
+        sim.set_cmd_vel(0.0, 0.4, 0.0)
+    assert len(_events(sim, "stop latched")) == 2 and len(_events(sim, "/cmd_vel ignored")) == 2
+
+
+def test_a_stopped_goal_stays_stopped_and_release_ends_the_estop_too():
+    sim = Simulator(seed=0, lidar_enabled=False)
+    sim.goto(8.0, 22.6, math.pi / 2, "assembly_station")
+    sim.step(5.0)
+    assert sim.stop() == "stopped; goal canceled"
+    sim.step(2.0)
+    rest = sim.pose
+    sim.step(3.0)
+    assert sim.goal is None and math.dist(rest[:2], sim.pose[:2]) < 1e-6
+    sim.estop()  # the E-STOP input on top of the latched stop: one release ends both
+    assert sim.snapshot().e_stopped and sim.snapshot().stop_latched
+    assert sim.release() == "released: the robot may move again"
+    assert not sim.held and sim.release() == "released; nothing was held"
     sim.goto(8.0, 22.6, math.pi / 2)
     assert sim.run_goal(200).status == "succeeded"
 

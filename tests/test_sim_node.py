@@ -167,6 +167,10 @@ def test_navigate_to_pose_feedback_arrival_cancel_and_refusals(client):
         assert client.call(Trigger, "/stop", Trigger.Request()).success
         ended = client.result(handle.get_result_async())
         assert ended.status == GoalStatus.STATUS_ABORTED and "stop" in ended.result.error_msg
+        handle, _ = send(_goal(*SHIPPING))  # the stop holds: no goal until /release
+        ended = client.result(handle.get_result_async())
+        assert ended.status == GoalStatus.STATUS_ABORTED and "latched" in ended.result.error_msg
+        assert client.call(Trigger, "/release", Trigger.Request()).success
 
         for goal, why in (
             (_goal(15.0, 3.5, qz=1e308, qw=1e308), "unit quaternion"),
@@ -243,6 +247,47 @@ def test_cmd_vel_moves_the_base_and_the_lapse_stops_it(client):
         time.sleep(1.5)  # no more commands: the 0.5 s lapse has stopped the base
         last = odom[-1][1].twist.twist
         assert math.hypot(last.linear.x, last.linear.y) < 1e-3
+
+
+def test_stop_latches_the_base_until_release(client):
+    """As a safety controller holds it: after /stop, /cmd_vel is ignored and goals refused
+    (read from the robot's own /odom and /robot_status) until /release."""
+    from astiop_msgs.msg import RobotStatus
+    from astiop_msgs.srv import GotoPosition
+    from geometry_msgs.msg import Twist
+    from std_srvs.srv import Trigger
+
+    with sim_node(speed=2.0):
+        graph = lambda: dict(client.node.get_service_names_and_types())  # noqa: E731
+        assert until(lambda: graph().get("/release"), 15) == ["std_srvs/srv/Trigger"]
+        odom = _undocked(client)
+        status = client.collect(RobotStatus, "/robot_status")
+        pub = client.node.create_publisher(Twist, "/cmd_vel", 10)
+        twist = Twist()
+        twist.linear.x = -0.4  # it faces west after undocking: backwards is +x
+
+        def back_up() -> list:
+            first = len(odom)
+            for _ in range(15):
+                pub.publish(twist)
+                time.sleep(0.1)
+            return [m for _, m in odom[first:]]
+
+        assert client.call(Trigger, "/stop", Trigger.Request()).success
+        rest = odom[-1][1].pose.pose.position
+        during = back_up()
+        assert during and max(abs(m.twist.twist.linear.x) for m in during) < 1e-3
+        held = odom[-1][1].pose.pose.position
+        assert math.hypot(held.x - rest.x, held.y - rest.y) < 1e-3
+        goal = client.call(GotoPosition, "/goto_position", GotoPosition.Request(name="shipping"))
+        assert not goal.success and "latched" in goal.message, goal.message
+        assert until(lambda: status and status[-1][1].state == "e_stopped", 5)
+        released = client.call(Trigger, "/release", Trigger.Request())
+        assert released.success, released.message
+        during = back_up()
+        assert max(abs(m.twist.twist.linear.x) for m in during) > 0.2
+        moved = odom[-1][1].pose.pose.position
+        assert moved.x > rest.x + 0.2
 
 
 def test_a_killed_node_leaves_nothing_behind_for_the_next():

@@ -21,7 +21,7 @@ class Action:
     """What one checked command would do to the robot."""
 
     kind: str  # read | list | stop | navigate | dock | undock | load | unload | save | motion
-    # | configure | invalid
+    # | configure | release | invalid
     xy: tuple[float, float] | None = None
     place: str | None = None
     twist: tuple[float, float, float] | None = None
@@ -35,6 +35,7 @@ _SERVICE_KINDS = {
     **{service: kind for kind, service in SERVICE_FOR.items()},
     "/save_location": "save",
     "/list_locations": "list",
+    "/release": "release",  # no request's intent: only the operator releases a held robot
 }
 
 
@@ -145,6 +146,7 @@ def _verb(action: Action) -> str:
         "unload": "unload the conveyor",
         "save": f"save a location '{action.place}'",
         "configure": "change the robot's configuration",
+        "release": "release the robot's latched stop (the operator's to do)",
     }.get(action.kind, action.kind)
 
 

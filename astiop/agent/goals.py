@@ -13,6 +13,7 @@ import time
 
 from astiop.robot.backend import Execution
 from astiop.robot.gateway import RobotGateway
+from astiop.robot.state import LOST
 
 NAVIGATING = ("/goto_position", "/dock", "/undock", "send_goal")
 MOVING = ("navigating", "docking", "undocking", "blocked")
@@ -98,7 +99,9 @@ async def follow(
             timed_out = True
             break
         state = await asyncio.to_thread(gateway.state)
-        if state.e_stopped:
+        if state.lost_s is not None:
+            outcome = LOST  # not aborted, never succeeded: its end was not heard
+        elif state.e_stopped:
             outcome = "e-stopped"
         idle = not (state.status and state.status.active_goal)
         # a status not yet received is not "idle": a CLI stream may take seconds to start
@@ -118,6 +121,8 @@ async def follow(
             text += f" (x {state.pose.x:.2f}, y {state.pose.y:.2f})"
     elif outcome == "still going":
         text = f"still going to {where}"
+    elif outcome == LOST:
+        text = f"lost contact with the robot during the goal to {where}"
     elif outcome == "stopped short" and where in ("dock", "undock"):
         text = f"not {where}ed: the robot reports docked {state.status and state.status.docked}"
     elif outcome == "stopped short" and target is not None and state.pose is not None:

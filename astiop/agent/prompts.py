@@ -8,7 +8,7 @@ from functools import cache, lru_cache
 
 import yaml
 
-from astiop.agent.tools import READABLE_EXCLUDED, Tool
+from astiop.agent.tools import OPERATOR_ONLY, READABLE_EXCLUDED, Tool
 from astiop.resources import prompts_path
 from astiop.ros2.catalog import Catalog
 
@@ -31,7 +31,11 @@ def command_prompt(catalog: Catalog, locations: list[str]) -> str:
         for t in catalog.topics.values()
         if t.name not in READABLE_EXCLUDED
     )
-    services = "\n".join(f"- {s.name} {s.type}: {s.description}" for s in catalog.services.values())
+    services = "\n".join(
+        f"- {s.name} {s.type}: {s.description}"
+        for s in catalog.services.values()
+        if s.name not in OPERATOR_ONLY
+    )
     return fill(
         template("agent_command"),
         topics=topics,

@@ -12,10 +12,13 @@ from dataclasses import dataclass
 
 from astiop.agent.intent import SERVICE_FOR, Intent, Motion
 from astiop.agent.rules import command_for
-from astiop.ros2.catalog import Catalog
+from astiop.ros2.catalog import RELEASE, Catalog
 from astiop.ros2.render import GOTO_TYPE, goto_command
 
 READABLE_EXCLUDED = {"/cmd_vel", "/tf", "/tf_static", "/plan"}
+# The operator's own: never in the model's prompt or tools (releasing a held robot is a person's
+# decision, as the console's ctrl+r is).
+OPERATOR_ONLY = {RELEASE}
 TRIGGER = "std_srvs/srv/Trigger"
 
 
@@ -91,7 +94,7 @@ def build_tools(catalog: Catalog, locations: list[str]) -> list[Tool]:
             SERVICE_KINDS.get(s.name, "other"),
         )
         for s in catalog.services.values()
-        if s.type == TRIGGER
+        if s.type == TRIGGER and s.name not in OPERATOR_ONLY
     ]
     if "/cmd_vel" in catalog.topics:
         tools += [

@@ -61,6 +61,8 @@ def set_up(gateway: RobotGateway, case, store) -> str:
             return "set-up failed: the robot publishes no /robot_status"
         time.sleep(0.1)
     gateway.run("ros2 service call /stop std_srvs/srv/Trigger", confirm=_yes)
+    if "/release" in gateway.catalog.services:  # a robot that latches its stop: let go of it
+        gateway.run("ros2 service call /release std_srvs/srv/Trigger", confirm=_yes)
     truth = stage2.Truth.of_robot(gateway.state())
     if start == "docked":
         if truth.docked:

@@ -44,10 +44,21 @@ def _serves_a_local_model(args: list[str]) -> bool:
     return command == "chat" and not (model or "").strip().startswith(SERVED_ELSEWHERE)
 
 
+def _stops_the_robot(args: list[str]) -> bool:
+    """`astiop estop`, not its --release nor its help."""
+    command, _ = _command_and_model(args)
+    asks = {"--release", "--help", "-h"}
+    return command == "estop" and not asks & {a.split("=", 1)[0] for a in args}
+
+
 def run(argv: list[str] | None = None) -> None:
     """The `astiop` executable (argv None: this process is it), or a command run in a process
     that goes on (tests): the app, with one line (never a traceback) for any failure."""
     args = _with_record_file(list(sys.argv[1:] if argv is None else argv))
+    if _stops_the_robot(args):  # every other astiop process stops as soon as this is written
+        from astiop import latch
+
+        latch.latch_early(latch.db_path(args))
     from astiop.agent import model_spawn
 
     if _serves_a_local_model(args):  # the model's process starts before our imports

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import ipaddress
+import os
 import sys
+from pathlib import Path
 
 import typer
 
@@ -33,9 +35,14 @@ def mcp(
     http: str | None = typer.Option(
         None, "--http", metavar="[HOST:]PORT", help="Serve streamable HTTP (default: stdio)."
     ),
-    token: str | None = typer.Option(
-        None, "--token", help="Require 'Authorization: Bearer TOKEN' (needed off the loopback)."
+    token_file: Path | None = typer.Option(
+        None,
+        "--token-file",
+        metavar="F",
+        help="Require 'Authorization: Bearer TOKEN', TOKEN the one line of F (mode 600); or set "
+        "ASTIOP_MCP_TOKEN. Needed off the loopback.",
     ),
+    token_given: str | None = typer.Option(None, "--token", hidden=True),
     read_only: bool = typer.Option(
         False, "--read-only", help="Register no tool that acts on the robot."
     ),
@@ -49,14 +56,23 @@ def mcp(
     ),
 ) -> None:
     """Serve the robot to MCP clients: reads freely; each actuation approved in a console."""
+    from astiop.mcp.bearer_token import TOKEN_VARIABLE, WHERE, TokenError, token_from
+
+    if token_given is not None:
+        fail(f"--token would show the token to every user in `ps`: give it as {WHERE}")
     host, port = parse_http(http) if http is not None else ("", 0)
+    if token_file is not None and http is None:
+        fail("--token-file goes with --http (stdio needs none)")
+    token = None
+    if http is not None:
+        try:
+            token = token_from(token_file, os.environ)
+        except TokenError as exc:
+            fail(str(exc))
+    os.environ.pop(TOKEN_VARIABLE, None)  # not handed down to the robot's `ros2` processes
     if http is not None and not loopback(host) and not token:
-        fail(f"--http on {host} (not the loopback) needs --token TOKEN: anyone who reaches it "
-             "could ask the robot to move")  # fmt: skip
-    if token is not None and http is None:
-        fail("--token goes with --http (stdio needs none)")
-    if token is not None and (len(token) < 16 or any(c.isspace() for c in token)):
-        fail("--token wants at least 16 characters and no spaces")
+        fail(f"--http on {host} (not the loopback) needs a token ({WHERE}): anyone who "
+             "reaches it could ask the robot to move")  # fmt: skip
 
     from astiop.mcp.approval import Policy
     from astiop.mcp.server import AstiopMCP, serve_http, serve_stdio

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
 import time
 from pathlib import Path
@@ -91,11 +92,16 @@ def record(
     except KeyboardInterrupt:
         pass
     except RecordingError as exc:
-        recorder.stop()
+        with contextlib.suppress(RecordingError):
+            recorder.stop()
         gateway.close()
         fail(str(exc))
     progress()
-    counts = recorder.stop()
+    try:
+        counts = recorder.stop()
+    except RecordingError as exc:
+        gateway.close()
+        fail(str(exc))
     gateway.close()
     if not as_json:
         typer.echo("", err=True)

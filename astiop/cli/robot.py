@@ -81,6 +81,28 @@ def exec_command(
         raise typer.Exit(1)
 
 
+def _release_robot(st) -> None:
+    """A robot that latches its own stop (a /release service on its graph) is released too;
+    its graph is read first, to know whether it has one."""
+    from astiop.robot.backend import BackendError
+    from astiop.robot.factory import make_robot_gateway
+
+    try:
+        gateway = make_robot_gateway(st.settings, st.store, who="estop --release")
+    except BackendError as exc:
+        fail(f"the robot was not reached to release its own stop: {exc}", code=1)
+    try:
+        if "/release" not in gateway.catalog.services:
+            typer.echo("the robot has no /release: it holds no stop of its own")
+            return
+        failed = gateway.release_estop()
+    finally:
+        gateway.close()
+    if failed:
+        fail("; ".join(failed), code=1)
+    typer.echo("the robot's own stop released (/release)")
+
+
 def estop(
     ctx: typer.Context,
     release: bool = typer.Option(
@@ -106,6 +128,8 @@ def estop(
                 fail("not released", code=1)
         st.store.release_estop("estop --release")
         typer.echo("E-STOP released")
+        if st.settings.robot.backend == "ros2":
+            _release_robot(st)
         return
     from astiop.robot.backend import BackendError
 

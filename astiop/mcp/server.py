@@ -4,7 +4,6 @@ line to the client, and the two transports (stdio; streamable HTTP behind an opt
 
 from __future__ import annotations
 
-import contextlib
 import hmac
 import json
 import logging
@@ -15,14 +14,13 @@ from typing import Any
 import anyio
 from mcp.server.mcpserver import Context, MCPServer
 from mcp.server.mcpserver.exceptions import ToolError
-from mcp.types import CallToolResult, ToolAnnotations
+from mcp.types import CallToolResult, TextContent, ToolAnnotations
 from pydantic import ValidationError
 
 from astiop import __version__
-from astiop.bounded import MAX_REPLY_CHARS, escape_controls, one_line
+from astiop.bounded import escape_controls, one_line
 from astiop.mcp.tools import CALL, TOOL_CLASSES, Call, Refused, RobotTools
 from astiop.ros2.interfaces import InterfaceError, interface_show
-from astiop.store import StoreError
 
 MAX_CALLS = 16  # calls served at once; more are refused at once (a flood)
 INSTRUCTIONS = (
@@ -125,43 +123,28 @@ class AstiopMCP(MCPServer):
 
     async def _recorded(self, name: str, arguments: dict[str, Any], context):
         call = Call(client_name(context), describe(name, arguments))
-        store = self.robot.store
+        audit = self.robot.audit
         t0 = time.perf_counter()
-        with contextlib.suppress(StoreError):  # a read-only database: the robot is still served
-            call.interaction_id = await anyio.to_thread.run_sync(
-                lambda: store.start_interaction(
-                    model=f"mcp:{call.client}", mode="mcp", prompt=call.what, session="mcp"
-                )
-            )
+        await anyio.to_thread.run_sync(audit.start, call)  # a store that fails still serves
         token = CALL.set(call)
         try:
             result = await super().call_tool(name, arguments, context)
         except ToolError as exc:
             reason = reason_of(name, exc)
-            await self._finish(call, reason, t0, error=True)
+            await anyio.to_thread.run_sync(audit.finish, call, reason, t0, True)
+            if call.unrecorded:
+                reason = one_line(f"{reason}; {call.note()}", 500)
             raise ToolError(reason) from None
         finally:
             CALL.reset(token)
         text = ""
         if isinstance(result, CallToolResult):
             text = "\n".join(getattr(c, "text", "") for c in result.content)
-        await self._finish(call, text, t0, error=False)
+        await anyio.to_thread.run_sync(audit.finish, call, text, t0, False)
+        if call.unrecorded and isinstance(result, CallToolResult):
+            # its own content item: a JSON answer's item stays JSON
+            result.content = [*result.content, TextContent(type="text", text=call.note())]
         return result
-
-    async def _finish(self, call: Call, answer: str, t0: float, error: bool) -> None:
-        if call.interaction_id is None:
-            return
-        fields = {
-            "finished_at": time.time(),
-            "answer": answer[:MAX_REPLY_CHARS],
-            "total_s": time.perf_counter() - t0,
-            "status": "error" if error else "done",
-            "error": answer if error else None,
-        }
-        with contextlib.suppress(StoreError):
-            await anyio.to_thread.run_sync(
-                lambda: self.robot.store.update_interaction(call.interaction_id, **fields)
-            )
 
     def _resources(self) -> None:
         gw = self.robot.gateway

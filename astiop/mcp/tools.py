@@ -4,21 +4,22 @@ here before any command is built; a refusal is a `Refused` with its one-line rea
 from __future__ import annotations
 
 import asyncio
-import contextlib
-import contextvars
 import math
 import re
 import threading
 import time
-from dataclasses import dataclass
 
 from astiop.agent import goals
 from astiop.bounded import MAX_COMMAND_CHARS, has_controls, one_line, preview
 from astiop.mcp.approval import Policy, clear
+from astiop.mcp.audit import CALL, AuditTrail, Call
 from astiop.robot.backend import Execution
 from astiop.robot.gateway import RobotGateway
+from astiop.robot.safety import Review
 from astiop.ros2.render import GOTO_TYPE, STAMPED, goto_command
-from astiop.store import Store, StoreError
+from astiop.store import Store
+
+__all__ = ["CALL", "TOOL_CLASSES", "Call", "Refused", "RobotTools"]
 
 # Every tool and its class, in one table: "read" tools never move the robot; "actuate" tools
 # are not registered with --read-only. A test holds it complete.
@@ -48,19 +49,6 @@ class Refused(Exception):
     """The call was refused or failed; the reason says what, if anything, was sent."""
 
 
-@dataclass
-class Call:
-    """The tool call being served: who asked, and its interaction in the store."""
-
-    client: str
-    what: str
-    interaction_id: int | None = None
-    seq: int = 0
-
-
-CALL: contextvars.ContextVar[Call] = contextvars.ContextVar("mcp_call")
-
-
 def finite(name: str, value: float, limit: float = 1e6) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         raise Refused(f"{name} must be a finite number")
@@ -82,6 +70,7 @@ class RobotTools:
         self.gateway = gateway
         self.store = store
         self.policy = policy
+        self.audit = AuditTrail(store)
         self.last_goal: dict[str, str] = {}
         self._actuating = threading.Lock()  # one actuation at a time (stop and estop excepted)
 
@@ -133,15 +122,23 @@ class RobotTools:
         return self._read(f"ros2 topic echo {topic} --once")
 
     def ros2_query(self, command: str) -> str:
-        command = self._command_text(command)
-        review = self.gateway.review(command)
-        if review.checked.valid and review.checked.kind == "actuate":
-            raise Refused("this command acts on the robot: use ros2_command")
-        return self._read(command)
+        return self._read(self._command_text(command))
 
     def _read(self, text: str) -> str:
-        ex = self.gateway.run(text)  # a read: valid or refused, never confirmed
+        """Review once and run that very review: a second review could see a newer catalog in
+        which the command acts (a service that appeared since), and with confirm_actuation off
+        it would run unconfirmed from a read-only tool."""
+        review = self.gateway.review(text)
+        checked = review.checked
+        if checked.valid and checked.kind != "read":
+            raise Refused("this command acts on the robot: use ros2_command")
+        ex = self.gateway.run(checked.text, confirm=_only(review), review=review)
         self._record(ex)
+        if ex.kind != checked.kind:  # run() reviewed it again and it changed: said, never hidden
+            raise Refused(
+                f"the command changed from {checked.kind} to {ex.kind} after it was reviewed"
+                + ("; it was sent" if ex.executed else "; nothing was sent")
+            )
         if not ex.executed:
             raise Refused(ex.reason or "refused")
         if ex.error:
@@ -240,7 +237,8 @@ class RobotTools:
     def _actuate(self, text: str, goal: tuple[str, tuple | None] | None = None) -> str:
         with self._one_actuation():
             review = self._clearance(text)
-            ex = self.gateway.run(text, confirm=lambda _c: True, review=review)
+            # exactly what was reviewed and approved: run() reviews nothing again
+            ex = self.gateway.run(review.checked.text, confirm=_only(review), review=review)
         self._record(ex)
         if not ex.executed:
             raise Refused(ex.reason or "refused")
@@ -288,20 +286,18 @@ class RobotTools:
             except Exception as exc:  # noqa: BLE001 - the server keeps serving
                 outcome, text = "unknown", f"the goal could not be followed: {one_line(exc)}"
             mine["outcome"] = text
-            if call.interaction_id is not None:
-                self.store.update_interaction(
-                    call.interaction_id, outcome=outcome, outcome_at=time.time()
-                )
+            self.audit.outcome(call, outcome)
 
         threading.Thread(target=follow, name="mcp-goal", daemon=True).start()
 
     def _record(self, ex: Execution) -> None:
-        call = CALL.get(None)
-        if call is None or call.interaction_id is None:
-            return
-        call.seq += 1
-        with contextlib.suppress(StoreError):  # a read-only database still serves
-            self.store.add_command(call.interaction_id, seq=call.seq, source="mcp", **ex.record())
+        self.audit.command(ex)  # a store that cannot write still serves, and says so
+
+
+def _only(review: Review):
+    """A confirmation for exactly the reviewed command: should run() ever review it again, the
+    new review is not what was approved (or read), and nothing is sent."""
+    return lambda checked: checked is review.checked
 
 
 class _Release:

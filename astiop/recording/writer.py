@@ -11,9 +11,12 @@ everything up to its last chunk; `repair` rewrites what such a file still holds.
 
 from __future__ import annotations
 
+import contextlib
 import json
+import sys
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -22,11 +25,14 @@ from mcap.records import Channel, Message, Schema
 from mcap.stream_reader import StreamReader
 from mcap.writer import Writer
 
+from astiop.bounded import one_line
 from astiop.ros2.definitions import definitions
 from astiop.ros2.interfaces import normalize_type, used_types
 
 FLUSH_S = 2.0
 POLL_HZ = 20.0
+STOP_WAIT_S = 5.0  # for the thread's last poll; the file is finished either way
+MAX_NOTICES = 5  # different failures said per recording; the same one is said once
 SEPARATOR = "=" * 80
 
 
@@ -87,7 +93,10 @@ JSON_SCHEMAS = {
 
 
 class SessionRecorder:
-    """Polls the gateway (never the simulator) and the store while it runs, in its own thread."""
+    """Polls the gateway (never the simulator) and the store while it runs, in its own thread.
+
+    A poll that fails is said once (`on_error`, called from the recording's thread, and a line
+    on stderr) and the recording goes on; `stop()` finishes the file whatever the polls did."""
 
     def __init__(
         self,
@@ -97,6 +106,7 @@ class SessionRecorder:
         *,
         scan_hz: float | None = None,
         flush_s: float = FLUSH_S,
+        on_error: Callable[[str], None] | None = None,
     ):
         from mcap_ros2._dynamic import serialize_dynamic  # the encoder its Writer uses
 
@@ -117,12 +127,18 @@ class SessionRecorder:
         self._channels: dict[str, tuple[int, Any]] = {}  # topic -> (channel id, encoder)
         self._last: dict[str, int] = {}  # topic -> last stamp written (ns)
         self.counts: dict[str, int] = {}
+        self.failures = 0  # polls (or messages) that could not be written
+        self._on_error = on_error
+        self._said: set[str] = set()
         self._event_seq = gateway.state().event_seq if gateway else 0
-        self._interaction_id = self._newest_interaction()
+        # The agent's turns: those after _turns_after, and those seen running (a turn ends when
+        # it ends, not in the order the turns started), so each is written once, when it ends.
+        self._turns_after, self._turns_running = self._interaction_marks()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._flushed = time.monotonic()
-        self._lock = threading.Lock()
+        self._lock = threading.Lock()  # the writer: a poll's writes, and finishing the file
+        self._finished = False
 
     # -- the loop -----------------------------------------------------------------------
     def start(self) -> SessionRecorder:
@@ -131,45 +147,88 @@ class SessionRecorder:
         return self
 
     def stop(self) -> dict[str, int]:
+        """A last poll, then the file finished (its summary written), even after failed polls
+        or a thread stuck in a robot call; RecordingError only if the file cannot be written."""
         self._stop.set()
         if self._thread is not None:
-            self._thread.join(5.0)
+            self._thread.join(STOP_WAIT_S)  # it polls once more on its way out
+        else:
+            self._poll_safely()
         with self._lock:
-            self.poll()
-            self._writer.finish()
-            self._file.close()
+            if not self._finished:
+                self._finished = True  # a poll still under way writes nothing more
+                try:
+                    try:
+                        self._writer.finish()
+                    finally:
+                        self._file.close()
+                except (OSError, ValueError) as exc:
+                    raise RecordingError(f"cannot finish {self.path}: {one_line(exc)}") from None
         return dict(self.counts)
 
     def _loop(self) -> None:
         while not self._stop.wait(1.0 / POLL_HZ):
-            with self._lock:
-                self.poll()
+            self._poll_safely()
+        self._poll_safely()
+
+    def _poll_safely(self) -> None:
+        try:
+            self.poll()
+        except Exception as exc:  # any layer's: the recording must outlive one bad poll
+            self._failed("a poll", exc)
+
+    def _failed(self, what: str, exc: Exception) -> None:
+        """Counted always; said once per different reason, up to MAX_NOTICES."""
+        self.failures += 1
+        reason = one_line(exc, 200) or type(exc).__name__
+        if reason in self._said or len(self._said) >= MAX_NOTICES:
+            return
+        self._said.add(reason)
+        text = f"recording {self.path.name}: {what} failed ({reason}); the recording goes on"
+        print(f"astiop: {text}", file=sys.stderr, flush=True)
+        if self._on_error is not None:
+            with contextlib.suppress(Exception):  # the notice's own path (an app closing)
+                self._on_error(text)
 
     def poll(self) -> None:
-        """Write what is new since the last poll; close a chunk every flush_s."""
+        """Write what is new since the last poll; close a chunk every flush_s. The robot and the
+        store are read before the writer is locked: a call that hangs never holds up stop(),
+        and a call that fails leaves everything to the next poll."""
         robot_now = self.gateway.state().t  # the clock the topics are logged on
         topics = self.gateway.catalog.topics
         names = self.gateway.catalog.recorded_topics()
         times = self.gateway.message_times(names)  # published, or received on a robot
-        for topic, message in self.gateway.messages(names).items():
-            stamp = int(times.get(topic, robot_now) * 1e9)
-            last = self._last.get(topic)
-            if last is not None and stamp <= last:
-                continue  # nothing new on this topic
-            if topic == "/scan" and last is not None and stamp - last < self.scan_period * 1e9:
-                continue
-            self._ros2(topic, topics[topic].type, message, stamp)
-            self._last[topic] = stamp
-        for ev in self.gateway.events_since(self._event_seq):
-            self._event_seq = max(self._event_seq, ev.seq)
-            data = {"kind": ev.kind, "severity": ev.severity, "message": ev.message}
-            self._json("/astiop/events", data, int((ev.t or robot_now) * 1e9))
-        for turn in self._new_interactions():
-            self._json("/astiop/interactions", turn, int(robot_now * 1e9))
-        if time.monotonic() - self._flushed >= self.flush_s:
-            self._writer.flush()  # closes the open chunk: a kill from here on loses nothing
-            self._file.flush()
-            self._flushed = time.monotonic()
+        messages = self.gateway.messages(names)
+        events = self.gateway.events_since(self._event_seq)
+        turns = self._interactions()
+        with self._lock:
+            if self._finished:
+                return
+            for topic, message in messages.items():
+                self._topic_message(topic, topics[topic].type, message, times, robot_now)
+            for ev in events:
+                data = {"kind": ev.kind, "severity": ev.severity, "message": ev.message}
+                self._json("/astiop/events", data, int((ev.t or robot_now) * 1e9))
+                self._event_seq = max(self._event_seq, ev.seq)
+            for turn in turns:
+                self._interaction(turn, int(robot_now * 1e9))
+            if time.monotonic() - self._flushed >= self.flush_s:
+                self._writer.flush()  # closes the open chunk: a kill from here on loses nothing
+                self._file.flush()
+                self._flushed = time.monotonic()
+
+    def _topic_message(self, topic, type_name, message, times, robot_now) -> None:
+        stamp = int(times.get(topic, robot_now) * 1e9)
+        last = self._last.get(topic)
+        if last is not None and stamp <= last:
+            return  # nothing new on this topic
+        if topic == "/scan" and last is not None and stamp - last < self.scan_period * 1e9:
+            return
+        self._last[topic] = stamp  # a message that cannot be encoded is passed over, once
+        try:
+            self._ros2(topic, type_name, message, stamp)
+        except Exception as exc:  # the encoder's: a message that does not fit its type
+            self._failed(f"writing {topic}", exc)
 
     # -- writing ------------------------------------------------------------------------
     def _channel(self, topic: str, type_name: str) -> tuple[int, Any]:
@@ -198,17 +257,25 @@ class SessionRecorder:
         self.counts[topic] = self.counts.get(topic, 0) + 1
 
     # -- the agent's turns ----------------------------------------------------------------
-    def _newest_interaction(self) -> int:
-        return self.store.newest_interaction_id() if self.store is not None else 0
+    def _interaction_marks(self) -> tuple[int, set[int]]:
+        """Turns that ended before the recording are not in it; those running are, later."""
+        if self.store is None:
+            return 0, set()
+        newest, running = self.store.interaction_marks()
+        return newest, set(running)
 
-    def _new_interactions(self) -> list[dict]:
+    def _interactions(self) -> list[dict]:
         if self.store is None:
             return []
-        turns = []
-        for it in self.store.finished_interactions_after(self._interaction_id):
-            self._interaction_id = max(self._interaction_id, it["id"])
-            turns.append(it)
-        return turns
+        return self.store.interactions_to_record(self._turns_after, self._turns_running)
+
+    def _interaction(self, turn: dict, t_ns: int) -> None:
+        if turn["status"] == "running":
+            self._turns_running.add(turn["id"])
+        else:
+            self._json("/astiop/interactions", turn, t_ns)
+            self._turns_running.discard(turn["id"])
+        self._turns_after = max(self._turns_after, turn["id"])
 
 
 def _finite_floats(value: Any) -> Any:

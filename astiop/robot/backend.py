@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+import contextlib
 import time
 from abc import ABC, abstractmethod
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING, Any, Union
 
+from astiop.robot.errors import BackendError  # noqa: F401 - its home for every caller
+from astiop.robot.inflight import InFlight
+from astiop.robot.safety import ALWAYS_ALLOWED
 from astiop.robot.state import OccupancyGrid, RobotEvent, RobotState, TopicStat
 from astiop.ros2.catalog import Catalog
 from astiop.ros2.validation import Checked
@@ -19,10 +23,6 @@ if TYPE_CHECKING:
 # A known layout (the simulator's warehouse), the robot's /map, or nothing: then the map view
 # follows the robot and shows its scan.
 MapGeometry = Union[WarehouseMap, OccupancyGrid, None]
-
-
-class BackendError(Exception):
-    """The command was valid but running it failed (timeout, no message, process error)."""
 
 
 @dataclass
@@ -83,6 +83,14 @@ class RobotBackend(ABC):
     playback: Playback | None = None  # a replay's clock
     refreshed_at: float = 0.0  # time.monotonic() of the last read of the robot's graph
     refresh_every_s: float = 5.0  # a missing name reads the graph again at most this often
+    inflight: InFlight  # what this process has running that moves the robot
+
+    def actuating(self, checked: Checked):
+        """The job an actuating command runs as (the E-STOP ends it); None for a read and for
+        the stop itself, which must run while the E-STOP holds."""
+        if checked.kind != "actuate" or checked.command.name in ALWAYS_ALLOWED:
+            return contextlib.nullcontext(None)
+        return self.inflight.running(checked.command.display())
 
     def refresh(self) -> bool:
         """Read the robot's graph again; False if nothing was read."""
@@ -116,7 +124,10 @@ class RobotBackend(ABC):
         ...
 
     @abstractmethod
-    def release_estop(self) -> None: ...
+    def release_estop(self) -> list[str]:
+        """Let the robot move again; the failures (a robot that latches its own stop and did
+        not answer its release)."""
+        ...
 
     @abstractmethod
     def execute(self, checked: Checked, timeout: float) -> tuple[str, object]: ...

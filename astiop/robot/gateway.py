@@ -7,12 +7,13 @@ before anything is sent.
 
 from __future__ import annotations
 
-import contextlib
+import logging
 import threading
 import time
 from collections.abc import Callable
 
 from astiop.robot.backend import BackendError, Execution, MapGeometry, RobotBackend
+from astiop.robot.latch_watch import LatchWatcher
 from astiop.robot.safety import ALWAYS_ALLOWED, Review, SafetyPolicy
 from astiop.robot.state import RobotEvent, RobotState, TopicStat
 from astiop.ros2.catalog import Catalog
@@ -21,6 +22,7 @@ from astiop.ros2.validation import Checked, validate
 from astiop.store import Store, StoreError
 
 Confirm = Callable[[Checked], bool]
+log = logging.getLogger("astiop.robot")
 MAX_STAMP_AGE_S = 86400.0  # a stamp older than a day is on another clock, not a day-old reading
 ESTOP_REASON = "the E-STOP is engaged: no motion command runs until the operator releases it"
 
@@ -45,11 +47,16 @@ class RobotGateway:
         self.who = who
         self._last_drive: tuple[float, float, float] | None = None
         self._journaled = 0  # the last event kept in the store
+        self._store_errors: set[str] = set()
         self._journal_lock = threading.Lock()
         self._latch_lock = threading.Lock()
         self._latch_seen = self.latched
         if restore_latch and self._latch_seen and not backend.e_stopped:
             backend.estop()  # a restart keeps the E-STOP until it is released
+        # another process's E-STOP ends what this one has in flight, with no one asking
+        self._watcher = (
+            LatchWatcher(store, backend.inflight, self.follow_latch).start() if store else None
+        )
 
     @property
     def catalog(self) -> Catalog:
@@ -76,18 +83,21 @@ class RobotGateway:
                 failures.append(f"the E-STOP is not latched for other processes: {exc}")
         return failures
 
-    def release_estop(self) -> None:
+    def release_estop(self) -> list[str]:
+        """Release the latch for every process, then this process's robot; the failures."""
         if self.store is not None:
             with self._latch_lock:
                 self.store.release_estop(self.who)
                 self._latch_seen = False
-        self.backend.release_estop()
+        return self.backend.release_estop()
 
     # -- live state ------------------------------------------------------------------------
     def start(self) -> None:
         self.backend.start()
 
     def close(self) -> None:
+        if self._watcher is not None:
+            self._watcher.close()
         self.backend.close()
 
     def state(self) -> RobotState:
@@ -119,7 +129,9 @@ class RobotGateway:
                 if new:
                     self._journaled = new[-1].seq
             if new:
-                self.store.keep_robot_events(new)  # never raises
+                failed = self.store.keep_robot_events(new)  # never raises
+                if failed:
+                    self._say_store_error(failed)
         return events
 
     def messages(self, names) -> dict[str, dict]:
@@ -171,20 +183,29 @@ class RobotGateway:
         """Run one command. Nothing reaches the backend unless it is valid, safe and confirmed.
         With a `source` (exec, teleop), a valid command is recorded in the store, whether it
         ran or safety, the E-STOP or the operator held it; text that is not a command is not."""
-        result = self._run(text, confirm, timeout, review)
-        if source and result.valid:
-            self.record(result, source)
+        journal = _Journal(self, source) if source else None
+        result = self._run(text, confirm, timeout, review, journal)
+        if journal is not None and result.valid:
+            journal.finish(result)
         return result
 
     def record(self, ex: Execution, source: str) -> None:
-        if self.store is None:
-            return
-        # a read-only database still drives the robot; it cannot keep the record
-        with contextlib.suppress(StoreError):
-            self.store.add_command(None, seq=0, source=source, **ex.record())
+        _Journal(self, source).finish(ex)
+
+    def _say_store_error(self, message: str) -> None:
+        """A record the store could not keep: said once per reason (the robot was driven all the
+        same; a read-only database still drives it)."""
+        if message not in self._store_errors:
+            self._store_errors.add(message)
+            log.error(message)
 
     def _run(
-        self, text: str, confirm: Confirm | None, timeout: float | None, review: Review | None
+        self,
+        text: str,
+        confirm: Confirm | None,
+        timeout: float | None,
+        review: Review | None,
+        journal: _Journal | None = None,
     ) -> Execution:
         t0 = time.perf_counter()
         if review is None or review.checked.text != text:
@@ -209,6 +230,8 @@ class RobotGateway:
         if checked.kind == "actuate" and self._held(checked):
             result.reason = ESTOP_REASON  # pressed while the operator was deciding
             return result
+        if journal is not None:
+            journal.sent(result)  # before the robot is told: a crash meanwhile leaves its record
         try:
             result.output, result.values = self.backend.execute(checked, timeout or self.timeout_s)
             result.executed = True
@@ -296,3 +319,43 @@ class RobotGateway:
             self.safety.max_linear = checked.message["value"]
         elif cmd.args["param"] == "max_angular_speed":
             self.safety.max_angular = checked.message["value"]
+
+
+class _Journal:
+    """One command's row in the store: written as sent before the robot is told, completed
+    after; a command that never went out is written once, with why."""
+
+    UNFINISHED = "sent to the robot; astiop ended before it finished"
+
+    def __init__(self, gateway: RobotGateway, source: str):
+        self.gateway = gateway
+        self.source = source
+        self.row: int | None = None
+
+    def sent(self, ex: Execution) -> None:
+        store = self.gateway.store
+        if store is None:
+            return
+        try:
+            fields = {**ex.record(), "executed": 1, "reason": self.UNFINISHED}
+            self.row = store.add_command(None, seq=0, source=self.source, **fields)
+        except StoreError as exc:
+            self._failed(ex, exc)
+
+    def finish(self, ex: Execution) -> None:
+        store = self.gateway.store
+        if store is None:
+            return
+        try:
+            if self.row is None:
+                store.add_command(None, seq=0, source=self.source, **ex.record())
+            else:
+                store.finish_command(self.row, **ex.record())
+        except StoreError as exc:
+            self._failed(ex, exc)
+
+    def _failed(self, ex: Execution, exc: StoreError) -> None:
+        note = f"not in astiop's record of commands: {exc}"
+        if note not in ex.notes:
+            ex.notes.append(note)
+        self.gateway._say_store_error(note)

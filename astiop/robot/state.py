@@ -126,6 +126,9 @@ def grid_from_message(msg: dict[str, Any]) -> OccupancyGrid:
     )
 
 
+LOST = "lost"  # the robot is not heard: its state word, and how a goal it was on ended
+
+
 @dataclass(frozen=True)
 class RobotState:
     t: float  # the robot's clock: sim time, or receive time on a real robot
@@ -140,6 +143,7 @@ class RobotState:
     conveyor: Conveyor | None = None
     e_stopped: bool = False
     event_seq: int = 0
+    lost_s: float | None = None  # how long the robot has not been heard, once it is lost
 
     @property
     def speed(self) -> float | None:
@@ -149,6 +153,8 @@ class RobotState:
 
     @property
     def state_word(self) -> str:
+        if self.lost_s is not None:
+            return LOST  # nothing it last said holds any more, an E-STOP's effect included
         if self.e_stopped:
             return "e_stopped"
         return self.status.state if self.status else "unknown"
@@ -173,6 +179,9 @@ class RobotState:
 
     def with_e_stop(self, engaged: bool) -> RobotState:
         return replace(self, e_stopped=engaged or self.e_stopped)
+
+    def with_lost(self, lost_s: float | None) -> RobotState:
+        return self if lost_s is None else replace(self, lost_s=lost_s)
 
 
 def yaw_of(q: dict[str, Any]) -> float:

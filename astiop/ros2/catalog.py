@@ -7,6 +7,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+# The robot's release of its own latched stop: the operator's to call, never the model's
+RELEASE = "/release"
+
 
 @dataclass(frozen=True)
 class TopicSpec:
@@ -209,8 +212,17 @@ _SERVICES = [
         "std_srvs/srv/Trigger",
         "/navigator",
         True,
+        # the robot then holds until /release, which the model never learns of (this text
+        # is in its prompt; /release is the operator's, agent/tools.py OPERATOR_ONLY)
         "stop motion and cancel the goal; acknowledges a collision fault",
         needs_confirmation=False,
+    ),
+    ServiceSpec(
+        RELEASE,
+        "std_srvs/srv/Trigger",
+        "/navigator",
+        True,
+        "release the latched stop (after /stop or the E-STOP): the robot may move again",
     ),
     ServiceSpec(
         "/dock",

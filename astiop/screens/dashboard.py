@@ -31,6 +31,7 @@ STATE_COLOURS = {
     "blocked": "yellow",
     "e_stopped": "bold red",
     "fault": "bold red",
+    "lost": "bold red",
 }
 EVENT_ROWS = 6
 GAP = "   "
@@ -54,7 +55,9 @@ def robot_text(st: RobotState) -> Text:
     text = Text.assemble(
         ("robot  ", "bold"), (state.upper() + GAP, STATE_COLOURS.get(state, "white"))
     )
-    if status:
+    if st.lost_s is not None:  # what follows is what it said last, not what it does now
+        text.append(f"no message for {st.lost_s:.0f} s: last known{GAP}", style="bold red")
+    elif status:
         text.append(f"mode {status.mode}{GAP}")
     text.append(f"t {st.t:.1f} s\n")
     if st.pose is None:

@@ -118,10 +118,9 @@ class TeleopScreen(ConsoleScreen):
     def action_halt(self) -> None:
         self._supersede()
         self._show_wheels((0.0, 0.0, 0.0, 0.0))
-        # after the presses before it, on the same thread
-        sent = self._sender.submit(
-            self.app.services.gateway.run, "ros2 service call /stop std_srvs/srv/Trigger"
-        )
+        # after the presses before it, on the same thread; a zero Twist, not /stop, which a
+        # robot may latch until it is released (ctrl+e stops everything)
+        sent = self._sender.submit(self.app.services.gateway.drive, 0.0, 0.0, 0.0)
         self.run_worker(
             lambda: self._halted(sent), thread=True, group="teleop", exit_on_error=False
         )

@@ -38,6 +38,7 @@ from astiop.warehouse import WarehouseMap, default_map
 
 ROBOT_MASS = 45.0
 TELEOP_TIMEOUT_S = 0.5
+STOP_LATCHED = "the stop is latched: /release to move again"
 A_LIN, A_ANG = 1.0, 2.0  # m/s², rad/s² the base ramps with
 
 
@@ -92,7 +93,9 @@ class Simulator(NavigationMixin):
         self.plan: tuple[tuple[float, float], ...] = ()
         self.last_result: GoalResult | None = None
         self._goal_ids = 0
-        self.e_stopped = False
+        self.e_stopped = False  # the robot's E-STOP input
+        self.stop_latched = False  # /stop holds the base, as a safety controller does
+        self._ignored_said = False  # /cmd_vel ignored during this hold: said once
         self.fault = ""
         self.max_penetration = 0.0
         self.collisions = 0
@@ -164,10 +167,15 @@ class Simulator(NavigationMixin):
     def speed(self) -> float:
         return float(math.hypot(self._v[0], self._v[1]))
 
+    @property
+    def held(self) -> bool:
+        """Whether the base holds still until /release: its E-STOP input, or a latched /stop."""
+        return self.e_stopped or self.stop_latched
+
     def state_word(self) -> str:
         goal = self.goal
         return state_word(
-            e_stopped=self.e_stopped,
+            e_stopped=self.held,  # held by /stop reads as held by the E-STOP: /release ends both
             fault=self.fault,
             goal_kind=None if goal is None else goal.current.kind,
             blocked=goal is not None and goal.blocked_since is not None,
@@ -194,6 +202,7 @@ class Simulator(NavigationMixin):
                 active_goal=goal.name if goal else "",
                 fault=self.fault,
                 e_stopped=self.e_stopped,
+                stop_latched=self.stop_latched,
                 docked=self.docked(),
                 battery_soc=self.battery.soc,
                 battery_voltage=self.battery.voltage,
@@ -221,11 +230,14 @@ class Simulator(NavigationMixin):
     def _check_can_move(self) -> None:
         if self.e_stopped:
             raise GoalError("the robot is e-stopped; release the e-stop first")
+        if self.stop_latched:
+            raise GoalError(STOP_LATCHED)
         if self.fault:
             raise GoalError(f"the robot has a fault ({self.fault}); call /stop to acknowledge it")
 
     def stop(self) -> str:
-        """Stop all motion, cancel the goal and acknowledge a collision fault."""
+        """Stop all motion, cancel the goal and acknowledge a collision fault; then hold the
+        base (no /cmd_vel, goal, dock or conveyor job) until /release."""
         with self.lock:
             had_goal = self.cancel("stopped by /stop")
             self._teleop = _Teleop()
@@ -233,17 +245,46 @@ class Simulator(NavigationMixin):
             if self.fault:
                 self._event("fault", f"fault acknowledged: {self.fault}")
                 self.fault = ""
+            if not self.stop_latched:
+                self.stop_latched = True
+                self._event("stop", "stop latched: /release to move again", "warning")
             return "stopped; goal canceled" if had_goal else "stopped"
+
+    def release(self) -> str:
+        """/release: let go of a latched /stop and of the E-STOP input."""
+        with self.lock:
+            if not self.held:
+                return "released; nothing was held"
+            if self.e_stopped:
+                self.e_stopped = False
+                self._event("estop", "e-stop released")
+            if self.stop_latched:
+                self.stop_latched = False
+                self._event("stop", "stop released: the robot may move again")
+            self._ignored_said = False  # the next hold says it again
+            return "released: the robot may move again"
 
     def set_cmd_vel(
         self, vx: float, vy: float, wz: float, timeout: float = TELEOP_TIMEOUT_S
     ) -> None:
-        """Teleop velocity in the robot frame; it lapses unless repeated within `timeout`."""
+        """Teleop velocity in the robot frame; it lapses unless repeated within `timeout`.
+        Held (E-STOP, latched /stop), the base stays at rest: a zero Twist agrees with that,
+        any other is refused and said once per hold."""
         with self.lock:
+            if self.held:
+                if vx == vy == wz == 0.0:
+                    return
+                self._say_ignored()
             self._check_can_move()
             if self.goal is not None:
                 self.cancel("overridden by /cmd_vel")
             self._teleop = _Teleop((float(vx), float(vy), float(wz)), self.t + timeout)
+
+    def _say_ignored(self) -> None:
+        if not self._ignored_said:
+            self._ignored_said = True
+            why = "the robot is e-stopped" if self.e_stopped else "the stop is latched"
+            self._event("stop", f"/cmd_vel ignored: {why} (/release to move again)", "warning")
 
     def _clear_teleop(self) -> None:
         self._teleop = _Teleop()
@@ -261,10 +302,8 @@ class Simulator(NavigationMixin):
                 self._event("estop", "E-STOP engaged", "error")
 
     def release_estop(self) -> None:
-        with self.lock:
-            if self.e_stopped:
-                self.e_stopped = False
-                self._event("estop", "e-stop released")
+        """The E-STOP's release is the robot's /release: it lets go of a latched /stop too."""
+        self.release()
 
     def conveyor_transfer(self, direction: int) -> str:
         with self.lock:

@@ -35,7 +35,8 @@ class SimState:
     mode: str
     active_goal: str
     fault: str
-    e_stopped: bool
+    e_stopped: bool  # the E-STOP input; `state` reads "e_stopped" while a /stop holds too
+    stop_latched: bool
     docked: bool
     battery_soc: float
     battery_voltage: float

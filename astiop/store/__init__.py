@@ -4,8 +4,10 @@ of astiop behind a named method (locations, the journal, the benchmark)."""
 from __future__ import annotations
 
 import os
+import random
 import sqlite3
 import threading
+import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -53,6 +55,15 @@ def _writable(path: Path) -> bool:
     return os.access(folder, os.W_OK | os.X_OK)
 
 
+def _read_only_uri(path: Path) -> str:
+    """mode=ro; and immutable where SQLite could not make a WAL file's shared-memory file (no
+    -shm beside it, in a folder astiop may not write): it is then read as it stands on disk."""
+    shm = path.with_name(path.name + "-shm")
+    if not shm.exists() and not os.access(path.parent, os.W_OK | os.X_OK):
+        return f"{path.as_uri()}?mode=ro&immutable=1"
+    return f"{path.as_uri()}?mode=ro"
+
+
 class Store(LocationTables, JournalTables, BenchTables, ApprovalTables):
     """One connection per thread, all to the same file."""
 
@@ -77,7 +88,7 @@ class Store(LocationTables, JournalTables, BenchTables, ApprovalTables):
         db = getattr(self._local, "db", None)
         if db is None:
             if self.readonly:  # reads work; any write fails, and _tx says so first
-                conn = sqlite3.connect(f"{self.path.as_uri()}?mode=ro", uri=True, timeout=10)
+                conn = sqlite3.connect(_read_only_uri(self.path), uri=True, timeout=10)
             else:
                 conn = sqlite3.connect(self.path, timeout=10)
             conn.execute(f"PRAGMA busy_timeout={BUSY_TIMEOUT_MS}")  # SQLite retries, bounded
@@ -155,14 +166,55 @@ class Store(LocationTables, JournalTables, BenchTables, ApprovalTables):
                     f"{self.path} is read-only and needs an upgrade this astiop cannot write"
                 )
             return
+        self._enter_wal(db.conn)
+        if version < SCHEMA_VERSION:
+            self._run_migrations()
+
+    def _enter_wal(self, conn: sqlite3.Connection) -> None:
+        """PRAGMA journal_mode=WAL, outside any transaction (SQLite refuses it inside one).
+        Switching needs the file to itself, and SQLite answers "locked" at once, without its
+        busy wait, when another process opening a new file holds it: retried, bounded."""
+        deadline = time.monotonic() + BUSY_TIMEOUT_MS / 1000
+        while True:
+            try:
+                conn.execute("PRAGMA journal_mode=WAL")
+                return
+            except sqlite3.OperationalError as exc:
+                if "locked" not in str(exc) or time.monotonic() > deadline:
+                    raise StoreError(f"{self.path} cannot be written: {exc}") from None
+            except sqlite3.DatabaseError as exc:
+                raise StoreError(f"{self.path} cannot be written: {exc}") from None
+            time.sleep(random.uniform(0.005, 0.05))  # apart from the others trying
+
+    def _run_migrations(self) -> None:
+        """Each migration in one transaction, on a connection of its own in autocommit mode (no
+        implicit BEGIN or COMMIT from Python): a process killed inside one leaves the version
+        before it. The version is read again under the write lock, as another process opening
+        the same file may have migrated it meanwhile."""
+        conn = sqlite3.connect(self.path, timeout=BUSY_TIMEOUT_MS / 1000, isolation_level=None)
+        version = None
         try:
-            db.conn.execute("PRAGMA journal_mode=WAL")
+            while True:
+                conn.execute("BEGIN IMMEDIATE")
+                version = conn.execute("PRAGMA user_version").fetchone()[0]
+                if version >= SCHEMA_VERSION:  # done, by this process or another
+                    conn.execute("ROLLBACK")
+                    break
+                MIGRATIONS[version](conn)
+                conn.execute(f"PRAGMA user_version = {version + 1}")
+                conn.execute("COMMIT")
         except sqlite3.DatabaseError as exc:
-            raise StoreError(f"{self.path} cannot be written: {exc}") from None
-        for index in range(version, SCHEMA_VERSION):
-            with db.conn:
-                MIGRATIONS[index](db)
-                db.conn.execute(f"PRAGMA user_version = {index + 1}")
+            if conn.in_transaction:
+                conn.execute("ROLLBACK")
+            at = "" if version is None else f"; it was left at schema version {version}"
+            raise StoreError(f"{self.path}: the schema upgrade failed ({exc}){at}") from None
+        finally:
+            conn.close()
+        if version > SCHEMA_VERSION:
+            raise StoreError(
+                f"{self.path} was upgraded meanwhile to schema version {version}, newer than "
+                f"this astiop understands ({SCHEMA_VERSION}); upgrade astiop"
+            )
 
     def close(self) -> None:
         db = getattr(self._local, "db", None)

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
-import contextlib
 import json
 import os
 import time
+from collections.abc import Collection
 from typing import Any
+
+from astiop import latch
 
 
 class JournalTables:
@@ -53,17 +55,29 @@ class JournalTables:
                 }
             )
 
-    def keep_robot_events(self, events) -> None:
+    def keep_robot_events(self, events) -> str | None:
         """The robot's events (RobotEvent), in one write. It never raises: the record must
-        never stop what is watching the robot (the console, `astiop record`)."""
+        never stop what is watching the robot (the console, `astiop record`); why it failed,
+        for the caller to say."""
         rows = [
             {"t": time.time(), "sim_t": e.t, "kind": e.kind, "severity": e.severity,
              "message": e.message}
             for e in events
         ]  # fmt: skip
         if rows:
-            with contextlib.suppress(Exception), self._tx():
-                self.db["events"].insert_all(rows)
+            try:
+                with self._tx():
+                    self.db["events"].insert_all(rows)
+            except Exception as exc:  # noqa: BLE001 - said by the caller, never raised
+                return f"robot events not kept: {exc}"
+        return None
+
+    def finish_command(self, command_id: int, **fields: Any) -> None:
+        """A command journaled as sent (before the robot was told), completed with its result."""
+        if "values" in fields and not isinstance(fields["values"], (str, type(None))):
+            fields["values"] = json.dumps(fields["values"], default=str)
+        with self._tx():
+            self.db["commands"].update(command_id, fields)
 
     def interactions(self, limit: int = 500) -> list[dict[str, Any]]:
         return list(self.db.query("SELECT * FROM interactions ORDER BY id DESC LIMIT ?", [limit]))
@@ -95,40 +109,53 @@ class JournalTables:
             return {"by": row[1], "at": row[2]}
         return None
 
+    def latch_version(self) -> int:
+        """SQLite's data_version on this thread's connection: it changes when another
+        connection commits, so a watcher reads the latch only then (a few µs a look)."""
+        return self.db.conn.execute("PRAGMA data_version").fetchone()[0]
+
     def latch_estop(self, who: str) -> None:
         with self._tx():
-            self.db.conn.execute(
-                "UPDATE estop SET engaged = 1, engaged_by = ?, engaged_at = ? WHERE id = 1",
-                [who, time.time()],
-            )
+            self.db.conn.execute(latch.LATCH, [who, time.time()])
 
     def release_estop(self, who: str) -> None:
         with self._tx():
-            self.db.conn.execute(
-                "UPDATE estop SET engaged = 0, released_by = ?, released_at = ? WHERE id = 1",
-                [who, time.time()],
-            )
+            self.db.conn.execute(latch.RELEASE, [who, time.time()])
 
-    def newest_interaction_id(self) -> int:
-        return self.db.execute("SELECT max(id) FROM interactions").fetchone()[0] or 0
+    def interaction_marks(self) -> tuple[int, list[int]]:
+        """The newest turn's id and the ids of the turns still running, read together."""
+        rows = self.db.execute(
+            "SELECT id, status FROM interactions "
+            "WHERE status = 'running' OR id = (SELECT max(id) FROM interactions)"
+        ).fetchall()
+        newest = max((i for i, _status in rows), default=0)
+        return newest, [i for i, status in rows if status == "running"]
 
-    def finished_interactions_after(self, interaction_id: int) -> list[dict[str, Any]]:
-        """Turns that ended after `interaction_id`, with their commands (for recording)."""
+    def interactions_to_record(
+        self, after_id: int, running: Collection[int] = ()
+    ) -> list[dict[str, Any]]:
+        """The turns after `after_id` and the turns `running` (seen running before), in one
+        statement, so a turn missing from the list started after every turn in it: running
+        ones with their status, ended ones with their commands too (for recording)."""
+        ids = sorted(running)
+        also = f" OR id IN ({','.join('?' * len(ids))})" if ids else ""
         rows = list(
-            self.db.query(
+            self.db.query(  # no ORDER BY: with it SQLite scans the table, without it looks up
                 "SELECT id, prompt, model, mode, answer, grounding, total_s, status "
-                "FROM interactions WHERE id > ? AND status != 'running' ORDER BY id",
-                [interaction_id],
+                f"FROM interactions WHERE id > ?{also}",
+                [after_id, *ids],
             )
         )
+        rows.sort(key=lambda row: row["id"])
         for row in rows:
-            row["commands"] = list(
-                self.db.query(
-                    "SELECT command, valid, executed, reason, source FROM commands "
-                    "WHERE interaction_id = ? ORDER BY seq",
-                    [row["id"]],
+            if row["status"] != "running":
+                row["commands"] = list(
+                    self.db.query(
+                        "SELECT command, valid, executed, reason, source FROM commands "
+                        "WHERE interaction_id = ? ORDER BY seq",
+                        [row["id"]],
+                    )
                 )
-            )
         return rows
 
     def add_recorded_interaction(self, turn: dict[str, Any], started_at: float) -> int:

@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import math
+import sqlite3
 import time
 from pathlib import Path
 
-import sqlite_utils
 import yaml
 
 from astiop.resources import data_path
@@ -15,21 +15,44 @@ from astiop.store.records import StoreError
 SQLITE_HEADER = b"SQLite format 3\x00"
 
 
-def _seed_locations(db: sqlite_utils.Database) -> None:
+def _statements(script: str) -> list[str]:
+    """A script's SQL statements one by one: executescript would COMMIT before it runs them,
+    and a migration must stay inside its own transaction."""
+    found, pending = [], ""
+    for line in script.splitlines(keepends=True):
+        pending += line
+        if sqlite3.complete_statement(pending):
+            found.append(pending.strip())
+            pending = ""
+    if pending.strip():
+        raise ValueError(f"an unfinished SQL statement: {pending.strip()[:60]}")
+    return found
+
+
+def _run(conn: sqlite3.Connection, script: str) -> None:
+    for statement in _statements(script):
+        conn.execute(statement)
+
+
+def _seed_locations(conn: sqlite3.Connection) -> None:
     seeds = yaml.safe_load(data_path("locations.yaml").read_text(encoding="utf-8"))
     now = time.time()
-    for s in seeds:
-        db["locations"].insert(
-            {
-                "name": s["name"],
-                "x": float(s["x"]),
-                "y": float(s["y"]),
-                "theta": math.radians(float(s.get("theta_deg", 0.0))),
-                "description": s.get("description", ""),
-                "created_at": now,
-                "updated_at": now,
-            }
-        )
+    conn.executemany(
+        "INSERT INTO locations (name, x, y, theta, description, created_at, updated_at) "
+        "VALUES (?, ?, ?, ?, ?, ?, ?)",
+        [
+            (
+                s["name"],
+                float(s["x"]),
+                float(s["y"]),
+                math.radians(float(s.get("theta_deg", 0.0))),
+                s.get("description", ""),
+                now,
+                now,
+            )
+            for s in seeds
+        ],
+    )
 
 
 _SCHEMA_V1 = """
@@ -81,14 +104,15 @@ CREATE TABLE bench_results (
 """
 
 
-def _migrate_v1(db: sqlite_utils.Database) -> None:
-    db.conn.executescript(_SCHEMA_V1)
-    _seed_locations(db)
+def _migrate_v1(conn: sqlite3.Connection) -> None:
+    _run(conn, _SCHEMA_V1)
+    _seed_locations(conn)
 
 
-def _migrate_v2(db: sqlite_utils.Database) -> None:
+def _migrate_v2(conn: sqlite3.Connection) -> None:
     # The E-STOP latch: one row, read by every astiop process on this database.
-    db.conn.executescript(
+    _run(
+        conn,
         """
         CREATE TABLE estop (
             id INTEGER PRIMARY KEY CHECK (id = 1),
@@ -96,36 +120,39 @@ def _migrate_v2(db: sqlite_utils.Database) -> None:
             engaged_by TEXT, engaged_at REAL, released_by TEXT, released_at REAL
         );
         INSERT INTO estop (id, engaged) VALUES (1, 0);
-        """
+        """,
     )
 
 
-def _migrate_v3(db: sqlite_utils.Database) -> None:
+def _migrate_v3(conn: sqlite3.Connection) -> None:
     # Grounded answers: the model's own text and why it was replaced; how a started goal ended.
-    db.conn.executescript(
+    _run(
+        conn,
         """
         ALTER TABLE interactions ADD COLUMN model_answer TEXT;
         ALTER TABLE interactions ADD COLUMN grounding TEXT;
         ALTER TABLE interactions ADD COLUMN outcome TEXT;
         ALTER TABLE interactions ADD COLUMN outcome_at REAL;
-        """
+        """,
     )
 
 
-def _migrate_v4(db: sqlite_utils.Database) -> None:
+def _migrate_v4(conn: sqlite3.Connection) -> None:
     # Every command astiop runs, with where it came from; the process behind a running turn.
-    db.conn.executescript(
+    _run(
+        conn,
         """
         ALTER TABLE commands ADD COLUMN source TEXT;
         ALTER TABLE interactions ADD COLUMN pid INTEGER;
-        """
+        """,
     )
 
 
-def _migrate_v5(db: sqlite_utils.Database) -> None:
+def _migrate_v5(conn: sqlite3.Connection) -> None:
     # An outside agent's actuation waits for a person in an open console (astiop mcp); the
     # consoles say they are open by a heartbeat.
-    db.conn.executescript(
+    _run(
+        conn,
         """
         CREATE TABLE approvals (
             id INTEGER PRIMARY KEY,
@@ -136,22 +163,24 @@ def _migrate_v5(db: sqlite_utils.Database) -> None:
         CREATE TABLE consoles (
             pid INTEGER PRIMARY KEY, started_at REAL NOT NULL, seen_at REAL NOT NULL
         );
-        """
+        """,
     )
 
 
-# Ordered; the database's PRAGMA user_version counts how many have run.
-def _migrate_v6(db: sqlite_utils.Database) -> None:
+def _migrate_v6(conn: sqlite3.Connection) -> None:
     # What kind of fact each result is (measured, accepted, commanded, reported) and how old a
     # reading was by its stamp.
-    db.conn.executescript(
+    _run(
+        conn,
         """
         ALTER TABLE commands ADD COLUMN provenance TEXT;
         ALTER TABLE commands ADD COLUMN age_s REAL;
-        """
+        """,
     )
 
 
+# Ordered; the database's PRAGMA user_version counts how many have run. Each runs inside one
+# transaction (Store._run_migrations): on a plain connection, with execute only.
 MIGRATIONS = [_migrate_v1, _migrate_v2, _migrate_v3, _migrate_v4, _migrate_v5, _migrate_v6]
 SCHEMA_VERSION = len(MIGRATIONS)
 _OUR_TABLES = {

@@ -75,3 +75,33 @@ class EstopWork:
             for e in self.events.since(self._seq)
             if e.kind == "estop" and e.message not in self._said
         ]
+
+
+class Contact:
+    """Whether the robot is heard: silent for `silent_s` (none of its state topics came), it is
+    lost, said once; heard again, reconnected, said once. Never heard is not lost (not yet)."""
+
+    def __init__(self, events: EventLog, silent_s: float, on_return=None):
+        self.events = events
+        self.silent_s = silent_s
+        self.on_return = on_return  # what a transport redoes once the robot is back
+        self._lost = False
+        self._lock = threading.Lock()
+
+    def check(self, ages: list[float]) -> float | None:
+        """The seconds since the robot was last heard when it is lost, else None; `ages` are
+        its topics' last messages' ages (inf: none came yet)."""
+        heard = [a for a in ages if a != float("inf")]
+        age = min(heard) if heard else None
+        lost = age is not None and age > self.silent_s
+        with self._lock:
+            changed, self._lost = lost != self._lost, lost
+        if changed and lost:
+            self.events.add(
+                "robot", "error", f"lost contact with the robot: no message for {self.silent_s:g} s"
+            )
+        elif changed:
+            self.events.add("robot", "info", "reconnected: the robot is publishing again")
+            if self.on_return is not None:
+                self.on_return()
+        return age if lost else None

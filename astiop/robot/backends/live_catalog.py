@@ -6,7 +6,8 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from astiop.ros2.catalog import (
+from astiop.ros2.catalog import (  # noqa: F401 - RELEASE: its home for the transports
+    RELEASE,
     ActionSpec,
     Catalog,
     ParamSpec,

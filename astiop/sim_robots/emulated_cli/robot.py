@@ -202,7 +202,7 @@ class EmulatedRobot(TopicVerbs):
                     )
         except Interrupted:  # the client's finally: cancel the goal it sent
             if self.sim.goal is not None and self.sim.goal.id == goal.id:
-                self.sim.stop()
+                self.sim.cancel("canceled by the action client")  # a cancel, not a latched /stop
             with contextlib.suppress(Interrupted):
                 call.out("Canceling goal...\nGoal canceled.\n")
             raise

@@ -9,13 +9,15 @@ import time
 from typing import Any
 
 from astiop.robot.backend import BackendError, RobotBackend
-from astiop.robot.backends.event_log import EstopWork, EventLog
-from astiop.robot.backends.live_catalog import describe_graph, stop_service_type
+from astiop.robot.backends.event_log import Contact, EstopWork, EventLog
+from astiop.robot.backends.live_catalog import RELEASE, describe_graph, stop_service_type
 from astiop.robot.backends.rclpy.graph import read_lists, read_params
 from astiop.robot.backends.rclpy.node import ros_process
 from astiop.robot.backends.rclpy.verbs import RclpyVerbs
 from astiop.robot.backends.rclpy.watch import TopicWatch, watch
+from astiop.robot.inflight import InFlight, Job
 from astiop.robot.state import (
+    LOST,
     OccupancyGrid,
     RobotEvent,
     RobotState,
@@ -69,15 +71,16 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         self._map: OccupancyGrid | None = None
         self._goals: list[Any] = []  # goal handles this process sent and that have not ended
         self._last_outcome: str | None = None
-        self._e_stopped = False
+        self.inflight = InFlight()
+        self._teleop_job: Job | None = None  # while teleop holds a velocity
         self._closed = threading.Event()
         self._cmd_vel: tuple[Any, Any, str] | None = None  # publisher, class, type
         self._hold: dict | None = None
         self._hold_until = 0.0
-        self._silent = False
         self.t0 = time.monotonic()
         self.events = EventLog(self.t0)
         self._estop = EstopWork(self.events)
+        self._contact = Contact(self.events, SILENT_S)
         self._lists = self._discover(DISCOVERY_S if discover else 0.0)
         self._params: list[tuple[str, str]] = []  # read by start(), or when a command needs them
         self._params_of: dict[str, list[tuple[str, str]]] = {}  # node -> its parameters
@@ -146,19 +149,14 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
                     if read_lists(self.proc) != self._lists:
                         self.refresh()
                     self._drop_unwanted()
-                    self._check_silence()
+                    self._lost_for(time.monotonic())
             except Exception as exc:  # noqa: BLE001 - the loop must outlive one bad read
                 self.events.add("graph", "warning", f"reading the robot's graph failed: {exc}")
 
-    def _check_silence(self) -> None:
-        now = time.monotonic()
-        ages = [w.age(now) for w in self._watches.values()]
-        silent = bool(ages) and min(ages) > SILENT_S
-        if silent and not self._silent:
-            self.events.add("robot", "error", f"no message from the robot for {SILENT_S:g} s")
-        elif self._silent and not silent:
-            self.events.add("robot", "info", "the robot is publishing again")
-        self._silent = silent
+    def _lost_for(self, now: float) -> float | None:
+        """Seconds since the robot was last heard, when it is lost (said once, as is its
+        return)."""
+        return self._contact.check([w.age(now) for w in self._watches.values()])
 
     # -- lifecycle ---------------------------------------------------------------------------
     def start(self) -> None:
@@ -264,7 +262,8 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         if status.get("state") not in MOVING:
             messages.pop("/plan", None)  # the last plan of a finished goal
         seq = self.events.seq
-        return from_messages(now - self.t0, messages, e_stopped=self._e_stopped, event_seq=seq)
+        state = from_messages(now - self.t0, messages, e_stopped=self.inflight.held, event_seq=seq)
+        return state.with_lost(self._lost_for(now))
 
     def messages(self, names) -> dict[str, dict[str, Any]]:
         out = {}
@@ -299,6 +298,8 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
     def wait_until_idle(self, timeout_s: float) -> str | None:
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline:
+            if self._lost_for(time.monotonic()) is not None:
+                return LOST  # its goal's end will not be heard
             status = self._watches.get("/robot_status")
             state = (status.latest() or {}).get("state") if status else None
             if not self._goals and state not in MOVING:
@@ -341,44 +342,53 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         return msg
 
     def drive(self, twist: dict) -> None:
-        if self._e_stopped:
-            raise BackendError("the E-STOP is engaged")
         with self._lock:
+            if self._teleop_job is None:  # refused while the E-STOP holds
+                self._teleop_job = self.inflight.start("teleop", self._drop_hold)
+            job = self._teleop_job
             self._hold, self._hold_until = twist, time.monotonic() + LAPSE_S
             self._holding.set()
-        self._send_twist(twist)  # now, not at the next tick
+        with job.sending():
+            self._send_twist(twist)  # now, not at the next tick
         self._want("/odom")  # the velocity it makes, after it is sent
+
+    def _drop_hold(self) -> None:
+        with self._lock:
+            self._hold, self._teleop_job = None, None
 
     def _teleop_loop(self) -> None:
         """Repeat the held velocity at 10 Hz; when the keys stop, one zero Twist. Asleep while
         nothing is held (no wake-up ten times a second for nothing)."""
         while self._holding.wait() and not self._closed.wait(1.0 / TELEOP_HZ):
             with self._lock:
-                twist, until = self._hold, self._hold_until
+                twist, until, job = self._hold, self._hold_until, self._teleop_job
                 lapsed = twist is not None and time.monotonic() > until
                 if lapsed:
-                    self._hold = None
+                    self._hold, self._teleop_job = None, None
                 if self._hold is None:
                     self._holding.clear()  # drive() sets it again, under this lock
             try:
                 if lapsed:
                     self._send_twist(zero_twist())
-                elif twist is not None and not self._e_stopped:
-                    self._send_twist(twist)
+                    if job is not None:
+                        job.done()
+                elif twist is not None and job is not None:
+                    with job.sending():
+                        self._send_twist(twist)
+            except BackendError:
+                pass  # the E-STOP ended the hold: its own zero Twists follow
             except Exception as exc:  # noqa: BLE001
                 self.events.add("teleop", "error", f"/cmd_vel: {exc}")
 
     @property
     def e_stopped(self) -> bool:
-        return self._e_stopped
+        return self.inflight.held
 
     def estop(self) -> list[str]:
-        """The zero Twist now, /stop called and every goal of this process canceled, none
-        waiting on another; failures that come later arrive as events (`settle_estop`)."""
-        self._e_stopped = True
-        with self._lock:
-            self._hold = None
-        failures: list[str] = []
+        """Everything in flight ended first (timed publishes, goals, teleop), then the zero Twist
+        now and /stop called, neither waiting on the other; failures that come later arrive as
+        events (`settle_estop`)."""
+        failures = self.inflight.stop_all()
         self._estop.begin()
         try:
             if "/cmd_vel" in self.catalog.topics:
@@ -388,7 +398,6 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
             failures.append(f"{exc}: no zero Twist was sent")
         stop_type = stop_service_type(self.catalog)  # a young process may not have seen it yet
         self._estop.start(lambda: self._call_stop(stop_type), "estop-stop")
-        self._cancel_goals()
         self._estop.said(failures)
         return failures
 
@@ -412,29 +421,39 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
                     raise BackendError(f"nothing subscribed to /cmd_vel in {self.timeout_s:g} s")
                 time.sleep(0.01)
             end = time.monotonic() + ESTOP_BURST_S
-            while time.monotonic() < end and self._e_stopped and not self._closed.is_set():
+            while time.monotonic() < end and self.inflight.held and not self._closed.is_set():
                 self._send_twist(zero_twist())
                 time.sleep(1.0 / TELEOP_HZ)
         except Exception as exc:  # noqa: BLE001 - said, never raised: /stop goes on
             self.events.add("estop", "error", f"E-STOP zero Twist: {exc}")
 
     def _call_stop(self, type_: str) -> None:
+        self._trigger("/stop", type_, "E-STOP")
+
+    def _trigger(self, name: str, type_: str, what: str) -> None:
+        """Call a service with an empty request; a failure is said as an event, never raised."""
         try:
-            client = self.proc.client(interface_class(type_), "/stop")
+            client = self.proc.client(interface_class(type_), name)
             if not client.wait_for_service(timeout_sec=self.timeout_s):
                 self.events.add(
-                    "estop", "error", f"E-STOP: no /stop answered within {self.timeout_s:g} s"
+                    "estop", "error", f"{what}: no {name} answered within {self.timeout_s:g} s"
                 )
                 return
             request = client.srv_type.Request()
-            self.proc.wait(client.call_async(request), self.timeout_s, "E-STOP /stop")
+            self.proc.wait(client.call_async(request), self.timeout_s, f"{what} {name}")
         except Exception as exc:  # noqa: BLE001 - said, never raised: the stop goes on
-            self.events.add("estop", "error", f"E-STOP /stop: {exc}")
+            self.events.add("estop", "error", f"{what} {name}: {exc}")
 
     def settle_estop(self, timeout_s: float) -> list[str]:
         # /stop waits for its server, then for the answer: each may take the timeout (the
         # burst ends sooner: its timeout and a second)
         return self._estop.settle(2 * timeout_s)
 
-    def release_estop(self) -> None:
-        self._e_stopped = False
+    def release_estop(self) -> list[str]:
+        self.inflight.release()
+        spec = self.catalog.services.get(RELEASE)
+        if spec is None:
+            return []
+        seq = self.events.seq  # a robot that latches its own stop lets go too
+        self._trigger(RELEASE, spec.type, "release")
+        return [e.message for e in self.events.since(seq) if e.kind == "estop"]

@@ -15,6 +15,7 @@ from rclpy.qos import qos_profile_sensor_data
 from astiop.robot.backend import BackendError
 from astiop.robot.backends.rclpy.graph import full_name, hidden, matched_qos
 from astiop.robot.backends.rclpy.node import RosTimeout
+from astiop.robot.inflight import ENDED, Job
 from astiop.ros2.interfaces import interface_show
 from astiop.ros2.message_objects import MessageTypeError, interface_class, to_dict, to_message
 from astiop.ros2.printing import echo_text, node_info_text, ros2cli_yaml
@@ -44,13 +45,12 @@ class RclpyVerbs:
 
     def execute(self, checked: Checked, timeout: float) -> tuple[str, Any]:
         cmd = checked.command
-        if checked.kind == "actuate" and self._e_stopped and cmd.name != "/stop":
-            raise BackendError("the E-STOP is engaged: nothing was sent")
         handler = getattr(self, f"_{cmd.verb}_{cmd.sub}", None)
         if handler is None:
             raise BackendError(f"ros2 {cmd.verb} {cmd.sub} is not served through rclpy")
         try:
-            return handler(checked, timeout)
+            with self.actuating(checked):  # refused while the E-STOP holds, ended by it
+                return handler(checked, timeout)
         except RosTimeout as exc:
             raise BackendError(str(exc)) from None
         except MessageTypeError as exc:
@@ -216,6 +216,7 @@ class RclpyVerbs:
             cls = interface_class(c.type)
             pub = self.proc.node.create_publisher(cls, name, matched_qos(self.proc, name))
         lines = []
+        job = self.inflight.current() or Job(self.inflight, "a read")  # the E-STOP ends it
         try:
             if pub.get_subscription_count() < 1:
                 lines.append("Waiting for at least 1 matching subscription(s)...")
@@ -223,17 +224,17 @@ class RclpyVerbs:
                 while pub.get_subscription_count() < 1:
                     if time.monotonic() > deadline:
                         raise BackendError(f"no subscriber on {name} within {timeout:g} s")
-                    time.sleep(0.1)
+                    if job.wait(0.1):
+                        raise BackendError(f"{ENDED}: nothing was published")
             lines.append("publisher: beginning loop")
             for i in range(times):
-                if i:
-                    time.sleep(1.0 / rate)
-                if self._e_stopped and name == "/cmd_vel":
-                    raise BackendError("the E-STOP is engaged: publishing stopped")
+                if i and job.wait(1.0 / rate):
+                    raise BackendError(f"{ENDED} after {i} of {times} messages")
                 msg = (
                     self._stamped(cls, message) if name == "/cmd_vel" else to_message(cls, message)
                 )
-                pub.publish(msg)
+                with job.sending():
+                    pub.publish(msg)
                 lines += [f"publishing #{i + 1}: {msg!r}", ""]
         finally:
             if name != "/cmd_vel":
@@ -283,13 +284,21 @@ class RclpyVerbs:
             lines.append("Goal was rejected.")
             return "\n".join(lines) + "\n", {"accepted": False, "status": "REJECTED"}
         goal_id = bytes(handle.goal_id.uuid).hex()
+        try:  # followed as a job of its own until it ends: the E-STOP cancels it
+            job = self.inflight.start(f"goal {c.command.name}", handle.cancel_goal_async)
+        except BackendError:
+            handle.cancel_goal_async()  # the E-STOP came while it was being accepted
+            raise BackendError(f"{ENDED}: the goal was accepted and canceled") from None
         lines.append(f"Goal accepted with ID: {goal_id}\n")
         self._goals.append(handle)
         self._last_outcome = None
-        handle.get_result_async().add_done_callback(lambda f: self._goal_ended(handle, client, f))
+        handle.get_result_async().add_done_callback(
+            lambda f: self._goal_ended(handle, client, f, job)
+        )
         return "\n".join(lines) + "\n", {"accepted": True, "goal_id": goal_id, "status": "ACCEPTED"}
 
-    def _goal_ended(self, handle: Any, client: Any, future: Any) -> None:
+    def _goal_ended(self, handle: Any, client: Any, future: Any, job: Job) -> None:
+        job.done()
         if handle in self._goals:
             self._goals.remove(handle)
         result = future.result()

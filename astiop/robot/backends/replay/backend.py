@@ -12,6 +12,7 @@ from typing import Any
 
 from astiop.recording.reader import Recording
 from astiop.robot.backend import BackendError, RobotBackend
+from astiop.robot.inflight import InFlight
 from astiop.robot.state import (
     RobotEvent,
     RobotState,
@@ -99,6 +100,7 @@ class ReplayBackend(RobotBackend):
         self.label = f"replay of {recording.path.name}"
         self.store = store  # a throwaway store: the recorded turns appear in it as they happen
         self.catalog: Catalog = astibot_catalog()
+        self.inflight = InFlight()  # stays empty: a replay never actuates
         self.playback = Playback(recording.start_ns, recording.end_ns, speed, not paused)
         self._turns = recording.channels.get("/astiop/interactions")
         self._turns_shown = 0
@@ -138,8 +140,8 @@ class ReplayBackend(RobotBackend):
     def estop(self) -> list[str]:
         return []  # nothing moves; the latch is kept in the replay's own store
 
-    def release_estop(self) -> None:
-        pass
+    def release_estop(self) -> list[str]:
+        return []
 
     def execute(self, checked: Checked, timeout: float) -> tuple[str, object]:
         raise BackendError(READ_ONLY)

@@ -13,8 +13,8 @@ import time
 from typing import Any
 
 from astiop.robot.backend import BackendError, RobotBackend
-from astiop.robot.backends.event_log import EstopWork, EventLog
-from astiop.robot.backends.live_catalog import nothing_listed, stop_service_type
+from astiop.robot.backends.event_log import Contact, EstopWork, EventLog
+from astiop.robot.backends.live_catalog import RELEASE, nothing_listed, stop_service_type
 from astiop.robot.backends.ros2cli import process as ros2_process
 from astiop.robot.backends.ros2cli.graph import GraphReader
 from astiop.robot.backends.ros2cli.motion import (
@@ -30,7 +30,9 @@ from astiop.robot.backends.ros2cli.replies import (
     without_display_options,
 )
 from astiop.robot.backends.ros2cli.streams import TopicStream, parse_document
+from astiop.robot.inflight import ENDED, InFlight, Job
 from astiop.robot.state import (
+    LOST,
     OccupancyGrid,
     RobotEvent,
     RobotState,
@@ -48,6 +50,7 @@ from astiop.ros2.validation import Checked
 ARRAYS = {"/scan", "/plan", "/obstacles"}  # echoed in full: ros2 truncates at 128 items
 MOVING = {"navigating", "docking", "blocked"}
 GRAPH_REFRESH_S = 30.0
+SILENT_S = 3.0  # none of the robot's state streams said anything for this long: it is lost
 ZERO_PUB_S = 1.0  # an E-STOP's ten zero Twists at 10 Hz: a second on top of the start-up
 
 
@@ -85,7 +88,8 @@ class Ros2Backend(RobotBackend):
         self.timeout_s = timeout_s
         self.distro = current_distro()
         self.stream = stream
-        self._e_stopped = False
+        self.inflight = InFlight()
+        self._teleop_job: Job | None = None  # while teleop holds a velocity
         self._lock = threading.Lock()
         self._latest: dict[str, dict[str, Any]] = {}
         self._received: dict[str, float] = {}  # on the robot clock: s since t0
@@ -98,6 +102,7 @@ class Ros2Backend(RobotBackend):
         self.t0 = time.monotonic()
         self.events = EventLog(self.t0)
         self._estop = EstopWork(self.events)
+        self._contact = Contact(self.events, SILENT_S, on_return=self._rearm)
         self._closed = threading.Event()
         self._graph = GraphReader(self._run, timeout_s)
         self.discovered = discover
@@ -106,7 +111,9 @@ class Ros2Backend(RobotBackend):
 
     # -- the live graph -----------------------------------------------------------------
     def _run(self, argv: list[str], timeout: float, **kw) -> ros2_process.Run:
-        return ros2_process.run(self.executable, argv, timeout, **kw)
+        """`ros2 ARGV`; inside an actuating command's job, the E-STOP kills it."""
+        job = self.inflight.current()
+        return ros2_process.run(self.executable, argv, timeout, job=job, **kw)
 
     def refresh(self) -> bool:
         """Read the graph again (a name was missing, or 30 s passed); False if it failed."""
@@ -125,10 +132,12 @@ class Ros2Backend(RobotBackend):
     def start(self) -> None:
         cmd_vel = self.catalog.topics.get("/cmd_vel")
         if cmd_vel is not None:
-            self._teleop = TeleopPublisher(self.executable, cmd_vel.name, cmd_vel.type)
+            self._teleop = TeleopPublisher(
+                self.executable, cmd_vel.name, cmd_vel.type, on_lapse=self._teleop_lapsed
+            )
             if self.distro in STDIN_DISTROS:
                 self._armed = ArmedStop(self.executable, cmd_vel.name, cmd_vel.type)
-                if not self._e_stopped:
+                if not self.inflight.held:
                     self._armed.arm()
         if not self.stream:
             return
@@ -176,8 +185,19 @@ class Ros2Backend(RobotBackend):
         status = messages.get("/robot_status") or {}
         if status.get("state") not in MOVING:
             messages.pop("/plan", None)  # the last plan of a finished goal
-        t = time.monotonic() - self.t0
-        return from_messages(t, messages, e_stopped=self._e_stopped, event_seq=seq)
+        now = time.monotonic()
+        state = from_messages(now - self.t0, messages, e_stopped=self.inflight.held, event_seq=seq)
+        return state.with_lost(self._lost_for(now))
+
+    def _lost_for(self, now: float) -> float | None:
+        """Seconds since the robot was last heard, when it is lost (said once, as is its
+        return)."""
+        return self._contact.check([s.age(now) for s in self._streams.values()])
+
+    def _rearm(self) -> None:
+        """The robot is back: the E-STOP's armed publisher may have ended with it."""
+        if self._armed is not None and not self.inflight.held:
+            self._armed.arm()
 
     def messages(self, names) -> dict[str, dict[str, Any]]:
         with self._lock:
@@ -213,6 +233,8 @@ class Ros2Backend(RobotBackend):
     def wait_until_idle(self, timeout_s: float) -> str | None:
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline:
+            if self._lost_for(time.monotonic()) is not None:
+                return LOST  # its goal's end will not be heard
             # a goal's client is followed until its last line is read (its outcome), not only
             # until its process exits: the follower drops it from the list then
             goals_running = bool(self._goal_procs)
@@ -226,15 +248,15 @@ class Ros2Backend(RobotBackend):
     # -- E-STOP and teleop -----------------------------------------------------------------
     @property
     def e_stopped(self) -> bool:
-        return self._e_stopped
+        return self.inflight.held
 
     def estop(self) -> list[str]:
-        """Zero Twist first (armed, or spawned), /stop in parallel, goals canceled; no step
-        waits for another. Failures after this returns arrive as events."""
-        self._e_stopped = True
+        """Everything in flight ended first (a timed publish's process killed, goals' clients
+        stopped so they cancel, teleop halted), then the zero Twist (armed, or spawned) and /stop
+        in parallel; no step waits for another. Failures after this returns arrive as events."""
+        failures = self.inflight.stop_all()
         if self._teleop is not None:
             self._teleop.halt()
-        failures: list[str] = []
         self._estop.begin()
         cmd_vel = self.catalog.topics.get("/cmd_vel")
         fired = self._armed.fire() if self._armed is not None else None
@@ -251,7 +273,6 @@ class Ros2Backend(RobotBackend):
             self._background(lambda: ["service", "call", "/stop", stop_type, "{}"], "/stop")
         else:
             failures.append("the robot has no /stop service: goals were canceled directly")
-        self._cancel_goals()
         self._estop.said(failures)
         return failures
 
@@ -309,23 +330,58 @@ class Ros2Backend(RobotBackend):
             err = (proc.stderr.read() or "").strip()[-200:] if proc.stderr else ""
             self.events.add("estop", "error", f"E-STOP {what}: {err or f'exit status {rc}'}")
 
-    def release_estop(self) -> None:
-        self._e_stopped = False
+    def release_estop(self) -> list[str]:
+        self.inflight.release()
         if self._armed is not None:
             self._armed.arm()
+        spec = self.catalog.services.get(RELEASE)
+        if spec is None:
+            return []
+        # a robot that latches its own stop lets go too
+        run = self._run(["service", "call", RELEASE, spec.type, "{}"], self.timeout_s)
+        if run.returncode == 0 and not run.stopped and not _waited_for_service(run.out):
+            return []
+        why = f"release {RELEASE}: " + (
+            run.err.strip()[-200:] or f"no answer in {self.timeout_s:g} s"
+        )
+        self.events.add("estop", "error", why)
+        return [why]
 
     def drive(self, twist: dict) -> None:
-        if self._e_stopped:
-            raise BackendError("the E-STOP is engaged")
         if self._teleop is None:
             raise BackendError("the robot has no /cmd_vel")
-        self._teleop.drive(twist)
+        with self._lock:
+            if self._teleop_job is None:  # refused while the E-STOP holds
+                self._teleop_job = self.inflight.start("teleop", self._halt_teleop)
+            job = self._teleop_job
+        with job.sending():
+            self._teleop.drive(twist)
+
+    def _halt_teleop(self) -> None:
+        with self._lock:
+            self._teleop_job = None
+        if self._teleop is not None:
+            self._teleop.halt()
+
+    def _teleop_lapsed(self) -> None:
+        """Teleop's keys stopped and its publisher was stopped: nothing of it is in flight."""
+        with self._lock:
+            job, self._teleop_job = self._teleop_job, None
+        if job is not None:
+            job.done()
 
     # -- commands -------------------------------------------------------------------------
     def execute(self, checked: Checked, timeout: float) -> tuple[str, Any]:
+        with self.actuating(checked) as job:  # refused while the E-STOP holds, ended by it
+            try:
+                return self._execute(checked, timeout)
+            except BackendError:
+                if job is not None and job.ended_by_estop:
+                    raise BackendError(f"{ENDED}: its ros2 process was killed") from None
+                raise
+
+    def _execute(self, checked: Checked, timeout: float) -> tuple[str, Any]:
         cmd = checked.command
-        if checked.kind == "actuate" and self._e_stopped and cmd.name != "/stop":
-            raise BackendError("the E-STOP is engaged: nothing was sent")
         argv = sent_argv(checked)
         if cmd.key == ("topic", "echo"):
             return self._echo(checked, argv, timeout)
@@ -387,7 +443,14 @@ class Ros2Backend(RobotBackend):
     def _send_goal(self, checked: Checked, argv: list[str], timeout: float):
         """Return at acceptance; the client keeps running and is followed to the end."""
         result = ros2_process.Run(argv)  # filled by the follower thread
-        proc = ros2_process.spawn(self.executable, argv)
+        # a job of its own for the goal's life: the E-STOP stops its client, which cancels it
+        goal = self.inflight.start(f"goal {checked.command.name}")
+        try:
+            proc = ros2_process.spawn_owned(self.executable, argv, goal)
+        except BackendError:
+            goal.done()
+            raise
+        goal.on_estop(lambda: _stop_in_background(proc))
         accepted = threading.Event()
 
         def follow() -> None:
@@ -403,6 +466,7 @@ class Ros2Backend(RobotBackend):
                     self._last_outcome = "canceled"
                     self.events.add("goal", "warning", "goal canceled")
             proc.wait()
+            goal.done()
             accepted.set()
             if proc in self._goal_procs:
                 self._goal_procs.remove(proc)
@@ -421,4 +485,9 @@ class Ros2Backend(RobotBackend):
 
     def _cancel_goals(self) -> None:
         for proc in list(self._goal_procs):
-            threading.Thread(target=ros2_process.stop, args=(proc, 3.0), daemon=True).start()
+            _stop_in_background(proc)
+
+
+def _stop_in_background(proc) -> None:
+    """SIGINT a goal's client (it cancels the goal), then harder, without waiting here."""
+    threading.Thread(target=ros2_process.stop, args=(proc, 3.0), daemon=True).start()

@@ -17,6 +17,7 @@ from __future__ import annotations
 import subprocess
 import threading
 import time
+from collections.abc import Callable
 
 from astiop.robot.backends.ros2cli import process as ros2_process
 from astiop.ros2.render import flow_yaml, stamped_now, velocity_message, zero_twist
@@ -32,8 +33,16 @@ def zero_message(type_: str) -> dict:
 
 
 class TeleopPublisher:
-    def __init__(self, executable: str, topic: str, type_: str, lapse_s: float = 0.5):
+    def __init__(
+        self,
+        executable: str,
+        topic: str,
+        type_: str,
+        lapse_s: float = 0.5,
+        on_lapse: Callable[[], None] | None = None,
+    ):
         self.executable = executable
+        self.on_lapse = on_lapse  # the keys stopped: nothing publishes until the next one
         self.topic = topic
         self.type = type_
         self.lapse_s = lapse_s
@@ -84,6 +93,8 @@ class TeleopPublisher:
                 lapsed = proc is not None and not starting and time.monotonic() > self._deadline
                 if lapsed:
                     self._replace(None)
+                    if self.on_lapse is not None:  # before a new key can start a motion
+                        self.on_lapse()
             if lapsed:  # motion lapsed: say so to the base too
                 zero = zero_message(self.type)
                 argv = ["topic", "pub", "--once", self.topic, self.type, flow_yaml(zero)]

@@ -5,6 +5,7 @@ started), then SIGTERM, then SIGKILL.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import subprocess
@@ -13,7 +14,8 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from astiop.robot.backend import BackendError
+from astiop.robot.errors import BackendError
+from astiop.robot.inflight import Job
 
 MAX_OUTPUT = 4_000_000  # characters kept per stream of one call
 
@@ -66,6 +68,23 @@ def stop(proc: subprocess.Popen, grace_s: float = 3.0) -> None:
             continue
 
 
+def kill(proc: subprocess.Popen) -> None:
+    """At once, no grace: an E-STOP ending a publisher (it has nothing to cancel)."""
+    if proc.poll() is None:
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(proc.pid, signal.SIGKILL)
+
+
+def spawn_owned(executable: str, argv: list[str], job: Job | None, **kw) -> subprocess.Popen:
+    """Spawn as part of `job`: not at all if the E-STOP already ended it, and killed by it."""
+    if job is None:
+        return spawn(executable, argv, **kw)
+    with job.sending():
+        proc = spawn(executable, argv, **kw)
+        job.on_estop(lambda: kill(proc))
+    return proc
+
+
 def _pump(stream, sink: list[str], on_line: Callable[[str], None] | None) -> None:
     size = 0
     for line in stream:
@@ -84,13 +103,15 @@ def run(
     *,
     until: Callable[[str], bool] | None = None,
     grace_s: float = 3.0,
+    job: Job | None = None,
 ) -> Run:
-    """Run to completion within `timeout`, or stop it there, or as soon as `until(stdout)`.
+    """Run to completion within `timeout`, or stop it there, or as soon as `until(stdout)`;
+    as part of `job`, the E-STOP kills it.
 
     The output printed before a stop is kept.
     """
     result = Run(argv)
-    proc = spawn(executable, argv)
+    proc = spawn_owned(executable, argv, job)
     done = threading.Event()
 
     def on_line(_line: str) -> None:

@@ -10,6 +10,7 @@ from typing import Any
 from astiop.robot.backend import BackendError, RobotBackend
 from astiop.robot.backends.sim import messages as sm
 from astiop.robot.backends.sim.verbs import SimVerbs
+from astiop.robot.inflight import InFlight
 from astiop.robot.state import RobotEvent, RobotState, TopicStat, from_messages
 from astiop.ros2.catalog import Catalog, astibot_catalog
 from astiop.ros2.interfaces import default_value
@@ -36,6 +37,7 @@ class SimBackend(SimVerbs, RobotBackend):
         self._runner = SimRunner(sim, speed=speed) if realtime else None
         self.catalog: Catalog = astibot_catalog()
         self.params = {k: p.value for k, p in self.catalog.params.items()}
+        self.inflight = InFlight()
         self.last_twist: dict | None = None
         self.last_twist_t = -math.inf
         self._samples: dict[str, deque] = {}
@@ -53,14 +55,17 @@ class SimBackend(SimVerbs, RobotBackend):
 
     @property
     def e_stopped(self) -> bool:
-        return self.sim.e_stopped
+        return self.sim.e_stopped or self.inflight.held
 
     def estop(self) -> list[str]:
+        failures = self.inflight.stop_all()  # a timed publish sends nothing more
         self.sim.estop()
-        return []
+        return failures
 
-    def release_estop(self) -> None:
-        self.sim.release_estop()
+    def release_estop(self) -> list[str]:
+        self.inflight.release()
+        self.sim.release()  # the E-STOP and a latched /stop: the operator's release is both
+        return []
 
     # -- live state -------------------------------------------------------------------
     def robot_time(self) -> float:

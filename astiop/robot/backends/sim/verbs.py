@@ -8,6 +8,7 @@ import uuid
 from typing import Any
 
 from astiop.robot.backend import BackendError
+from astiop.robot.inflight import Job
 from astiop.robot.state import yaw_of
 from astiop.ros2.interfaces import interface_show, python_repr
 from astiop.ros2.printing import echo_text, indent_yaml, node_info_text
@@ -26,7 +27,8 @@ class SimVerbs:
             raise BackendError("the E-STOP is engaged: nothing was sent")
         handler = getattr(self, f"_{cmd.verb}_{cmd.sub}")
         try:
-            return handler(checked, timeout)
+            with self.actuating(checked):  # refused while the E-STOP holds, ended by it
+                return handler(checked, timeout)
         except (GoalError, LocationError) as exc:
             raise BackendError(str(exc)) from None
         except BackendError:
@@ -78,8 +80,10 @@ class SimVerbs:
         times = 1 if "once" in cmd.flags else cmd.options["times"]
         rate = cmd.options.get("rate", 1.0)
         lines = ["publisher: beginning loop"]
+        job = self.inflight.current() or Job(self.inflight, "a publish")
         for i in range(times):
-            self.drive(twist, 0.5 if times == 1 else max(0.5, 1.5 / rate))
+            with job.sending():  # the E-STOP ends it between two messages
+                self.drive(twist, 0.5 if times == 1 else max(0.5, 1.5 / rate))
             lines.append(f"publishing #{i + 1}: {python_repr('geometry_msgs/msg/Twist', twist)}")
             lines.append("")
             if i + 1 < times:
@@ -122,6 +126,8 @@ class SimVerbs:
                 }
             if name == "/stop":
                 return {"success": True, "message": sim.stop()}
+            if name == "/release":
+                return {"success": True, "message": sim.release()}
             if name == "/dock":
                 sim.dock()
                 return {"success": True, "message": "docking"}

@@ -1,0 +1,77 @@
+"""The E-STOP latch's SQL, and its writing by `astiop estop` before anything else is imported.
+
+The store (`store/journal.py`) latches with the same statements. `astiop estop` latches here
+first, with the standard library alone: importing the store takes ~0.2 s (sqlite-utils, numpy),
+and every other astiop process ends what it has in flight as soon as the latch is written.
+"""
+
+from __future__ import annotations
+
+import os
+import sqlite3
+import time
+from pathlib import Path
+
+# a latch already engaged keeps who engaged it and when (SET reads the row as it was)
+LATCH = (
+    "UPDATE estop SET engaged_by = CASE WHEN engaged = 1 THEN engaged_by ELSE ? END, "
+    "engaged_at = CASE WHEN engaged = 1 THEN engaged_at ELSE ? END, engaged = 1 WHERE id = 1"
+)
+RELEASE = "UPDATE estop SET engaged = 0, released_by = ?, released_at = ? WHERE id = 1"
+WAIT_S = 2.0  # for another process's write: the full path latches again after this
+
+
+def _configured_db(env: dict[str, str]) -> Path | None:
+    """`db` in the settings file, as config.config_path finds it (None: not set, unreadable)."""
+    import platformdirs
+
+    try:
+        import tomllib
+    except ModuleNotFoundError:  # Python 3.10
+        import tomli as tomllib
+
+    if env.get("ASTIOP_CONFIG"):
+        file = Path(env["ASTIOP_CONFIG"]).expanduser()
+    else:
+        file = platformdirs.user_config_path("astiop") / "config.toml"
+    try:
+        value = tomllib.loads(file.read_text(encoding="utf-8")).get("db")
+    except (OSError, ValueError):
+        return None
+    return Path(value) if isinstance(value, str) and value else None
+
+
+def db_path(args: list[str], env: dict[str, str] | None = None) -> Path:
+    """The database a command line will use, read as the settings read it: `--db`, then
+    ASTIOP_DB, then the settings file, then the default."""
+    env = dict(os.environ) if env is None else env
+    for i, token in enumerate(args):
+        if token == "--db" and i + 1 < len(args):
+            return Path(args[i + 1]).expanduser()
+        if token.startswith("--db="):
+            return Path(token[5:]).expanduser()
+    if env.get("ASTIOP_DB"):
+        return Path(env["ASTIOP_DB"]).expanduser()
+    configured = _configured_db(env)
+    if configured is not None:
+        return configured.expanduser()
+    import platformdirs
+
+    return platformdirs.user_data_path("astiop") / "astiop.db"
+
+
+def latch_early(path: Path, who: str = "estop") -> bool:
+    """Latch the E-STOP in an existing database now; False if it cannot be done here (no file
+    yet, an older schema, a lock held too long): the full path latches it then."""
+    if not path.is_file():
+        return False
+    try:
+        conn = sqlite3.connect(path, timeout=WAIT_S)
+        try:
+            with conn:
+                written = conn.execute(LATCH, (who, time.time())).rowcount
+        finally:
+            conn.close()
+    except sqlite3.Error:
+        return False
+    return written == 1
