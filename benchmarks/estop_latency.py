@@ -35,20 +35,13 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+from tests.ros import until  # noqa: E402
+
 PUBLISH = "ros2 topic pub -t 300 -r 10 /cmd_vel geometry_msgs/msg/Twist '{linear: {x: -0.3}}'"
 
 
 def cli(db: Path, *args: str) -> list[str]:
     return [sys.executable, "-m", "astiop", "--db", str(db), "--robot", "ros2", *args]
-
-
-def until(predicate, timeout: float) -> bool:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        time.sleep(0.01)
-    return False
 
 
 def latch_at(db: Path) -> float | None:
@@ -119,7 +112,7 @@ def one_trial(
         stderr=subprocess.DEVNULL,
     )  # fmt: skip
     n0 = len(twists())
-    if not until(lambda: sum(1 for _, x in twists()[n0:] if x != 0.0) >= 5, 60):
+    if not until(lambda: sum(1 for _, x in twists()[n0:] if x != 0.0) >= 5, 60, step=0.01):
         publisher.kill()
         raise RuntimeError(f"{kind}: the timed publish never reached the robot")
     t0_wall, t0 = time.time(), time.monotonic()

@@ -14,20 +14,12 @@ import pytest
 from astiop.robot.errors import BackendError
 from astiop.robot.inflight import InFlight
 from tests.emulator import cmd_vel_received, emulated_robot, on_path
+from tests.ros import until
 
 PUBLISH = (
     "ros2 topic pub -t 300 -r 10 /cmd_vel geometry_msgs/msg/Twist "
     "'{linear: {x: 0.3}}'"
 )  # 30 s of motion unless something ends it
-
-
-def until(predicate, timeout: float) -> bool:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        time.sleep(0.02)
-    return bool(predicate())
 
 
 def _actuate(inflight: InFlight, i: int, go, stopped, sent_after: list[str]) -> None:

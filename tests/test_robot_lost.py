@@ -13,19 +13,11 @@ import time
 import pytest
 
 from tests.emulator import emulated_robot, on_path
+from tests.ros import until
 
 pytestmark = pytest.mark.slow
 GOTO = 'ros2 service call /goto_position astiop_msgs/srv/GotoPosition "{name: shipping}"'
 YES = lambda _c: True  # noqa: E731
-
-
-def until(predicate, timeout: float) -> bool:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        time.sleep(0.05)
-    return bool(predicate())
 
 
 def said(gateway, words: str) -> bool:
