@@ -7,6 +7,7 @@ off the UI thread and answers any open confirmation with "no".
 
 from __future__ import annotations
 
+import logging
 import threading
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -104,6 +105,10 @@ class AstiopApp(App):
 
     def on_mount(self) -> None:
         gateway = self.services.gateway
+        # what the robot layer could not keep or read (the store, the latch), on the screen:
+        # stderr is the terminal the console draws on
+        self._said = _Notices(self)
+        logging.getLogger("astiop.robot").addHandler(self._said)
         self.refresh_subtitle()
         gateway.start()
         self.topic_stats = gateway.topic_stats()
@@ -136,6 +141,7 @@ class AstiopApp(App):
             try:
                 self.services.gateway.close()
             finally:
+                logging.getLogger("astiop.robot").removeHandler(self._said)
                 self.services.endpoint.close()
 
     def broadcast(self, message_factory) -> None:
@@ -411,3 +417,15 @@ def make_app(
         confirm_timeout_s=confirm_timeout_s,
         record=record,
     )
+
+
+class _Notices(logging.Handler):
+    """The robot layer's logged errors as the console's notifications (notify is thread-safe:
+    it posts a message)."""
+
+    def __init__(self, app: App):
+        super().__init__(logging.WARNING)
+        self.app = app
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.app.notify(record.getMessage(), severity="error", title="robot", markup=False)

@@ -50,8 +50,9 @@ def db_path(args: list[str], env: dict[str, str] | None = None) -> Path:
             return Path(args[i + 1]).expanduser()
         if token.startswith("--db="):
             return Path(token[5:]).expanduser()
-    if env.get("ASTIOP_DB"):
-        return Path(env["ASTIOP_DB"]).expanduser()
+    named = [v for k, v in env.items() if k.upper() == "ASTIOP_DB" and v]  # as the settings
+    if named:
+        return Path(named[-1]).expanduser()
     configured = _configured_db(env)
     if configured is not None:
         return configured.expanduser()
@@ -60,18 +61,20 @@ def db_path(args: list[str], env: dict[str, str] | None = None) -> Path:
     return platformdirs.user_data_path("astiop") / "astiop.db"
 
 
-def latch_early(path: Path, who: str = "estop") -> bool:
-    """Latch the E-STOP in an existing database now; False if it cannot be done here (no file
-    yet, an older schema, a lock held too long): the full path latches it then."""
-    if not path.is_file():
-        return False
+def latch_early(args: list[str], who: str = "estop") -> bool:
+    """Latch the E-STOP in the command line's database, if it exists, now; False if it cannot be
+    done here (no file yet, an older schema, a lock held too long, a path it cannot read): the
+    full path latches it then, and says why it could not."""
     try:
+        path = db_path(args)
+        if not path.is_file():
+            return False
         conn = sqlite3.connect(path, timeout=WAIT_S)
         try:
             with conn:
                 written = conn.execute(LATCH, (who, time.time())).rowcount
         finally:
             conn.close()
-    except sqlite3.Error:
+    except Exception:  # noqa: BLE001 - never in the way of the full path
         return False
     return written == 1

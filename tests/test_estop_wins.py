@@ -57,6 +57,7 @@ def test_a_job_raced_by_the_estop_is_refused_or_ended_and_sends_nothing_after():
         stopped.set()
         for t in threads:
             t.join(5)
+            assert not t.is_alive(), "a job was left waiting"
         assert not sent_after, sent_after
         with pytest.raises(BackendError, match="E-STOP is engaged"):
             inflight.start("after")
@@ -116,7 +117,8 @@ def test_estop_from_another_process_ends_a_timed_publish_on_the_cli_transport(
 def test_a_publish_and_the_estop_raced_in_one_process_leave_the_robot_stopped(
     monkeypatch, tmp_path
 ):
-    """The same instant, on the CLI transport: the publish is refused or ended, and no moving
+    """On the CLI transport, the E-STOP while the publish's ros2 process is starting (the
+    gateway's own, in this process): the publish is refused or ended, and no moving
     Twist follows the E-STOP's zeros."""
     from astiop.robot.backends.ros2cli.backend import Ros2Backend
     from astiop.robot.gateway import RobotGateway

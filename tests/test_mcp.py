@@ -473,3 +473,21 @@ def test_a_bad_token_file_or_variable_is_refused_in_one_line(tmp_path):
     assert why == "ASTIOP_MCP_TOKEN: the token is 6 characters; it needs 16"
     why = refused(tmp_path, "--token-file", token_file("stdio", good))
     assert why == "--token-file goes with --http (stdio needs none)"
+
+
+def test_an_outside_agent_may_never_release_a_held_robot(store):
+    """/release is the operator's (ctrl+r, astiop estop --release): refused even with
+    --approve-actuation, and the robot stays held."""
+    gateway = make_sim_gateway(load_settings({}), store)
+    robot = RobotTools(gateway, store, Policy(approve_actuation=True))
+    call = Call(
+        "pytest", "ros2_command", store.start_interaction(model="m", mode="mcp", prompt="r")
+    )
+    token = CALL.set(call)
+    try:
+        robot.ros2_command("ros2 service call /stop std_srvs/srv/Trigger")
+        with pytest.raises(Refused, match="/release is the operator's"):
+            robot.ros2_command("ros2 service call /release std_srvs/srv/Trigger")
+    finally:
+        CALL.reset(token)
+    assert gateway.state().state_word == "e_stopped"  # still held by its own stop

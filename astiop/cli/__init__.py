@@ -58,7 +58,7 @@ def run(argv: list[str] | None = None) -> None:
     if _stops_the_robot(args):  # every other astiop process stops as soon as this is written
         from astiop import latch
 
-        latch.latch_early(latch.db_path(args))
+        latch.latch_early(args)
     from astiop.agent import model_spawn
 
     if _serves_a_local_model(args):  # the model's process starts before our imports

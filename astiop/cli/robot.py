@@ -92,15 +92,14 @@ def _release_robot(st) -> None:
     except BackendError as exc:
         fail(f"the robot was not reached to release its own stop: {exc}", code=1)
     try:
-        if "/release" not in gateway.catalog.services:
-            typer.echo("the robot has no /release: it holds no stop of its own")
-            return
+        has_release = "/release" in gateway.catalog.services
         failed = gateway.release_estop()
     finally:
         gateway.close()
     if failed:
         fail("; ".join(failed), code=1)
-    typer.echo("the robot's own stop released (/release)")
+    if has_release:
+        typer.echo("the robot's own stop released (/release)")
 
 
 def estop(
@@ -118,7 +117,8 @@ def estop(
     st = state(ctx)
     if release:
         latch = st.store.estop_latch()
-        if latch is None:
+        live = st.settings.robot.backend == "ros2"  # its own stop may hold it (a bare /stop)
+        if latch is None and not live:
             typer.echo("the E-STOP is not engaged")
             return
         if not yes:
@@ -126,9 +126,12 @@ def estop(
                 fail("releasing the E-STOP needs a person to confirm it (or --yes)")
             if not typer.confirm("release the E-STOP (the robot may move again)?", err=True):
                 fail("not released", code=1)
-        st.store.release_estop("estop --release")
-        typer.echo("E-STOP released")
-        if st.settings.robot.backend == "ros2":
+        if latch is not None:
+            st.store.release_estop("estop --release")
+            typer.echo("E-STOP released")
+        else:
+            typer.echo("the E-STOP is not engaged")
+        if live:
             _release_robot(st)
         return
     from astiop.robot.backend import BackendError

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 from astiop.robot.gateway import ESTOP_REASON, RobotGateway
 from astiop.robot.safety import ALWAYS_ALLOWED, Review
+from astiop.ros2.catalog import RELEASE
 from astiop.ros2.render import sent_text
 from astiop.store import Store
 
@@ -59,6 +60,8 @@ def clear(
         return Clearance(review, ESTOP_REASON)
     if not checked.valid:
         return Clearance(review, checked.reason or "not a valid command")
+    if checked.command.name == RELEASE:  # a held robot is let go by a person, never an agent
+        return Clearance(review, f"{RELEASE} is the operator's: ctrl+r or astiop estop --release")
     if not review.allowed:
         return Clearance(review, review.reason)
     if not needs_approval(review):

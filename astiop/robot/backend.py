@@ -124,9 +124,10 @@ class RobotBackend(ABC):
         ...
 
     @abstractmethod
-    def release_estop(self) -> list[str]:
+    def release_estop(self, *, robot: bool = True) -> list[str]:
         """Let the robot move again; the failures (a robot that latches its own stop and did
-        not answer its release)."""
+        not answer its release). `robot=False`: this process only (another process released
+        the latch and the robot)."""
         ...
 
     @abstractmethod

@@ -116,7 +116,7 @@ class RobotGateway:
                 if latched and not self.backend.e_stopped:
                     self.backend.estop()
                 elif not latched and self.backend.e_stopped:
-                    self.backend.release_estop()
+                    self.backend.release_estop(robot=False)  # the releaser told the robot
         return latched
 
     def events_since(self, seq: int) -> list[RobotEvent]:

@@ -94,8 +94,12 @@ class InFlight:
             self._local.job = None
             job.done()
 
-    def current(self) -> Job | None:
-        """The job this thread is running a command for, if any."""
+    def current(self, what: str = "") -> Job:
+        """The job this thread is running a command for; else (a command that does not actuate)
+        one of its own, which nothing ends."""
+        return getattr(self._local, "job", None) or Job(self, what or "not an actuation")
+
+    def current_job(self) -> Job | None:
         return getattr(self._local, "job", None)
 
     def done(self, job: Job) -> None:
@@ -108,6 +112,7 @@ class InFlight:
         with self._lock:
             self.held = True
             jobs, self._jobs = self._jobs, []
+            self._busy.notify_all()
         return [f for f in (job.estop() for job in jobs) if f]
 
     def release(self) -> None:
@@ -118,14 +123,16 @@ class InFlight:
     def busy(self) -> bool:
         return bool(self._jobs)
 
-    def describe(self) -> list[str]:
-        with self._lock:
-            return [job.what for job in self._jobs]
+    @property
+    def watched(self) -> bool:
+        """Something to follow another process's latch for: a job that moves the robot, or the
+        E-STOP this process holds (its release)."""
+        return bool(self._jobs) or self.held
 
-    def wait_busy(self, timeout_s: float) -> bool:
-        """Block until a job is running (or `timeout_s`); whether one is."""
+    def wait_watched(self, timeout_s: float) -> bool:
+        """Block until `watched` (or `timeout_s`); whether it is."""
         with self._lock:
-            return self._busy.wait_for(lambda: bool(self._jobs), timeout_s)
+            return self._busy.wait_for(lambda: bool(self._jobs) or self.held, timeout_s)
 
     def wake(self) -> None:
         with self._lock:

@@ -17,6 +17,7 @@ from astiop.robot.inflight import InFlight
 from astiop.store import Store
 
 POLL_S = 0.02  # while in flight: another process's latch is seen within this
+HELD_POLL_S = 0.2  # while only held: a release elsewhere is followed within this
 IDLE_WAIT_S = 1.0  # how often an idle watcher wakes to see whether it was closed
 
 log = logging.getLogger("astiop.robot")
@@ -42,22 +43,22 @@ class LatchWatcher:
     def _loop(self) -> None:
         try:
             while not self._closed.is_set():
-                if self.inflight.wait_busy(IDLE_WAIT_S) and not self._closed.is_set():
-                    self._watch_while_busy()
+                if self.inflight.wait_watched(IDLE_WAIT_S) and not self._closed.is_set():
+                    self._watch()
         finally:
             self.store.close()  # this thread's connection
 
-    def _watch_while_busy(self) -> None:
+    def _watch(self) -> None:
         seen = None
-        while self.inflight.busy and not self._closed.is_set():
+        while self.inflight.watched and not self._closed.is_set():
             try:
                 version = self.store.latch_version()
                 if version != seen:
-                    seen = version
                     self.follow()
+                    seen = version  # only once followed: a failed look is looked at again
             except Exception as exc:  # noqa: BLE001 - said once; the next look may work
                 self._say(f"the E-STOP latch could not be read: {exc}")
-            self._closed.wait(POLL_S)
+            self._closed.wait(POLL_S if self.inflight.busy else HELD_POLL_S)
 
     def _say(self, message: str) -> None:
         if message not in self._said:

@@ -370,15 +370,15 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
             try:
                 if lapsed:
                     self._send_twist(zero_twist())
-                    if job is not None:
-                        job.done()
                 elif twist is not None and job is not None:
                     with job.sending():
                         self._send_twist(twist)
-            except BackendError:
-                pass  # the E-STOP ended the hold: its own zero Twists follow
             except Exception as exc:  # noqa: BLE001
-                self.events.add("teleop", "error", f"/cmd_vel: {exc}")
+                if job is None or not job.ended_by_estop:  # else: its own zero Twists follow
+                    self.events.add("teleop", "error", f"/cmd_vel: {exc}")
+            finally:
+                if lapsed and job is not None:
+                    job.done()
 
     @property
     def e_stopped(self) -> bool:
@@ -449,10 +449,10 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         # burst ends sooner: its timeout and a second)
         return self._estop.settle(2 * timeout_s)
 
-    def release_estop(self) -> list[str]:
+    def release_estop(self, *, robot: bool = True) -> list[str]:
         self.inflight.release()
         spec = self.catalog.services.get(RELEASE)
-        if spec is None:
+        if spec is None or not robot:
             return []
         seq = self.events.seq  # a robot that latches its own stop lets go too
         self._trigger(RELEASE, spec.type, "release")

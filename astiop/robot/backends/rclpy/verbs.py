@@ -216,7 +216,7 @@ class RclpyVerbs:
             cls = interface_class(c.type)
             pub = self.proc.node.create_publisher(cls, name, matched_qos(self.proc, name))
         lines = []
-        job = self.inflight.current() or Job(self.inflight, "a read")  # the E-STOP ends it
+        job = self.inflight.current(f"publish on {name}")
         try:
             if pub.get_subscription_count() < 1:
                 lines.append("Waiting for at least 1 matching subscription(s)...")

@@ -140,7 +140,7 @@ class ReplayBackend(RobotBackend):
     def estop(self) -> list[str]:
         return []  # nothing moves; the latch is kept in the replay's own store
 
-    def release_estop(self) -> list[str]:
+    def release_estop(self, *, robot: bool = True) -> list[str]:
         return []
 
     def execute(self, checked: Checked, timeout: float) -> tuple[str, object]:

@@ -112,7 +112,7 @@ class Ros2Backend(RobotBackend):
     # -- the live graph -----------------------------------------------------------------
     def _run(self, argv: list[str], timeout: float, **kw) -> ros2_process.Run:
         """`ros2 ARGV`; inside an actuating command's job, the E-STOP kills it."""
-        job = self.inflight.current()
+        job = self.inflight.current_job()
         return ros2_process.run(self.executable, argv, timeout, job=job, **kw)
 
     def refresh(self) -> bool:
@@ -330,12 +330,12 @@ class Ros2Backend(RobotBackend):
             err = (proc.stderr.read() or "").strip()[-200:] if proc.stderr else ""
             self.events.add("estop", "error", f"E-STOP {what}: {err or f'exit status {rc}'}")
 
-    def release_estop(self) -> list[str]:
+    def release_estop(self, *, robot: bool = True) -> list[str]:
         self.inflight.release()
         if self._armed is not None:
             self._armed.arm()
         spec = self.catalog.services.get(RELEASE)
-        if spec is None:
+        if spec is None or not robot:
             return []
         # a robot that latches its own stop lets go too
         run = self._run(["service", "call", RELEASE, spec.type, "{}"], self.timeout_s)
@@ -350,12 +350,17 @@ class Ros2Backend(RobotBackend):
     def drive(self, twist: dict) -> None:
         if self._teleop is None:
             raise BackendError("the robot has no /cmd_vel")
+        job = self._teleop_held()
+        with job.sending():
+            self._teleop.drive(twist)
+        if self._teleop_job is not job:  # it lapsed meanwhile: this key's publisher is new
+            self._teleop_held()
+
+    def _teleop_held(self) -> Job:
         with self._lock:
             if self._teleop_job is None:  # refused while the E-STOP holds
                 self._teleop_job = self.inflight.start("teleop", self._halt_teleop)
-            job = self._teleop_job
-        with job.sending():
-            self._teleop.drive(twist)
+            return self._teleop_job
 
     def _halt_teleop(self) -> None:
         with self._lock:
@@ -445,12 +450,11 @@ class Ros2Backend(RobotBackend):
         result = ros2_process.Run(argv)  # filled by the follower thread
         # a job of its own for the goal's life: the E-STOP stops its client, which cancels it
         goal = self.inflight.start(f"goal {checked.command.name}")
-        try:
-            proc = ros2_process.spawn_owned(self.executable, argv, goal)
+        try:  # SIGINT, not a kill: its client cancels the goal on the robot
+            proc = ros2_process.spawn_owned(self.executable, argv, goal, _stop_in_background)
         except BackendError:
             goal.done()
             raise
-        goal.on_estop(lambda: _stop_in_background(proc))
         accepted = threading.Event()
 
         def follow() -> None:

@@ -75,13 +75,19 @@ def kill(proc: subprocess.Popen) -> None:
             os.killpg(proc.pid, signal.SIGKILL)
 
 
-def spawn_owned(executable: str, argv: list[str], job: Job | None, **kw) -> subprocess.Popen:
-    """Spawn as part of `job`: not at all if the E-STOP already ended it, and killed by it."""
+def spawn_owned(
+    executable: str,
+    argv: list[str],
+    job: Job | None,
+    end: Callable[[subprocess.Popen], None] = kill,
+) -> subprocess.Popen:
+    """Spawn as part of `job`: not at all if the E-STOP already ended it, and ended by it with
+    `end` (killed at once, by default)."""
     if job is None:
-        return spawn(executable, argv, **kw)
+        return spawn(executable, argv)
     with job.sending():
-        proc = spawn(executable, argv, **kw)
-        job.on_estop(lambda: kill(proc))
+        proc = spawn(executable, argv)
+        job.on_estop(lambda: end(proc))
     return proc
 
 

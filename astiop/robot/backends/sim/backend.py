@@ -62,7 +62,7 @@ class SimBackend(SimVerbs, RobotBackend):
         self.sim.estop()
         return failures
 
-    def release_estop(self) -> list[str]:
+    def release_estop(self, *, robot: bool = True) -> list[str]:
         self.inflight.release()
         self.sim.release()  # the E-STOP and a latched /stop: the operator's release is both
         return []

@@ -8,7 +8,6 @@ import uuid
 from typing import Any
 
 from astiop.robot.backend import BackendError
-from astiop.robot.inflight import Job
 from astiop.robot.state import yaw_of
 from astiop.ros2.interfaces import interface_show, python_repr
 from astiop.ros2.printing import echo_text, indent_yaml, node_info_text
@@ -80,7 +79,7 @@ class SimVerbs:
         times = 1 if "once" in cmd.flags else cmd.options["times"]
         rate = cmd.options.get("rate", 1.0)
         lines = ["publisher: beginning loop"]
-        job = self.inflight.current() or Job(self.inflight, "a publish")
+        job = self.inflight.current("a publish")
         for i in range(times):
             with job.sending():  # the E-STOP ends it between two messages
                 self.drive(twist, 0.5 if times == 1 else max(0.5, 1.5 / rate))
