@@ -261,3 +261,22 @@ async def test_estop_from_another_process_ends_an_mcp_move_on_the_cli_transport(
             if t["twist"]["linear"]["x"] == 0.0 and i > 0 and twists[i - 1]["twist"]["linear"]["x"]
         )
         assert not moving(twists[first_zero:]), twists[first_zero:]
+
+
+@pytest.mark.slow
+def test_astiop_estop_release_lets_go_of_a_robot_held_by_a_bare_stop(monkeypatch, tmp_path):
+    """A robot the agent stopped (/stop: it latches its own stop, the store holds nothing) is
+    released by `astiop estop --release`, which calls its /release."""
+    from tests.emulator import ros2_calls
+
+    with emulated_robot(speed=4.0) as folder:
+        on_path(monkeypatch, folder)
+        db = tmp_path / "held.db"
+        stop = _cli(db, "exec", "--yes", "ros2 service call /stop std_srvs/srv/Trigger")
+        subprocess.run(stop, capture_output=True, text=True, timeout=60, check=True)
+        out = subprocess.run(
+            _cli(db, "estop", "--release", "--yes"), capture_output=True, text=True, timeout=90
+        )
+        assert out.returncode == 0, out.stderr
+        assert "the robot's own stop released (/release)" in out.stdout, out.stdout
+        assert ["service", "call", "/release"] in [c[:3] for c in ros2_calls(folder)]

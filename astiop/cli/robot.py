@@ -92,7 +92,7 @@ def _release_robot(st) -> None:
     except BackendError as exc:
         fail(f"the robot was not reached to release its own stop: {exc}", code=1)
     try:
-        has_release = "/release" in gateway.catalog.services
+        has_release = gateway.serves("/release", st.settings.robot.ros2_timeout_s)
         failed = gateway.release_estop()
     finally:
         gateway.close()
@@ -130,7 +130,7 @@ def estop(
             st.store.release_estop("estop --release")
             typer.echo("E-STOP released")
         else:
-            typer.echo("the E-STOP is not engaged")
+            typer.echo("the E-STOP is not latched in the database")
         if live:
             _release_robot(st)
         return

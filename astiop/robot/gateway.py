@@ -24,6 +24,7 @@ from astiop.store import Store, StoreError
 Confirm = Callable[[Checked], bool]
 log = logging.getLogger("astiop.robot")
 MAX_STAMP_AGE_S = 86400.0  # a stamp older than a day is on another clock, not a day-old reading
+SETTLED_S = 2.0  # a robot graph unchanged this long has been read whole
 ESTOP_REASON = "the E-STOP is engaged: no motion command runs until the operator releases it"
 
 
@@ -166,6 +167,23 @@ class RobotGateway:
         if not checked.valid and checked.reason.startswith("there is no") and self._refresh():
             checked = validate(text, self.catalog)  # it may have appeared since the last read
         return self.safety.review(checked, self.e_stopped)
+
+    def serves(self, name: str, timeout_s: float) -> bool:
+        """Whether the robot serves `name`, reading its graph again until it appears: a new
+        process's first read may have found only part of it. False once the robot's base is
+        seen and its services stay the same for SETTLED_S without it, or after `timeout_s`."""
+        deadline = time.monotonic() + timeout_s
+        seen, since = None, time.monotonic()
+        while name not in self.catalog.services:
+            services = set(self.catalog.services)
+            if services != seen:
+                seen, since = services, time.monotonic()
+            settled = time.monotonic() - since > SETTLED_S
+            if time.monotonic() > deadline or ("/cmd_vel" in self.catalog.topics and settled):
+                return False
+            time.sleep(0.3)
+            self.backend.refresh()
+        return True
 
     def _refresh(self) -> bool:
         if time.monotonic() - self.backend.refreshed_at < self.backend.refresh_every_s:

@@ -77,11 +77,14 @@ class EstopWork:
         ]
 
 
+LOST_S = 2.0  # none of the robot's state topics (10 Hz and faster among them) for this long
+
+
 class Contact:
     """Whether the robot is heard: silent for `silent_s` (none of its state topics came), it is
     lost, said once; heard again, reconnected, said once. Never heard is not lost (not yet)."""
 
-    def __init__(self, events: EventLog, silent_s: float, on_return=None):
+    def __init__(self, events: EventLog, silent_s: float = LOST_S, on_return=None):
         self.events = events
         self.silent_s = silent_s
         self.on_return = on_return  # what a transport redoes once the robot is back

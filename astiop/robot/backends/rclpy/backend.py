@@ -37,7 +37,7 @@ DISCOVERY_S = 3.0  # at most this long for a new process's discovery to settle
 DISCOVERY_QUIET_S = 1.0  # no change in the graph for this long: discovery has settled
 DISCOVERY_YOUNG_S = 10.0  # a process this young may not have discovered the whole robot
 PARAMS_REFRESH_S = 30.0
-SILENT_S = 3.0  # no message from the robot for this long: it is said to be gone
+SILENT_S = 3.0  # a state topic's last message older than this is no longer the robot's state
 TELEOP_HZ = 10.0
 LAPSE_S = 0.5
 ESTOP_BURST_S = 1.0
@@ -80,7 +80,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         self.t0 = time.monotonic()
         self.events = EventLog(self.t0)
         self._estop = EstopWork(self.events)
-        self._contact = Contact(self.events, SILENT_S)
+        self._contact = Contact(self.events)
         self._lists = self._discover(DISCOVERY_S if discover else 0.0)
         self._params: list[tuple[str, str]] = []  # read by start(), or when a command needs them
         self._params_of: dict[str, list[tuple[str, str]]] = {}  # node -> its parameters

@@ -50,7 +50,6 @@ from astiop.ros2.validation import Checked
 ARRAYS = {"/scan", "/plan", "/obstacles"}  # echoed in full: ros2 truncates at 128 items
 MOVING = {"navigating", "docking", "blocked"}
 GRAPH_REFRESH_S = 30.0
-SILENT_S = 3.0  # none of the robot's state streams said anything for this long: it is lost
 ZERO_PUB_S = 1.0  # an E-STOP's ten zero Twists at 10 Hz: a second on top of the start-up
 
 
@@ -102,7 +101,7 @@ class Ros2Backend(RobotBackend):
         self.t0 = time.monotonic()
         self.events = EventLog(self.t0)
         self._estop = EstopWork(self.events)
-        self._contact = Contact(self.events, SILENT_S, on_return=self._rearm)
+        self._contact = Contact(self.events, on_return=self._rearm)
         self._closed = threading.Event()
         self._graph = GraphReader(self._run, timeout_s)
         self.discovered = discover
