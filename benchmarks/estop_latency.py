@@ -5,7 +5,9 @@
 Each repeat, in fresh processes: `astiop exec --yes "ros2 topic pub -t 300 -r 10 /cmd_vel ..."`
 drives the robot; once its Twists arrive, `astiop estop` starts (t0). Measured:
 - latch: t0 -> the latch written in the shared database (its `engaged_at`);
-- ended: the latch -> the other process's last moving Twist at the robot (how fast it followed);
+- ended: the latch -> the other process's last moving Twist at the robot (how fast it followed:
+  the E-STOP comes at a random moment between two of the publish's Twists, 100 ms apart, so a
+  process that did not follow would show up to +100 ms here);
 - last moving Twist: t0 -> the last moving Twist at the robot;
 - estop zero: t0 -> the first zero Twist at the robot;
 - speed zero (rclpy only): t0 -> the robot's own /odom speed under 0.01 m/s;
@@ -24,6 +26,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import random
 import sqlite3
 import statistics
 import subprocess
@@ -115,6 +118,7 @@ def one_trial(
     if not until(lambda: sum(1 for _, x in twists()[n0:] if x != 0.0) >= 5, 60, step=0.01):
         publisher.kill()
         raise RuntimeError(f"{kind}: the timed publish never reached the robot")
+    time.sleep(random.uniform(0.0, 0.1))  # anywhere between two of the publish's Twists
     t0_wall, t0 = time.time(), time.monotonic()
     if console is not None:
         console.estop()
