@@ -173,8 +173,7 @@ class AstiopApp(App):
         self.broadcast(lambda: TurnFinished(msg.result, msg.model))
 
     def refresh_subtitle(self) -> None:
-        backend = self.services.gateway.backend
-        robot = backend.label or backend.name
+        robot = self.services.gateway.label
         rec = "  ● REC" if self.recorder is not None else ""
         self.sub_title = f"robot: {robot}  model: {self.services.endpoint.spec.raw}{rec}"
 

@@ -94,7 +94,7 @@ def mcp(
     else:
         mode = "actuation needs a console's approval"
     where = f"http://{host}:{port}/mcp" if http else "stdio"
-    print(f"astiop mcp: serving on {where}; robot {gateway.backend.name}; {mode}", file=sys.stderr)
+    print(f"astiop mcp: serving on {where}; robot {gateway.kind}; {mode}", file=sys.stderr)
     gateway.start()
     try:
         if http is not None:

@@ -145,7 +145,7 @@ def estop(
         fail(f"E-STOP latched in the database, but the robot was not reached: {exc}", code=1)
     failures = gateway.estop()
     # the zero-Twist burst and /stop go out before this process exits
-    failures += gateway.backend.settle_estop(st.settings.robot.ros2_timeout_s)
+    failures += gateway.settle_estop(st.settings.robot.ros2_timeout_s)
     gateway.close()
     for failure in failures:
         typer.echo(f"astiop: {failure}", err=True)

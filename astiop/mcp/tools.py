@@ -87,7 +87,7 @@ class RobotTools:
                     return round(max(0.0, state.t - times[name]), 2)
             return None
 
-        out: dict = {"robot": gw.backend.label or gw.backend.name, "robot_clock_s": state.t}
+        out: dict = {"robot": gw.label, "robot_clock_s": state.t}
         p = state.pose
         out["pose"] = None if p is None else {
             "x_m": round(p.x, 3), "y_m": round(p.y, 3),

@@ -58,7 +58,7 @@ def session_metadata(gateway) -> dict[str, str]:
     from astiop.ros2.grammar import current_distro
 
     return {
-        "backend": gateway.backend.name,
+        "backend": gateway.kind,
         "distro": current_distro(),
         "robot_t0": repr(gateway.state().t),
         "wall_t0": repr(time.time()),

@@ -63,6 +63,16 @@ class RobotGateway:
     def catalog(self) -> Catalog:
         return self.backend.catalog
 
+    @property
+    def kind(self) -> str:
+        """Which robot: sim, ros2 or replay."""
+        return self.backend.name
+
+    @property
+    def label(self) -> str:
+        """How the robot is named to the operator (its transport, distro and domain)."""
+        return self.backend.label or self.backend.name
+
     # -- E-STOP -----------------------------------------------------------------------------
     @property
     def latched(self) -> bool:
@@ -83,6 +93,11 @@ class RobotGateway:
             except Exception as exc:  # noqa: BLE001 - reported, the stop itself went out
                 failures.append(f"the E-STOP is not latched for other processes: {exc}")
         return failures
+
+    def settle_estop(self, timeout_s: float) -> list[str]:
+        """Wait for what the E-STOP started in the background to go out (a process about to
+        exit); the failures that came meanwhile."""
+        return self.backend.settle_estop(timeout_s)
 
     def release_estop(self) -> list[str]:
         """Release the latch for every process, then this process's robot; the failures."""
