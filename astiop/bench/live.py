@@ -9,6 +9,7 @@ import threading
 import time
 
 from astiop.bench import stage2
+from astiop.bench.case_turn import case_agent, scored
 from astiop.config import Settings
 from astiop.robot.gateway import RobotGateway
 
@@ -85,8 +86,6 @@ def set_up(gateway: RobotGateway, case, store) -> str:
 
 
 async def live_case(store, settings, config, endpoint, case, mode):
-    from astiop.bench.runner import _agent, _scored
-
     why = stage2.live_refusal(case)
     if why:
         return "skipped", {"total_s": 0.0, "skipped": why}, ""
@@ -94,11 +93,11 @@ async def live_case(store, settings, config, endpoint, case, mode):
     failed = await asyncio.to_thread(set_up, gateway, case, store)
     if failed:
         return "error", {"total_s": 0.0}, failed
-    agent = _agent(store, config, endpoint, mode, gateway)
+    agent = case_agent(store, config, endpoint, mode, gateway)
     turn = await agent.turn(case.request)
     truth = stage2.Truth.of_robot(gateway.state())  # what the robot reported at the answer
     if turn.started:  # followed as the console follows it, to the robot's arrival
         await agent.follow_up(turn, GOAL_WAIT_S)
     await asyncio.to_thread(_settle, gateway, CONVEYOR_WAIT_S)
     after = stage2.Truth.of_robot(gateway.state())
-    return _scored(case, turn, truth, after, store)
+    return scored(case, turn, truth, after, store)

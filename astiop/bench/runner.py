@@ -17,8 +17,8 @@ from pathlib import Path
 
 from astiop.agent.llm import LLMError, LLMTimeout
 from astiop.agent.specs import LLMEndpoint, open_endpoint, parse_spec
-from astiop.agent.turn import Agent
 from astiop.bench import library, paper_protocol, stage1, stage2
+from astiop.bench.case_turn import case_agent, scored
 from astiop.bench.live import close_live, live_case
 from astiop.bench.suites import SuiteError
 from astiop.config import Settings
@@ -284,45 +284,11 @@ def _case_recorder(config, gateway, sim, case, mode, who):
     return recorder
 
 
-def _agent(store, config, endpoint, mode, gateway) -> Agent:
-    return Agent(
-        gateway,
-        endpoint,
-        None,
-        mode=mode,
-        max_tokens=min(config.max_tokens, 160),
-        confirm=lambda _c: True,
-        fallback=False,
-        places={loc.name: (loc.x, loc.y) for loc in store.list_locations()},
-        interpretation=config.interpretation,
-    )
-
-
 async def _drive_case(store, config, endpoint, case, mode, sim, gateway):
-    agent = _agent(store, config, endpoint, mode, gateway)
+    agent = case_agent(store, config, endpoint, mode, gateway)
     turn = await agent.turn(case.request)
     truth = stage2.Truth.of_sim(sim)
     if sim.goal is not None:
         await asyncio.to_thread(sim.run_goal, 600.0)
     await asyncio.to_thread(sim.run_until, lambda: False, 5.0)  # a conveyor transfer ends
-    return _scored(case, turn, truth, stage2.Truth.of_sim(sim), store)
-
-
-def _scored(case, turn, truth, after, store):
-    score = stage2.score_case(case, turn, truth, after, store)
-    metrics = {
-        "command": score.command,
-        "interpretation": score.interpretation,
-        "c_valid": score.c_valid,
-        "i_valid": score.i_valid,
-        "total_s": turn.total_s,
-        "ttft_s": turn.ttft_s,
-        "tokens": turn.completion_tokens,
-        "base": case.base or case.id,
-        "wrong_actuations": len(stage2.wrong_actuations(turn, case.expect)),
-        "refused": bool(turn.refused),
-        "grounding": turn.grounding,
-        **score.details,
-    }
-    outcome = "error" if turn.error and not turn.commands else "ok"
-    return outcome, metrics, turn.answer
+    return scored(case, turn, truth, stage2.Truth.of_sim(sim), store)
