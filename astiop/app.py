@@ -10,7 +10,6 @@ from __future__ import annotations
 import logging
 import threading
 from collections.abc import Iterable
-from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -37,15 +36,8 @@ from astiop.screens.logs import LogsScreen
 from astiop.screens.messages import RobotStateSampled, TurnFinished
 from astiop.screens.modals import ConfirmModal
 from astiop.screens.teleop import TeleopScreen
+from astiop.services import Services
 from astiop.store import Store
-
-
-@dataclass
-class Services:
-    settings: Settings
-    store: Store
-    gateway: RobotGateway
-    endpoint: LLMEndpoint
 
 
 class AstiopApp(App):

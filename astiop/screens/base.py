@@ -5,11 +5,18 @@ from __future__ import annotations
 from textual.screen import Screen
 from textual.worker import Worker
 
+from astiop.services import Services
+
 
 class ConsoleScreen(Screen):
+    @property
+    def services(self) -> Services:
+        """The app's services, typed (the app is AstiopApp; `self.app` is typed App)."""
+        return self.app.services  # type: ignore[attr-defined]
+
     def on_mount(self) -> None:
         self.app.listeners.append(self)
-        playback = self.app.services.gateway.playback
+        playback = self.services.gateway.playback
         if playback is not None:  # a replay: where it is, on every screen
             from astiop.widgets.replay_bar import ReplayBar
 

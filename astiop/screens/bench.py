@@ -43,7 +43,7 @@ class BenchScreen(ConsoleScreen):
     def compose(self) -> ComposeResult:
         yield Header(show_clock=False)
         with Horizontal(id="bench-controls"):
-            suites, _ = all_suites(self.app.services.store.path.parent)
+            suites, _ = all_suites(self.services.store.path.parent)
             yield Select(
                 [(f"{s.name} ({len(s.cases)})", s.name) for s in suites],
                 value="astiop-stage2",
@@ -85,7 +85,7 @@ class BenchScreen(ConsoleScreen):
         self.action_reload()
 
     def action_reload(self) -> None:
-        self.runs = list_runs(self.app.services.store)
+        self.runs = list_runs(self.services.store)
         table = self.query_one("#bench-runs", DataTable)
         table.clear()
         for r in self.runs:
@@ -125,7 +125,7 @@ class BenchScreen(ConsoleScreen):
             self.notify("limit is a whole number of cases", severity="error")
             return None
         mode = self.query_one("#bench-mode", Select).value
-        store = self.app.services.store
+        store = self.services.store
         try:
             suite = load_suite(self.query_one("#bench-suite", Select).value, store.path.parent)
             config = runner.RunConfig(
@@ -149,7 +149,7 @@ class BenchScreen(ConsoleScreen):
 
     @work(exclusive=True, group="bench", exit_on_error=False)
     async def run_bench(self, config: runner.RunConfig) -> None:
-        store = self.app.services.store
+        store = self.services.store
         run_id = runner.create_run(store, config)
         progress = self.query_one("#bench-progress", ProgressBar)
         status = self.query_one("#bench-status", Label)
@@ -164,12 +164,12 @@ class BenchScreen(ConsoleScreen):
                 f"{p.outcome}  ETA {p.eta_s:.0f} s"
             )
 
-        await runner.run(store, self.app.services.settings, config, run_id, on_progress)
+        await runner.run(store, self.services.settings, config, run_id, on_progress)
         status.update(f"run {run_id} done in {time.perf_counter() - t0:.0f} s")
         self.action_reload()
 
     def show_report(self, run_id: int) -> None:
-        rep: Report = load_report(self.app.services.store, run_id)
+        rep: Report = load_report(self.services.store, run_id)
         ranking = self.query_one("#bench-ranking", DataTable)
         ranking.clear(columns=True)
         bars = self.query_one("#bench-bars", Static)

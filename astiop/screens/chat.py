@@ -109,7 +109,7 @@ class ChatScreen(ConsoleScreen):
 
     def on_mount(self) -> None:
         self._turn_lock = asyncio.Lock()
-        services = self.app.services
+        services = self.services
         self.agent = Agent(
             services.gateway,
             services.endpoint,
@@ -152,11 +152,11 @@ class ChatScreen(ConsoleScreen):
         except SpecError as exc:
             self.notify(str(exc), severity="error", markup=False)
             return
-        old = self.app.services.endpoint
-        self.app.services.endpoint = endpoint
+        old = self.services.endpoint
+        self.services.endpoint = endpoint
         self.agent.switch(
             endpoint,
-            self.agent.mode if self.agent.mode != "rules" else self.app.services.settings.llm.mode,
+            self.agent.mode if self.agent.mode != "rules" else self.services.settings.llm.mode,
         )
         self.app.refresh_subtitle()
         self.run_worker(old.close, thread=True, group="model")

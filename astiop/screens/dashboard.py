@@ -93,7 +93,7 @@ class DashboardScreen(ConsoleScreen):
         yield Header(show_clock=False)
         with Vertical(id="dash-grid"):
             with Vertical(id="dash-left"):
-                yield WarehouseMapView(self.app.services.gateway.map_geometry(), id="map-panel")
+                yield WarehouseMapView(self.services.gateway.map_geometry(), id="map-panel")
                 yield DataTable(id="events", cursor_type="none", zebra_stripes=True)
             with VerticalScroll(id="dash-right"):
                 yield Static(id="robot", classes="panel")
@@ -110,7 +110,7 @@ class DashboardScreen(ConsoleScreen):
         for label in ("topic", "type", "Hz", "age"):
             topics.add_column(label, key=label.lower())
         self.query_one("#events", DataTable).add_columns("t", "kind", "message")
-        cat = self.app.services.gateway.catalog
+        cat = self.services.gateway.catalog
         text = Text("services & actions\n", style="bold")
         for s in cat.services.values():
             text.append(s.name + "  ").append(s.type + "\n", style="dim")
@@ -127,7 +127,7 @@ class DashboardScreen(ConsoleScreen):
         # on first show too; locations may have changed on the Locations screen, and events
         # may have come while another screen was shown
         self.query_one(WarehouseMapView).set_locations(
-            [Place(loc.name, loc.x, loc.y) for loc in self.app.services.store.list_locations()]
+            [Place(loc.name, loc.x, loc.y) for loc in self.services.store.list_locations()]
         )
         self._show_events()
 
@@ -143,7 +143,7 @@ class DashboardScreen(ConsoleScreen):
         self.show_agent()
 
     def show_agent(self) -> None:
-        ep = self.app.services.endpoint
+        ep = self.services.endpoint
         if ep.is_rules:
             reach = "rule-based baseline (no LLM)"
         elif ep.local:
@@ -164,7 +164,7 @@ class DashboardScreen(ConsoleScreen):
 
     @work(exclusive=True, group="reach", exit_on_error=False)
     async def check_endpoint(self) -> None:
-        ep = self.app.services.endpoint
+        ep = self.services.endpoint
         if ep.is_rules or ep.local:
             return
         reach = await probe(ep)
@@ -190,7 +190,7 @@ class DashboardScreen(ConsoleScreen):
 
     def show_state(self, st: RobotState) -> None:
         view = self.query_one(WarehouseMapView)
-        view.set_geometry(self.app.services.gateway.map_geometry())
+        view.set_geometry(self.services.gateway.map_geometry())
         view.show(st)
         panel = self.query_one("#robot", Static)
         self._robot_text = show_text(panel, robot_text(st), getattr(self, "_robot_text", None))

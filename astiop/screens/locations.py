@@ -37,7 +37,7 @@ class LocationsScreen(ConsoleScreen):
         self.reload()
 
     def reload(self) -> None:
-        self.locations = self.app.services.store.list_locations()
+        self.locations = self.services.store.list_locations()
         table = self.query_one(DataTable)
         table.clear()
         for loc in self.locations:
@@ -75,7 +75,7 @@ class LocationsScreen(ConsoleScreen):
                 self.notify("x, y and θ must be numbers", severity="error")
                 return
             try:
-                loc = self.app.services.store.add_location(
+                loc = self.services.store.add_location(
                     values["name"].strip(), x, y, math.radians(th), values["description"]
                 )
             except LocationError as exc:
@@ -95,7 +95,7 @@ class LocationsScreen(ConsoleScreen):
             if values is None:
                 return
             try:
-                new = self.app.services.store.rename_location(loc.name, values["name"].strip())
+                new = self.services.store.rename_location(loc.name, values["name"].strip())
             except LocationError as exc:
                 self.notify(str(exc), severity="error", markup=False)
                 return
@@ -113,7 +113,7 @@ class LocationsScreen(ConsoleScreen):
 
         def done(ok: bool | None) -> None:
             if ok:
-                self.app.services.store.remove_location(loc.name)
+                self.services.store.remove_location(loc.name)
                 self.notify(f"removed {loc.name}", markup=False)
                 self.reload()
 

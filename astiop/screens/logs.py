@@ -65,7 +65,7 @@ class LogsScreen(ConsoleScreen):
 
     @work(thread=True, exclusive=True, group="logs", exit_on_error=False)
     def action_reload(self) -> None:
-        store = self.app.services.store
+        store = self.services.store
         rows = []
         interactions = store.interactions(500)
         commands = store.commands_by_interaction([it["id"] for it in interactions])
@@ -186,7 +186,7 @@ class LogsScreen(ConsoleScreen):
 
     @work(thread=True, group="export", exit_on_error=False)
     def action_export(self, fmt: str) -> None:
-        folder = self.app.services.store.path.parent / "exports"
+        folder = self.services.store.path.parent / "exports"
         folder.mkdir(parents=True, exist_ok=True)
         path = folder / f"astiop-logs-{time.strftime('%Y%m%d-%H%M%S')}.{fmt}"
         records = [

@@ -51,7 +51,7 @@ class TeleopScreen(ConsoleScreen):
     def compose(self) -> ComposeResult:
         yield Header(show_clock=False)
         with Vertical(id="teleop-grid"):
-            yield WarehouseMapView(self.app.services.gateway.map_geometry())
+            yield WarehouseMapView(self.services.gateway.map_geometry())
             with Vertical():
                 yield Static(id="teleop-help", classes="panel")
                 yield WheelBars(id="wheels", classes="panel")
@@ -60,7 +60,7 @@ class TeleopScreen(ConsoleScreen):
 
     def on_screen_resume(self) -> None:
         self.query_one(WarehouseMapView).set_locations(
-            [(loc.x, loc.y) for loc in self.app.services.store.list_locations()]
+            [(loc.x, loc.y) for loc in self.services.store.list_locations()]
         )
 
     def on_mount(self) -> None:
@@ -86,7 +86,7 @@ class TeleopScreen(ConsoleScreen):
         # the robot first: the sender's thread is idle and starts at once (a worker per press
         # starts at the event loop's next turn); the bars are redrawn once it is sent
         self._supersede()  # a press not sent yet gives way to this one: no backlog to drive
-        sent = self._pending = self._sender.submit(self.app.services.gateway.drive, *command)
+        sent = self._pending = self._sender.submit(self.services.gateway.drive, *command)
         self.run_worker(
             lambda: self._report(sent, wheel_speeds(*command)),
             thread=True,
@@ -120,7 +120,7 @@ class TeleopScreen(ConsoleScreen):
         self._show_wheels((0.0, 0.0, 0.0, 0.0))
         # after the presses before it, on the same thread; a zero Twist, not /stop, which a
         # robot may latch until it is released (ctrl+e stops everything)
-        sent = self._sender.submit(self.app.services.gateway.drive, 0.0, 0.0, 0.0)
+        sent = self._sender.submit(self.services.gateway.drive, 0.0, 0.0, 0.0)
         self.run_worker(
             lambda: self._halted(sent), thread=True, group="teleop", exit_on_error=False
         )
