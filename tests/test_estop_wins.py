@@ -101,7 +101,7 @@ def test_estop_from_another_process_ends_a_timed_publish_on_the_cli_transport(
             )
             out = subprocess.run(_cli(db, "estop"), capture_output=True, text=True, timeout=60)
             assert out.returncode == 0, out.stderr
-            _, err = publisher.communicate(timeout=15)  # not the 30 s it asked for
+            _, err = publisher.communicate(timeout=25)  # not the 30 s it asked for
         finally:
             if publisher.poll() is None:
                 publisher.kill()
@@ -185,7 +185,7 @@ def test_estop_from_another_process_ends_a_timed_publish_on_rclpy(tmp_path):
                 _cli(db, "estop"), capture_output=True, text=True, timeout=60, env=env
             )
             assert out.returncode == 0, out.stderr
-            _, err = publisher.communicate(timeout=15)
+            _, err = publisher.communicate(timeout=25)
         finally:
             if publisher.poll() is None:
                 publisher.kill()

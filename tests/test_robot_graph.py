@@ -397,3 +397,15 @@ def test_echo_text_follows_the_operators_options_and_the_values_stay_whole(gatew
     assert f"state: {state}" not in r.output
     r = gateway.run("ros2 topic echo /battery_status --once -l 3")
     assert "location: 2x ..." in r.output  # strings are cut too, with '...'
+
+
+def test_topic_list_count_is_printed_as_ros2cli_prints_it_on_the_simulator(tmp_path):
+    """`ros2 topic list -c` prints the count on every robot (the simulator printed the names)."""
+    from astiop.config import load_settings
+    from astiop.robot.factory import make_sim_gateway
+
+    gateway = make_sim_gateway(load_settings({}, env={}, path=tmp_path / "none.toml"), None)
+    result = gateway.run("ros2 topic list -c")
+    assert result.executed and result.output == f"{len(gateway.catalog.topics)}\n", result
+    listed = gateway.run("ros2 topic list -t")
+    assert "/cmd_vel [geometry_msgs/msg/Twist]\n" in listed.output

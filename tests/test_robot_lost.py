@@ -104,8 +104,8 @@ def test_rclpy_loses_the_sim_node_killed_mid_goal_and_reconnects(tmp_path):
             assert time.monotonic() - t0 < 10
             assert gateway.state().state_word == "lost" and said(gateway, "lost contact")
             with sim_node(speed=4.0):
-                assert until(lambda: gateway.state().state_word != "lost", 40)
-                assert gateway.state().pose is not None
+                back = gateway.state
+                assert until(lambda: back().state_word != "lost" and back().pose is not None, 40)
                 assert said(gateway, "reconnected"), gateway.events_since(0)
         finally:
             gateway.close()

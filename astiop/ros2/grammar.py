@@ -72,6 +72,9 @@ _FLAGS = {
     "flow_style": "flow_style",
     "csv": "csv",
     "verbose": "verbose",
+    "count_topics": "count_topics",  # list -c: printed as the count (ros2topic/verb/list.py)
+    "count_services": "count_services",
+    "count_actions": "count_actions",
 }
 _OPTIONS = {
     "rate": "rate",

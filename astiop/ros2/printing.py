@@ -86,3 +86,17 @@ def node_info_text(node: str, sections: dict[str, list[tuple[str, str]]]) -> str
         lines.append(f"  {section}:")
         lines += [f"    {n}: {t}" for n, t in items]
     return "\n".join(lines) + "\n"
+
+
+COUNTS = ("count_topics", "count_services", "count_actions")
+
+
+def list_text(pairs: list[tuple[str, str]], flags) -> tuple[str, list[str]]:
+    """`ros2 topic|service|action list` as ros2cli prints it (`-t` the types, `-c` the count),
+    and the names; `pairs` are (name, type) in the order to print."""
+    names = [n for n, _ in pairs]
+    if any(f in flags for f in COUNTS):
+        return f"{len(names)}\n", names
+    if "show_types" in flags:
+        return "".join(f"{n} [{t}]\n" for n, t in pairs), names
+    return "".join(f"{n}\n" for n in names), names

@@ -11,7 +11,7 @@ import yaml
 
 from astiop.robot.backend import BackendError
 from astiop.ros2.interfaces import InterfaceError, fill, python_repr
-from astiop.ros2.printing import echo_yaml
+from astiop.ros2.printing import echo_yaml, list_text
 from astiop.sim_robots.emulated_cli.call import Call
 
 HIDDEN_TOPICS = {
@@ -26,10 +26,8 @@ class TopicVerbs:
     # -- topic ------------------------------------------------------------------------------
     @staticmethod
     def _listing(call: Call, names: dict[str, str], types: bool, count: bool) -> int:
-        if count:
-            call.out(f"{len(names)}\n")
-        else:
-            call.out("\n".join(f"{n} [{t}]" if types else n for n, t in names.items()) + "\n")
+        flags = {"show_types"} if types else set()
+        call.out(list_text(list(names.items()), flags | ({"count_topics"} if count else set()))[0])
         return 0
 
     def _topic_list(self, call: Call, a: dict) -> int:

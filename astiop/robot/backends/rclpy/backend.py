@@ -9,15 +9,16 @@ import time
 from typing import Any
 
 from astiop.robot.backend import BackendError, RobotBackend
+from astiop.robot.backends import live_robot
 from astiop.robot.backends.event_log import Contact, EstopWork, EventLog
 from astiop.robot.backends.live_catalog import RELEASE, describe_graph, stop_service_type
+from astiop.robot.backends.live_robot import MOVING, without_finished_plan
 from astiop.robot.backends.rclpy.graph import read_lists, read_params
 from astiop.robot.backends.rclpy.node import ros_process
 from astiop.robot.backends.rclpy.verbs import RclpyVerbs
 from astiop.robot.backends.rclpy.watch import TopicWatch, watch
 from astiop.robot.inflight import InFlight, Job
 from astiop.robot.state import (
-    LOST,
     OccupancyGrid,
     RobotEvent,
     RobotState,
@@ -31,7 +32,6 @@ from astiop.ros2.grammar import current_distro
 from astiop.ros2.message_objects import interface_class, to_dict, to_message
 from astiop.ros2.render import velocity_message, zero_twist
 
-MOVING = {"navigating", "docking", "undocking", "blocked"}
 GRAPH_POLL_S = 1.0
 DISCOVERY_S = 3.0  # at most this long for a new process's discovery to settle
 DISCOVERY_QUIET_S = 1.0  # no change in the graph for this long: discovery has settled
@@ -258,9 +258,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
     def state(self) -> RobotState:
         now = time.monotonic()
         messages = self._fresh(now)
-        status = messages.get("/robot_status") or {}
-        if status.get("state") not in MOVING:
-            messages.pop("/plan", None)  # the last plan of a finished goal
+        messages = without_finished_plan(messages)
         seq = self.events.seq
         state = from_messages(now - self.t0, messages, e_stopped=self.inflight.held, event_seq=seq)
         return state.with_lost(self._lost_for(now))
@@ -296,16 +294,17 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         return self._map
 
     def wait_until_idle(self, timeout_s: float) -> str | None:
-        deadline = time.monotonic() + timeout_s
-        while time.monotonic() < deadline:
-            if self._lost_for(time.monotonic()) is not None:
-                return LOST  # its goal's end will not be heard
+        def state() -> str | None:
             status = self._watches.get("/robot_status")
-            state = (status.latest() or {}).get("state") if status else None
-            if not self._goals and state not in MOVING:
-                return self._last_outcome
-            time.sleep(0.1)
-        return None
+            return (status.latest() or {}).get("state") if status else None
+
+        return live_robot.wait_until_idle(
+            timeout_s,
+            lost=lambda: self._lost_for(time.monotonic()) is not None,
+            goals_running=lambda: bool(self._goals),
+            state=state,
+            outcome=lambda: self._last_outcome,
+        )
 
     # -- teleop and the E-STOP ------------------------------------------------------------------
     def _publisher(self) -> tuple[Any, Any, str]:

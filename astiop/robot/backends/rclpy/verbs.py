@@ -18,7 +18,7 @@ from astiop.robot.backends.rclpy.node import RosTimeout
 from astiop.robot.inflight import ENDED, Job
 from astiop.ros2.interfaces import interface_show
 from astiop.ros2.message_objects import MessageTypeError, interface_class, to_dict, to_message
-from astiop.ros2.printing import echo_text, node_info_text, ros2cli_yaml
+from astiop.ros2.printing import echo_text, list_text, node_info_text, ros2cli_yaml
 from astiop.ros2.render import STAMPED
 from astiop.ros2.validation import Checked
 
@@ -58,13 +58,7 @@ class RclpyVerbs:
 
     # -- listings ---------------------------------------------------------------------------
     def _listing(self, kind: str, c: Checked) -> tuple[str, list[str]]:
-        pairs = self._lists[kind]
-        names = [n for n, _ in pairs]
-        if "count_topics" in c.command.flags or "count_services" in c.command.flags:
-            return f"{len(names)}\n", names
-        if "show_types" in c.command.flags:
-            return "".join(f"{n} [{t}]\n" for n, t in pairs), names
-        return "".join(f"{n}\n" for n in names), names
+        return list_text(self._lists[kind], c.command.flags)
 
     def _topic_list(self, c: Checked, timeout: float):
         return self._listing("topic", c)

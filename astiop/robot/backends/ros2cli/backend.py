@@ -13,8 +13,10 @@ import time
 from typing import Any
 
 from astiop.robot.backend import BackendError, RobotBackend
+from astiop.robot.backends import live_robot
 from astiop.robot.backends.event_log import Contact, EstopWork, EventLog
 from astiop.robot.backends.live_catalog import RELEASE, nothing_listed, stop_service_type
+from astiop.robot.backends.live_robot import without_finished_plan
 from astiop.robot.backends.ros2cli import process as ros2_process
 from astiop.robot.backends.ros2cli.graph import GraphReader
 from astiop.robot.backends.ros2cli.motion import (
@@ -32,7 +34,6 @@ from astiop.robot.backends.ros2cli.replies import (
 from astiop.robot.backends.ros2cli.streams import TopicStream, parse_document
 from astiop.robot.inflight import ENDED, InFlight, Job
 from astiop.robot.state import (
-    LOST,
     OccupancyGrid,
     RobotEvent,
     RobotState,
@@ -48,7 +49,6 @@ from astiop.ros2.render import STAMPED, flow_yaml, sent_argv
 from astiop.ros2.validation import Checked
 
 ARRAYS = {"/scan", "/plan", "/obstacles"}  # echoed in full: ros2 truncates at 128 items
-MOVING = {"navigating", "docking", "blocked"}
 GRAPH_REFRESH_S = 30.0
 ZERO_PUB_S = 1.0  # an E-STOP's ten zero Twists at 10 Hz: a second on top of the start-up
 
@@ -181,9 +181,7 @@ class Ros2Backend(RobotBackend):
         with self._lock:
             messages = dict(self._latest)
         seq = self.events.seq
-        status = messages.get("/robot_status") or {}
-        if status.get("state") not in MOVING:
-            messages.pop("/plan", None)  # the last plan of a finished goal
+        messages = without_finished_plan(messages)
         now = time.monotonic()
         state = from_messages(now - self.t0, messages, e_stopped=self.inflight.held, event_seq=seq)
         return state.with_lost(self._lost_for(now))
@@ -230,19 +228,19 @@ class Ros2Backend(RobotBackend):
             self.events.add("map", "warning", f"/map could not be read: {exc}")
 
     def wait_until_idle(self, timeout_s: float) -> str | None:
-        deadline = time.monotonic() + timeout_s
-        while time.monotonic() < deadline:
-            if self._lost_for(time.monotonic()) is not None:
-                return LOST  # its goal's end will not be heard
-            # a goal's client is followed until its last line is read (its outcome), not only
-            # until its process exits: the follower drops it from the list then
-            goals_running = bool(self._goal_procs)
+        def state() -> str | None:
             with self._lock:
-                state = (self._latest.get("/robot_status") or {}).get("state")
-            if not goals_running and state not in MOVING:
-                return self._last_outcome
-            time.sleep(0.1)
-        return None
+                return (self._latest.get("/robot_status") or {}).get("state")
+
+        # a goal's client is followed until its last line is read (its outcome), not only
+        # until its process exits: the follower drops it from the list then
+        return live_robot.wait_until_idle(
+            timeout_s,
+            lost=lambda: self._lost_for(time.monotonic()) is not None,
+            goals_running=lambda: bool(self._goal_procs),
+            state=state,
+            outcome=lambda: self._last_outcome,
+        )
 
     # -- E-STOP and teleop -----------------------------------------------------------------
     @property

@@ -10,7 +10,7 @@ from typing import Any
 from astiop.robot.backend import BackendError
 from astiop.robot.state import yaw_of
 from astiop.ros2.interfaces import interface_show, python_repr
-from astiop.ros2.printing import echo_text, indent_yaml, node_info_text
+from astiop.ros2.printing import echo_text, indent_yaml, list_text, node_info_text
 from astiop.ros2.validation import Checked
 from astiop.sim.simulator import GoalError
 from astiop.store import LocationError
@@ -40,10 +40,7 @@ class SimVerbs:
 
     @staticmethod
     def _listing(entries: dict, c: Checked) -> tuple[str, list[str]]:
-        types = "show_types" in c.command.flags
-        names = sorted(entries)
-        lines = [f"{n} [{entries[n].type}]" if types else n for n in names]
-        return "\n".join(lines) + "\n", names
+        return list_text(sorted((n, e.type) for n, e in entries.items()), c.command.flags)
 
     def _topic_type(self, c: Checked, timeout: float):
         return c.type + "\n", c.type
