@@ -14,6 +14,7 @@ import atexit
 import contextlib
 import os
 import threading
+import time
 from typing import Any
 
 import rclpy
@@ -27,6 +28,7 @@ _lock = threading.Lock()
 # _wake_executor on each entity made or destroyed; close() wakes it).
 SPIN_TIMEOUT_S = 1.0
 POLL_S = 0.1  # the state topics' messages are taken ten times a second
+ASK_AGAIN_S = 2.0  # a read service unanswered this long is asked again
 _shared: RosProcess | None = None
 
 
@@ -116,6 +118,22 @@ class RosProcess:
             future.cancel()
             raise RosTimeout(f"{what}: no answer within {timeout:g} s")
         return future.result()
+
+    def ask(self, client: Any, request: Any, timeout: float, what: str, *, again: bool) -> Any:
+        """The answer to one request. A Fast DDS server drops its answer to a client whose
+        response reader it has not matched within 100 ms (ros2/rmw_fastrtps#390): on a loaded
+        machine a first call can go unanswered. `again`: a read, asked again every ASK_AGAIN_S
+        until `timeout`; an actuation is asked once (it may have been done)."""
+        deadline = time.monotonic() + timeout
+        while True:
+            left = deadline - time.monotonic()
+            try:
+                return self.wait(
+                    client.call_async(request), min(left, ASK_AGAIN_S) if again else left, what
+                )
+            except RosTimeout:
+                if not again or time.monotonic() + 0.05 >= deadline:
+                    raise RosTimeout(f"{what}: no answer within {timeout:g} s") from None
 
     def client(self, srv_type: Any, name: str) -> Any:
         """One client per service, kept: a new one is not matched at once, and a Fast DDS service

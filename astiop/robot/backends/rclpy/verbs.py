@@ -250,7 +250,8 @@ class RclpyVerbs:
             if not client.wait_for_service(timeout_sec=timeout):
                 raise BackendError(f"service {name} is not available (waited {timeout:g} s)")
         lines.append(f"requester: making request: {request!r}\n")
-        response = self.proc.wait(client.call_async(request), timeout, f"service {name}")
+        read = c.kind != "actuate"
+        response = self.proc.ask(client, request, timeout, f"service {name}", again=read)
         lines.append(f"response:\n{response!r}\n")
         if name == "/stop":
             self._cancel_goals()
