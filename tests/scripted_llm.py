@@ -6,12 +6,22 @@ Real HTTP, real sockets; the reply text and the failure mode are chosen by the t
 from __future__ import annotations
 
 import json
+import sys
 import threading
 import time
 from collections.abc import Callable
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
 Reply = str | Callable[[list[dict]], str]
+
+
+class _Server(ThreadingHTTPServer):
+    errors: list[BaseException]
+
+    def handle_error(self, request, client_address) -> None:
+        """Kept, never printed: a handler outliving its test (a client that hung up, a stream
+        canceled) would print into whatever stderr another test of this process captures."""
+        self.errors.append(sys.exc_info()[1])
 
 
 class ScriptedLLM:
@@ -25,7 +35,8 @@ class ScriptedLLM:
         self.requests: list[dict] = []
         self.timings = False  # send llama.cpp `timings` in the last chunk
         handler = self._handler()
-        self.httpd = ThreadingHTTPServer(("127.0.0.1", 0), handler)
+        self.httpd = _Server(("127.0.0.1", 0), handler)
+        self.httpd.errors = []
         self.port = self.httpd.server_address[1]
         self._thread = threading.Thread(target=self.httpd.serve_forever, daemon=True)
         self._thread.start()
