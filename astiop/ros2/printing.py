@@ -92,8 +92,9 @@ COUNTS = ("count_topics", "count_services", "count_actions")
 
 
 def list_text(pairs: list[tuple[str, str]], flags) -> tuple[str, list[str]]:
-    """`ros2 topic|service|action list` as ros2cli prints it (`-t` the types, `-c` the count),
-    and the names; `pairs` are (name, type) in the order to print."""
+    """`ros2 topic|service|action list` as ros2cli prints it (`-t` the types, `-c` the count,
+    nothing for an empty graph: ros2topic/verb/list.py, ros2service/verb/list.py, humble and
+    jazzy alike), and the names; `pairs` are (name, type) in the order to print."""
     names = [n for n, _ in pairs]
     if any(f in flags for f in COUNTS):
         return f"{len(names)}\n", names
