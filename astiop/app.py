@@ -189,6 +189,12 @@ class AstiopApp(App):
         """The console's own commands beside Textual's (ctrl+p)."""
         yield from super().get_system_commands(screen)
         yield SystemCommand("E-STOP", "Stop all motion now (ctrl+e)", self.action_estop)
+        # every screen's key has a second way here: a browser or a tablet may lack F-keys
+        for key, mode in enumerate(self.MODES, start=1):
+            yield SystemCommand(
+                f"Screen: {mode.title()}", f"Show the {mode} screen (f{key})",
+                partial(self.switch_mode, mode),
+            )  # fmt: skip
         yield SystemCommand(
             "Release the E-STOP",
             "Let the robot move again, after a y/n (ctrl+r)",

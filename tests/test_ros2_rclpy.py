@@ -88,7 +88,8 @@ def test_state_messages_are_taken_by_the_poller_each_at_its_receive_time(robot_g
     gaps = [b - a for a, b in zip(odom, odom[1:])]
     # 50 Hz taken ten times a second: stamped by their take they would come five at one time
     assert sum(g < 0.001 for g in gaps) < len(gaps) / 2, gaps
-    assert 40 <= watches["/odom"].rate(time.monotonic()) <= 60
+    # 50 Hz published; a loaded machine (CI's browser tests beside) delivers fewer, never more
+    assert 25 <= watches["/odom"].rate(time.monotonic()) <= 60
 
 
 def test_a_chat_read_agrees_with_the_robot_and_a_goal_is_followed_to_arrival(robot_gateway):

@@ -93,3 +93,23 @@ async def test_an_mcp_client_actuation_is_approved_and_refused_in_the_console(tm
         statuses = [r["status"] for r in server.db.query("SELECT status FROM approvals")]
         assert statuses == ["denied", "approved"]
         server.close()
+
+
+async def test_a_request_answered_in_another_console_closes_here_and_is_answered_once(tmp_path):
+    app = console(tmp_path)
+    server = Store(tmp_path / "console.db")
+    other = Store(tmp_path / "console.db")  # a second console (another terminal, a browser tab)
+    async with app.run_test(size=SIZE) as pilot:
+        await wait_for(pilot, server.console_open, what="the console's heartbeat")
+        request = await asyncio.to_thread(server.request_approval, "agent", GOTO, "", 30)
+        await wait_for(pilot, lambda: asked(app) != "")
+        assert other.decide_approval(request, True, "console")
+        await wait_for(pilot, lambda: type(app.screen).__name__ != "ConfirmModal")
+        await pilot.press("n")  # too late to count: the dialog is gone, nothing is answered
+        await pilot.pause(0.3)
+        row = server.approval(request)
+        assert (row["status"], row["decided_by"]) == ("approved", "console")
+        said = [n.message for n in app._notifications]
+        assert any("settled elsewhere" in m for m in said), said
+    other.close()
+    server.close()

@@ -20,6 +20,7 @@ from astiop.cli import (
     record,
     robot,
     ros2,
+    serve,
     sim,
 )
 from astiop.cli.common import CliState
@@ -45,6 +46,7 @@ app.command("doctor")(doctor.doctor)
 app.command("record")(record.record)
 app.command("replay")(console.replay)
 app.command("mcp")(mcp.mcp)
+app.command("serve")(serve.serve)
 
 
 def _version(value: bool) -> None:

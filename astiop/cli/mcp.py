@@ -56,22 +56,22 @@ def mcp(
     ),
 ) -> None:
     """Serve the robot to MCP clients: reads freely; each actuation approved in a console."""
-    from astiop.mcp.bearer_token import TOKEN_VARIABLE, WHERE, TokenError, token_from
+    from astiop.bearer_token import MCP_TOKEN, TokenError, token_from, where
 
     if token_given is not None:
-        fail(f"--token would show the token to every user in `ps`: give it as {WHERE}")
+        fail(f"--token would show the token to every user in `ps`: give it as {where(MCP_TOKEN)}")
     host, port = parse_http(http) if http is not None else ("", 0)
     if token_file is not None and http is None:
         fail("--token-file goes with --http (stdio needs none)")
     token = None
     if http is not None:
         try:
-            token = token_from(token_file, os.environ)
+            token = token_from(token_file, os.environ, MCP_TOKEN)
         except TokenError as exc:
             fail(str(exc))
-    os.environ.pop(TOKEN_VARIABLE, None)  # not handed down to the robot's `ros2` processes
+    os.environ.pop(MCP_TOKEN, None)  # not handed down to the robot's `ros2` processes
     if http is not None and not loopback(host) and not token:
-        fail(f"--http on {host} (not the loopback) needs a token ({WHERE}): anyone who "
+        fail(f"--http on {host} (not the loopback) needs a token ({where(MCP_TOKEN)}): anyone who "
              "reaches it could ask the robot to move")  # fmt: skip
 
     from astiop.mcp.approval import Policy

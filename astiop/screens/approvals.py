@@ -21,6 +21,7 @@ class ApprovalDesk(threading.Thread):
         self.app = app
         self.halt = threading.Event()
         self._asked: set[int] = set()
+        self._open: dict[int, ConfirmModal] = {}  # the UI thread's: dialogs still up
 
     def run(self) -> None:
         store = self.app.services.store
@@ -35,6 +36,10 @@ class ApprovalDesk(threading.Thread):
                     if request["id"] not in self._asked:
                         self._asked.add(request["id"])
                         self.app.call_from_thread(self._ask, request)
+                still = {request["id"] for request in pending}
+                for gone in self._asked - still:  # answered in another console, or expired
+                    self._asked.discard(gone)
+                    self.app.call_from_thread(self._close, gone)
         finally:
             with contextlib.suppress(StoreError):
                 store.console_closed()
@@ -50,6 +55,9 @@ class ApprovalDesk(threading.Thread):
         )
 
         def done(ok: bool | None) -> None:
+            self._open.pop(request["id"], None)
+            if ok is None:
+                return  # closed here because it was settled elsewhere
             self.app.run_worker(
                 lambda: self._decide(request["id"], bool(ok)),
                 thread=True,
@@ -63,8 +71,21 @@ class ApprovalDesk(threading.Thread):
             if self.app.screen is modal:
                 modal.dismiss(False)
 
+        self._open[request["id"]] = modal
         self.app.push_screen(modal, done)
         self.app.set_timer(left, expire)
+
+    def _close(self, approval_id: int) -> None:  # the UI thread
+        """The request was settled elsewhere (another console, a tab, the server's bound): its
+        dialog here answers nothing any more."""
+        modal = self._open.pop(approval_id, None)
+        if modal is None:
+            return
+        if self.app.screen is modal:
+            modal.dismiss(None)
+        self.app.notify(
+            f"MCP request {approval_id} was settled elsewhere (another console or its time ran out)."
+        )
 
     def _decide(self, approval_id: int, approved: bool) -> None:
         store = self.app.services.store

@@ -1,5 +1,6 @@
-"""Where `astiop mcp --http` gets its bearer token: a file only its owner can read, or the
-environment; never the command line, which every user on the machine sees in `ps`."""
+"""Where a server of astiop's (`astiop mcp --http`, `astiop serve`) gets its token: a file only
+its owner can read, or the environment; never the command line, which every user on the machine
+sees in `ps`."""
 
 from __future__ import annotations
 
@@ -9,13 +10,17 @@ import stat
 from collections.abc import Mapping
 from pathlib import Path
 
-TOKEN_VARIABLE = "ASTIOP_MCP_TOKEN"
+MCP_TOKEN = "ASTIOP_MCP_TOKEN"
+SERVE_TOKEN = "ASTIOP_SERVE_TOKEN"
 MIN_CHARS = 16
 MAX_CHARS = 1024
 MAX_FILE_BYTES = 4096
 # what an HTTP header carries as is: visible ASCII, no spaces
 TOKEN_RE = re.compile(rf"^[\x21-\x7e]{{{MIN_CHARS},{MAX_CHARS}}}$")
-WHERE = f"--token-file F (mode 600) or {TOKEN_VARIABLE}"
+
+
+def where(variable: str) -> str:
+    return f"--token-file F (mode 600) or {variable}"
 
 
 class TokenError(Exception):
@@ -71,10 +76,10 @@ def read_token_file(path: Path) -> str:
     return check(token, source)
 
 
-def token_from(token_file: Path | None, env: Mapping[str, str]) -> str | None:
+def token_from(token_file: Path | None, env: Mapping[str, str], variable: str) -> str | None:
     """The token to require: the file's if one is given, else the variable's; None if neither."""
     if token_file is not None:
         return read_token_file(token_file)
-    if TOKEN_VARIABLE in env:
-        return check(env[TOKEN_VARIABLE], TOKEN_VARIABLE)
+    if variable in env:
+        return check(env[variable], variable)
     return None

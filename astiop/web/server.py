@@ -1,0 +1,312 @@
+"""The web server of `astiop serve` (aiohttp): the log-in, the console page, a console process per
+websocket, and the page's E-STOP button. Nothing reaches a console before its token is checked."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import logging
+import signal
+import time
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from importlib.resources import files
+from pathlib import Path
+from urllib.parse import urlsplit
+
+from aiohttp import WSMsgType, web
+from textual_serve.download_manager import DownloadManager
+
+from astiop.web.access import COOKIE, Access, host_name, loopback_host
+from astiop.web.consoles import ConsoleProcess
+from astiop.web.pages import console_page, login_page
+
+log = logging.getLogger("astiop.serve")
+ESTOP_S = 60.0  # for `astiop estop` to reach the robot (its own timeouts are shorter)
+MAX_MESSAGE = 64 * 1024  # a browser's keystrokes and resizes are small
+STATIC = Path(str(files("textual_serve") / "static"))
+
+
+@dataclass
+class ServeConfig:
+    host: str
+    port: int
+    token: str | None
+    console_argv: list[str]  # one console (the web driver is set in its environment)
+    estop_argv: list[str]  # `astiop ... estop` on the same settings
+    db: Path
+    robot: str  # said in the page's title and header
+    console_env: dict[str, str] = field(default_factory=dict)
+    max_consoles: int = 8
+
+
+class WebServer:
+    def __init__(self, config: ServeConfig):
+        self.config = config
+        self.access = Access(config.token)
+        self.consoles: set[ConsoleProcess] = set()
+        self.downloads = DownloadManager()
+        self._db = ThreadPoolExecutor(1, thread_name_prefix="astiop-serve-db")
+        self._store = None  # made on the executor's thread, used only there
+        self._estop_lock = asyncio.Lock()
+
+    # --- who may ------------------------------------------------------------------------------
+
+    def _address(self, request: web.Request) -> str:
+        return request.remote or "?"
+
+    def _same_origin(self, request: web.Request) -> bool:
+        """A browser says which page asked; only this server's pages may act (a page elsewhere
+        cannot open a console or stop the robot through the operator's browser)."""
+        origin = request.headers.get("Origin")
+        if origin is None:
+            return True  # not a browser's cross-site request
+        hosts = {request.headers.get("Host"), request.headers.get("X-Forwarded-Host")}
+        return urlsplit(origin).netloc in hosts - {None}
+
+    def _allowed(self, request: web.Request) -> bool:
+        if not self._same_origin(request):
+            return False
+        if self.config.token is None and not loopback_host(host_name(request.host)):
+            return False  # no token: a page on another name (DNS rebinding) is not ours
+        return self.access.admitted(request.cookies.get(COOKIE))
+
+    def _secure(self, request: web.Request) -> bool:
+        return request.secure or request.headers.get("X-Forwarded-Proto", "") == "https"
+
+    async def _token_given(self, request: web.Request, token: str) -> web.Response:
+        address = self._address(request)
+        await asyncio.sleep(self.access.delay_s(address))  # repeated wrong tokens slow down
+        if not self.access.token_matches(token):
+            self.access.wrong_token(address)
+            log.warning("wrong token from %s", address)
+            return web.Response(
+                status=401, text=login_page(self.config.robot, wrong=True), content_type="text/html"
+            )
+        self.access.right_token(address)
+        response = web.Response(status=302, headers={"Location": "./"})
+        response.set_cookie(
+            COOKIE,
+            self.access.open_session(),
+            httponly=True,
+            samesite="Strict",
+            secure=self._secure(request),
+            path="/",
+        )
+        return response
+
+    # --- pages --------------------------------------------------------------------------------
+
+    async def index(self, request: web.Request) -> web.StreamResponse:
+        token = request.query.get("token")
+        if token is not None and self.config.token is not None:
+            return await self._token_given(request, token)  # a link with the token: a cookie
+        if not self._allowed(request):
+            if self.config.token is None:
+                raise web.HTTPForbidden(text="astiop serve answers only on this machine's names")
+            raise web.HTTPFound("login")
+        font = request.query.get("fontsize", "16")
+        size = int(font) if font.isdigit() and 6 <= int(font) <= 48 else 16
+        page = console_page(self.config.robot, "static/", size)
+        return web.Response(text=page, content_type="text/html", headers=_NO_STORE)
+
+    async def login_form(self, request: web.Request) -> web.Response:
+        if self.config.token is None:
+            raise web.HTTPFound("./")
+        return web.Response(
+            text=login_page(self.config.robot, wrong=False), content_type="text/html"
+        )
+
+    async def login(self, request: web.Request) -> web.Response:
+        if self.config.token is None:
+            raise web.HTTPFound("./")
+        if not self._same_origin(request):
+            raise web.HTTPForbidden(text="not from this server's page")
+        form = await request.post()
+        token = form.get("token")
+        return await self._token_given(request, token if isinstance(token, str) else "")
+
+    # --- the E-STOP button --------------------------------------------------------------------
+
+    def _latch(self, who: str | None) -> dict:
+        """On the database's own thread: latch (who given) and read the latch."""
+        if self._store is None:
+            from astiop.store import Store
+
+            self._store = Store(self.config.db)
+        if who is not None:
+            self._store.latch_estop(who)
+        return self._store.estop_latch() or {}
+
+    async def _read_latch(self, who: str | None = None) -> dict:
+        return await asyncio.get_running_loop().run_in_executor(self._db, self._latch, who)
+
+    async def estop_state(self, request: web.Request) -> web.Response:
+        if not self._allowed(request):
+            raise web.HTTPUnauthorized(text="log in first")
+        latch = await self._read_latch()
+        return web.json_response(_latch_said(latch), headers=_NO_STORE)
+
+    async def estop(self, request: web.Request) -> web.Response:
+        # a custom header: a page elsewhere cannot send it without this server's consent (CORS)
+        if not self._allowed(request) or request.headers.get("X-Astiop") != "estop":
+            raise web.HTTPForbidden(text="not from this server's page")
+        who = f"serve: browser at {self._address(request)}"
+        started = time.monotonic()
+        latch = await self._read_latch(who)  # every process on this database stops now
+        latched_ms = (time.monotonic() - started) * 1000
+        async with self._estop_lock:  # one `astiop estop` at a time; the latch is already held
+            ok, said = await self._stop_robot()
+        log.warning("E-STOP from %s: latched in %.0f ms; %s", who, latched_ms, said)
+        body = _latch_said(latch)
+        body.update(ok=ok, robot=said, latched_ms=round(latched_ms, 1))
+        body["message"] = (
+            "E-STOP ENGAGED: " if ok else "E-STOP LATCHED, robot not reached: "
+        ) + said
+        return web.json_response(body, status=200 if ok else 502)
+
+    async def _stop_robot(self) -> tuple[bool, str]:
+        process = await asyncio.create_subprocess_exec(
+            *self.config.estop_argv,
+            stdin=asyncio.subprocess.DEVNULL,
+            stdout=asyncio.subprocess.PIPE,
+            stderr=asyncio.subprocess.STDOUT,
+        )
+        try:
+            out, _ = await asyncio.wait_for(process.communicate(), ESTOP_S)
+        except asyncio.TimeoutError:
+            process.kill()
+            await process.wait()
+            return False, f"`astiop estop` did not finish in {ESTOP_S:.0f} s"
+        lines = [line for line in out.decode("utf-8", "replace").splitlines() if line.strip()]
+        return process.returncode == 0, (lines[-1] if lines else f"exit {process.returncode}")
+
+    # --- the consoles -------------------------------------------------------------------------
+
+    async def websocket(self, request: web.Request) -> web.StreamResponse:
+        if not self._allowed(request):
+            raise web.HTTPForbidden(text="log in first")  # refused before any process starts
+        if len(self.consoles) >= self.config.max_consoles:
+            raise web.HTTPServiceUnavailable(
+                text=f"{len(self.consoles)} consoles are open, the most this server allows"
+            )
+        socket = web.WebSocketResponse(heartbeat=15, max_msg_size=MAX_MESSAGE)
+        await socket.prepare(request)
+        width = _bounded_int(request.query.get("width"), 80, 20, 500)
+        height = _bounded_int(request.query.get("height"), 24, 8, 200)
+        console = ConsoleProcess(
+            self.config.console_argv,
+            self.config.console_env,
+            write_bytes=socket.send_bytes,
+            write_str=socket.send_str,
+            close=socket.close,
+            download_manager=self.downloads,
+        )
+        self.consoles.add(console)
+        try:
+            await console.start(width, height)
+            log.info(
+                "console %s opened for %s (%d open)",
+                console.pid,
+                self._address(request),
+                len(self.consoles),
+            )
+            await _relay(socket, console)
+        except asyncio.CancelledError:
+            pass
+        finally:
+            await console.end()
+            self.consoles.discard(console)
+            log.info("console %s ended (%d open)", console.pid, len(self.consoles))
+            with contextlib.suppress(Exception):
+                await socket.close()
+        return socket
+
+    async def end_all(self, _app: web.Application | None = None) -> None:
+        await asyncio.gather(*(console.end() for console in list(self.consoles)))
+        self._db.shutdown(wait=False)
+
+
+_NO_STORE = {"Cache-Control": "no-store"}
+
+
+def _latch_said(latch: dict) -> dict:
+    if not latch:
+        return {"engaged": False, "message": "E-STOP released"}
+    at = time.strftime("%H:%M:%S", time.localtime(latch["at"])) if latch.get("at") else "?"
+    return {
+        "engaged": True,
+        "by": latch.get("by"),
+        "at": latch.get("at"),
+        "message": f"E-STOP ENGAGED by {latch.get('by')} at {at}",
+    }
+
+
+def _bounded_int(value: str | None, default: int, low: int, high: int) -> int:
+    return min(high, max(low, int(value))) if value and value.isdigit() else default
+
+
+async def _relay(socket: web.WebSocketResponse, console: ConsoleProcess) -> None:
+    """The browser's keys, size and focus to the console, until the tab goes."""
+    async for message in socket:
+        if message.type != WSMsgType.TEXT:
+            continue
+        try:
+            envelope = json.loads(message.data)
+            kind, data = (envelope + [None])[:2] if isinstance(envelope, list) else (None, None)
+        except (ValueError, TypeError):
+            continue  # not what a page of ours sends: ignored
+        if kind == "stdin" and isinstance(data, str):
+            await console.send_bytes(data.encode("utf-8"))
+        elif kind == "resize" and isinstance(data, dict):
+            width = _bounded_int(str(data.get("width", "")), 80, 20, 500)
+            height = _bounded_int(str(data.get("height", "")), 24, 8, 200)
+            await console.set_terminal_size(width, height)
+        elif kind == "ping" and isinstance(data, str):
+            await socket.send_json(["pong", data[:64]])
+        elif kind == "blur":
+            await console.blur()
+        elif kind == "focus":
+            await console.focus()
+
+
+def make_web_app(config: ServeConfig) -> tuple[web.Application, WebServer]:
+    server = WebServer(config)
+    app = web.Application(client_max_size=MAX_MESSAGE)
+    app.add_routes(
+        [
+            web.get("/", server.index),
+            web.get("/login", server.login_form),
+            web.post("/login", server.login),
+            web.get("/ws", server.websocket),
+            web.get("/estop", server.estop_state),
+            web.post("/estop", server.estop),
+            web.static("/static", STATIC),
+        ]
+    )
+    app.on_shutdown.append(server.end_all)
+    return app, server
+
+
+async def serve_until_stopped(config: ServeConfig, ready) -> None:
+    """Serve until SIGINT or SIGTERM; `ready(url)` once the port is open (OSError if it cannot
+    be)."""
+    app, _server = make_web_app(config)
+    runner = web.AppRunner(app, handle_signals=False, access_log=None)
+    await runner.setup()
+    try:
+        site = web.TCPSite(runner, config.host, config.port)
+        await site.start()
+        ready(f"http://{_url_host(config.host)}:{config.port}/")
+        stop = asyncio.Event()
+        loop = asyncio.get_running_loop()
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            loop.add_signal_handler(sig, stop.set)
+        await stop.wait()
+    finally:
+        await runner.cleanup()
+
+
+def _url_host(host: str) -> str:
+    return f"[{host}]" if ":" in host else host

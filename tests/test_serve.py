@@ -1,0 +1,219 @@
+"""`astiop serve` as a browser meets it, without the browser: a console per websocket and none
+without the token, the page's origin checked, the E-STOP button, every process gone with its tab.
+(tests/test_serve_browser.py drives the same server from headless Chromium.)"""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from pathlib import Path
+
+import aiohttp
+import pytest
+
+from astiop.store import Store
+from astiop.web.access import FREE_TRIES, Access, host_name, loopback_host
+from tests.cli_runner import run_cli
+from tests.web_console import (
+    ENV,
+    Terminal,
+    consoles_of,
+    descendants,
+    free_port,
+    start_serve,
+    stop_serve,
+    wait_until,
+)
+
+TOKEN = "serve-token-0123456789abcdef"
+
+
+async def read_until(ws, terminal: Terminal, pattern: str, timeout: float = 30.0) -> None:
+    """Feed the console's frames to `terminal` until its screen matches."""
+    deadline = time.monotonic() + timeout
+    while not terminal.has(pattern):
+        left = deadline - time.monotonic()
+        assert left > 0, f"{pattern!r} never shown:\n{terminal.text()}"
+        try:
+            message = await ws.receive(timeout=left)
+        except asyncio.TimeoutError:
+            continue
+        if message.type == aiohttp.WSMsgType.BINARY:
+            terminal.feed(message.data)
+        elif message.type in (aiohttp.WSMsgType.CLOSE, aiohttp.WSMsgType.CLOSED):
+            raise AssertionError(f"the console closed:\n{terminal.text()}")
+
+
+def test_access_slows_wrong_tokens_and_forgets_them():
+    now = [0.0]
+    access = Access(TOKEN, clock=lambda: now[0])
+    for _ in range(FREE_TRIES):
+        assert access.delay_s("10.0.0.9") == 0.0
+        access.wrong_token("10.0.0.9")
+    delays = []
+    for _ in range(6):
+        delays.append(access.delay_s("10.0.0.9"))
+        access.wrong_token("10.0.0.9")
+    assert delays == [1.0, 2.0, 4.0, 8.0, 16.0, 30.0]
+    assert access.delay_s("10.0.0.10") == 0.0, "another address is not slowed"
+    now[0] += 601
+    assert access.delay_s("10.0.0.9") == 0.0, "forgotten after ten quiet minutes"
+    session = access.open_session()
+    assert access.admitted(session) and not access.admitted("guess") and not access.admitted(None)
+    now[0] += 13 * 3600
+    assert not access.admitted(session), "a session ends"
+    assert not access.token_matches(TOKEN + "x") and access.token_matches(TOKEN)
+
+
+def test_loopback_names():
+    assert [loopback_host(host_name(h)) for h in ("localhost:8765", "127.0.0.1:1", "[::1]:80")] == [
+        True,
+        True,
+        True,
+    ]
+    assert not loopback_host(host_name("evil.example:8765"))
+    assert not loopback_host(host_name("192.168.1.20:8765"))
+
+
+@pytest.mark.slow
+async def test_each_websocket_is_a_console_and_closing_it_ends_the_process(tmp_path):
+    port = free_port()
+    server = start_serve(tmp_path / "a.db", port)
+    url = f"http://127.0.0.1:{port}"
+    try:
+        async with aiohttp.ClientSession() as http:
+            async with http.get(url + "/") as page:
+                assert page.status == 200
+                assert "<title>astiop: simulator (one per tab)</title>" in await page.text()
+            assert consoles_of(server.pid) == [], "a page alone starts nothing"
+            first = await http.ws_connect(url + "/ws?width=120&height=40")
+            second = await http.ws_connect(url + "/ws?width=120&height=40")
+            one, two = Terminal(), Terminal()
+            await read_until(first, one, r"battery\s+\S+\s+\d+\.\d %")
+            await read_until(second, two, r"battery\s+\S+\s+\d+\.\d %")
+            assert len(consoles_of(server.pid)) == 2, "one console per tab"
+            await first.close()
+            wait_until(lambda: len(consoles_of(server.pid)) == 1, what="the first console to end")
+            await second.close()
+            wait_until(lambda: descendants(server.pid) == [], what="every process to end")
+    finally:
+        log = stop_serve(server)
+    assert "console" in log and "ended (0 open)" in log, log
+
+
+@pytest.mark.slow
+async def test_without_the_token_nothing_starts_and_with_it_a_console_does(tmp_path):
+    port = free_port()
+    server = start_serve(tmp_path / "a.db", port, env={**ENV, "ASTIOP_SERVE_TOKEN": TOKEN})
+    url = f"http://127.0.0.1:{port}"
+    try:
+        assert TOKEN.encode() not in Path(f"/proc/{server.pid}/cmdline").read_bytes()  # `ps`
+        # unsafe: aiohttp's jar keeps no cookie of an IP address unless asked (a browser does)
+        async with aiohttp.ClientSession(cookie_jar=aiohttp.CookieJar(unsafe=True)) as http:
+            async with http.get(url + "/", allow_redirects=False) as page:
+                assert (page.status, page.headers["Location"]) == (302, "login")
+            async with http.get(url + "/ws") as refused:
+                assert refused.status == 403
+            async with http.get(url + "/estop") as refused:
+                assert refused.status == 401
+            started = time.monotonic()
+            for _ in range(FREE_TRIES + 1):  # the last of these waits 1 s
+                async with http.post(url + "/login", data={"token": "wrong-token-000000"}) as r:
+                    assert r.status == 401 and "Wrong token" in await r.text()
+            assert time.monotonic() - started >= 1.0, "repeated wrong tokens slow down"
+            assert descendants(server.pid) == [], "a wrong token starts no process"
+            async with http.post(url + "/login", data={"token": TOKEN}, allow_redirects=False) as r:
+                assert r.status == 302 and "astiop_session" in r.cookies
+                assert "HttpOnly" in r.headers["Set-Cookie"]
+            ws = await http.ws_connect(url + "/ws")
+            await read_until(ws, Terminal(), r"Dashboard")
+            console = consoles_of(server.pid)
+            assert len(console) == 1
+            environ = Path(f"/proc/{console[0]}/environ").read_bytes()
+            assert TOKEN.encode() not in environ, "the token is not handed to a console"
+            await ws.close()
+        async with (  # a link with the token: a cookie
+            aiohttp.ClientSession() as link,
+            link.get(url + f"/?token={TOKEN}", allow_redirects=False) as r,
+        ):
+            assert r.status == 302 and "astiop_session" in r.cookies
+    finally:
+        stop_serve(server)
+
+
+@pytest.mark.slow
+async def test_a_page_elsewhere_cannot_open_a_console_nor_stop_nor_read(tmp_path):
+    port = free_port()
+    server = start_serve(tmp_path / "a.db", port)
+    url = f"http://127.0.0.1:{port}"
+    evil = {"Origin": "http://evil.example"}
+    try:
+        async with aiohttp.ClientSession() as http:
+            async with http.get(url + "/ws", headers=evil) as r:
+                assert r.status == 403
+            async with http.post(url + "/estop", headers={**evil, "X-Astiop": "estop"}) as r:
+                assert r.status == 403
+            async with http.post(url + "/estop") as r:  # a plain form post (no custom header)
+                assert r.status == 403
+            rebound = {"Host": f"evil.example:{port}", "Origin": f"http://evil.example:{port}"}
+            async with http.get(url + "/", headers=rebound) as r:  # DNS rebinding
+                assert r.status == 403
+            async with http.get(url + "/ws", headers=rebound) as r:
+                assert r.status == 403
+        assert descendants(server.pid) == []
+    finally:
+        stop_serve(server)
+    store = Store(tmp_path / "a.db")
+    assert store.estop_latch() is None, "nothing latched the E-STOP"
+    store.close()
+
+
+@pytest.mark.slow
+async def test_the_estop_button_latches_for_every_console(tmp_path):
+    port = free_port()
+    server = start_serve(tmp_path / "a.db", port)
+    url = f"http://127.0.0.1:{port}"
+    try:
+        async with aiohttp.ClientSession() as http:
+            ws = await http.ws_connect(url + "/ws?width=120&height=40")
+            terminal = Terminal()
+            await read_until(ws, terminal, r"robot\s+CHARGING")
+            same_page = {"Origin": url, "X-Astiop": "estop"}
+            async with http.post(url + "/estop", headers=same_page) as r:
+                body = await r.json()
+                assert r.status == 200, body
+            assert body["engaged"] and body["ok"] and "E-STOP ENGAGED" in body["message"]
+            store = Store(tmp_path / "a.db")
+            latch = store.estop_latch()
+            store.close()
+            assert latch and latch["by"] == "serve: browser at 127.0.0.1"
+            await read_until(ws, terminal, r"E.STOPPED")  # the open console follows the latch
+            async with http.get(url + "/estop") as r:
+                assert (await r.json())["engaged"]
+            await ws.close()
+    finally:
+        stop_serve(server)
+
+
+def test_serve_refuses_in_one_line(tmp_path):
+    db = str(tmp_path / "a.db")
+    off = run_cli("--db", db, "serve", "--host", "0.0.0.0")
+    assert off.returncode == 2 and "needs a token" in off.stderr and off.stderr.count("\n") == 1
+    given = run_cli("--db", db, "serve", "--token", TOKEN)
+    assert given.returncode == 2 and "`ps`" in given.stderr
+    loose = tmp_path / "token"
+    loose.write_text(TOKEN)
+    loose.chmod(0o644)
+    bad = run_cli("--db", db, "serve", "--token-file", str(loose))
+    assert bad.returncode == 2 and "chmod 600" in bad.stderr
+
+
+@pytest.mark.slow
+def test_a_port_in_use_is_said(tmp_path):
+    port = free_port()
+    server = start_serve(tmp_path / "a.db", port)
+    try:
+        second = run_cli("--db", str(tmp_path / "a.db"), "serve", "--port", str(port))
+        assert second.returncode == 2 and f"cannot listen on 127.0.0.1:{port}" in second.stderr
+    finally:
+        stop_serve(server)

@@ -1,0 +1,141 @@
+"""`astiop serve` in a real browser: headless Chromium (the system's) driven by Playwright. The
+token asked first; every screen reached by its key; a Chat answer; the page's E-STOP button
+stopping the robot for every tab and the database; keys a browser would take (ctrl+r reloads a
+page, F5 too) reaching the console; closing the tabs leaving no process. Screenshots of each
+screen are kept in test-artifacts/browser/."""
+
+from __future__ import annotations
+
+import asyncio
+import time
+
+import pytest
+
+from astiop.store import Store
+from tests.browser import CHROMIUM, FLAGS, Tab, browser_or_skip
+from tests.web_console import ENV, descendants, free_port, start_serve, stop_serve
+
+TOKEN = "browser-token-0123456789abcdef"
+SCREENS = {  # key -> what only that screen shows
+    "F2": r"Ask the robot",
+    "F3": r"search prompt, answer, command",
+    "F4": r"name\s+x \(m\)\s+y \(m\)",
+    "F5": r"w fwd\s+s back",
+    "F6": r"\^b Run",
+    "F1": r"battery\s+\S+\s+\d+\.\d %",
+}
+
+pytestmark = pytest.mark.slow
+
+
+def latch(db):
+    store = Store(db)
+    try:
+        return store.estop_latch()
+    finally:
+        store.close()
+
+
+async def until(check, timeout: float = 20.0, what: str = "") -> None:
+    deadline = time.monotonic() + timeout
+    while not check():
+        assert time.monotonic() < deadline, f"timed out waiting for {what}"
+        await asyncio.sleep(0.1)
+
+
+async def test_the_console_in_a_browser_behind_its_token(tmp_path):
+    async_playwright = browser_or_skip()
+    db, port = tmp_path / "a.db", free_port()
+    server = start_serve(db, port, env={**ENV, "ASTIOP_SERVE_TOKEN": TOKEN})
+    url = f"http://127.0.0.1:{port}/"
+    try:
+        async with async_playwright() as pw:
+            browser = await pw.chromium.launch(executable_path=CHROMIUM, args=FLAGS)
+            context = await browser.new_context(viewport={"width": 1400, "height": 900})
+            tab = Tab(await context.new_page())
+            page = tab.page
+            await page.goto(url)
+            assert page.url.endswith("/login")
+            await tab.shot("0-login")
+            await page.fill("#token", TOKEN)
+            opened = time.monotonic()
+            await page.click("button[type=submit]")
+            await tab.shows(SCREENS["F1"])  # a live battery on the Dashboard
+            print(f"log-in to a live dashboard: {time.monotonic() - opened:.2f} s")
+            assert await page.title() == "astiop: simulator (one per tab)"
+            await tab.shot("1-dashboard")
+            await page.click("#terminal")
+            for n, (key, shown) in enumerate(SCREENS.items(), start=2):
+                await page.keyboard.press(key)  # F5 reloads a page, F3 finds: not here
+                await tab.shows(shown)
+                await tab.shot(f"{n}-{key}")
+            assert page.url.endswith(f":{port}/"), "no key left the page"
+
+            await page.keyboard.press("F2")
+            await tab.shows(SCREENS["F2"])
+            await page.keyboard.type("what is the battery level?")
+            await page.keyboard.press("Enter")
+            await tab.shows(r"ros2 topic echo /battery_status")  # what ran, then the answer
+            await tab.shows(r"battery \d+\.\d %, \d+\.\d+ V")
+            await tab.shot("8-chat-answer")
+
+            await page.keyboard.press("F1")
+            await page.keyboard.press("Control+r")  # a browser's reload; here the console's key
+            await tab.shows(r"not engaged")
+            await page.click("#estop")  # the page's button: one click, on every screen
+            await page.wait_for_selector("#latch.engaged")
+            assert latch(db)["by"] == "serve: browser at 127.0.0.1"
+            await tab.shows(r"E.STOPPED")
+            await tab.shot("9-estop")
+
+            second = Tab(await context.new_page())  # the same browser's cookie: no log-in
+            await second.page.goto(url)
+            await second.page.wait_for_selector("#latch.engaged")
+            await second.shows(r"E.STOPPED")
+            await second.shot("10-second-tab")
+
+            await page.click("#terminal")
+            await page.keyboard.press("Control+r")
+            await tab.shows(r"Release the e-stop\?")
+            await page.keyboard.press("y")
+            await until(lambda: latch(db) is None, what="the release")
+            await page.keyboard.press("Control+e")  # the console's own key, in the terminal
+            await until(lambda: latch(db) is not None, what="ctrl+e")
+            assert latch(db)["by"] != "serve: browser at 127.0.0.1"
+
+            await page.keyboard.press("Control+p")  # the palette: every global key's second way
+            await tab.shows(r"Search for commands")
+            await page.keyboard.type("Screen: Logs")
+            await tab.shows(r"Show the logs screen")
+            await page.keyboard.press("Enter")
+            await tab.shows(SCREENS["F3"])
+
+            assert len(descendants(server.pid)) >= 2
+            await page.keyboard.press("Control+q")  # the console quits; the page says so
+            await page.wait_for_selector("#ended", state="visible")
+            await tab.shot("11-ended")
+            await second.page.close(run_before_unload=False)
+            await until(lambda: descendants(server.pid) == [], what="every console to end")
+            await browser.close()
+    finally:
+        stop_serve(server)
+
+
+async def test_a_wrong_token_in_the_page_starts_nothing(tmp_path):
+    async_playwright = browser_or_skip()
+    db, port = tmp_path / "a.db", free_port()
+    server = start_serve(db, port, env={**ENV, "ASTIOP_SERVE_TOKEN": TOKEN})
+    try:
+        async with async_playwright() as pw:
+            browser = await pw.chromium.launch(executable_path=CHROMIUM, args=FLAGS)
+            page = await browser.new_page()
+            await page.goto(f"http://127.0.0.1:{port}/")
+            await page.fill("#token", "not-the-token-000000")
+            await page.click("button[type=submit]")
+            await page.wait_for_selector("text=Wrong token")
+            await page.goto(f"http://127.0.0.1:{port}/ws")  # straight at the console: refused
+            assert "log in first" in await page.content()
+            await browser.close()
+        assert descendants(server.pid) == []
+    finally:
+        stop_serve(server)
