@@ -5,6 +5,9 @@ without the token, the page's origin checked, the E-STOP button, every process g
 from __future__ import annotations
 
 import asyncio
+import json
+import os
+import re
 import time
 from pathlib import Path
 
@@ -14,6 +17,7 @@ import pytest
 from astiop.store import Store
 from astiop.web.access import FREE_TRIES, Access, host_name, loopback_host
 from tests.cli_runner import run_cli
+from tests.ros import require_ros
 from tests.web_console import (
     ENV,
     Terminal,
@@ -78,7 +82,7 @@ def test_loopback_names():
 @pytest.mark.slow
 async def test_each_websocket_is_a_console_and_closing_it_ends_the_process(tmp_path):
     port = free_port()
-    server = start_serve(tmp_path / "a.db", port)
+    server = start_serve(tmp_path / "a.db", port, "--no-warm")
     url = f"http://127.0.0.1:{port}"
     try:
         async with aiohttp.ClientSession() as http:
@@ -104,7 +108,9 @@ async def test_each_websocket_is_a_console_and_closing_it_ends_the_process(tmp_p
 @pytest.mark.slow
 async def test_without_the_token_nothing_starts_and_with_it_a_console_does(tmp_path):
     port = free_port()
-    server = start_serve(tmp_path / "a.db", port, env={**ENV, "ASTIOP_SERVE_TOKEN": TOKEN})
+    server = start_serve(
+        tmp_path / "a.db", port, "--no-warm", env={**ENV, "ASTIOP_SERVE_TOKEN": TOKEN}
+    )
     url = f"http://127.0.0.1:{port}"
     try:
         assert TOKEN.encode() not in Path(f"/proc/{server.pid}/cmdline").read_bytes()  # `ps`
@@ -144,7 +150,7 @@ async def test_without_the_token_nothing_starts_and_with_it_a_console_does(tmp_p
 @pytest.mark.slow
 async def test_a_page_elsewhere_cannot_open_a_console_nor_stop_nor_read(tmp_path):
     port = free_port()
-    server = start_serve(tmp_path / "a.db", port)
+    server = start_serve(tmp_path / "a.db", port, "--no-warm")
     url = f"http://127.0.0.1:{port}"
     evil = {"Origin": "http://evil.example"}
     try:
@@ -166,6 +172,46 @@ async def test_a_page_elsewhere_cannot_open_a_console_nor_stop_nor_read(tmp_path
     store = Store(tmp_path / "a.db")
     assert store.estop_latch() is None, "nothing latched the E-STOP"
     store.close()
+
+
+def opened(log: str) -> list[int]:
+    return [int(pid) for pid in re.findall(r"console (\d+) opened", log)]
+
+
+@pytest.mark.slow
+async def test_a_warm_console_waits_for_the_next_tab_and_nothing_outlives_the_server(tmp_path):
+    port = free_port()
+    server = start_serve(tmp_path / "a.db", port)
+    url = f"http://127.0.0.1:{port}"
+    try:
+        wait_until(lambda: len(descendants(server.pid)) == 1, what="the spare console")
+        (spare,) = descendants(server.pid)
+
+        def resting() -> bool:  # its imports done, it waits on stdin
+            before = cpu_s(spare)
+            time.sleep(1.0)
+            return cpu_s(spare) - before < 0.03
+
+        wait_until(resting, timeout=30, what="the spare to wait without using the CPU")
+        async with aiohttp.ClientSession() as http:
+            ws = await http.ws_connect(url + "/ws?width=120&height=40")
+            terminal = Terminal()
+            await read_until(ws, terminal, r"battery\s+\S+\s+\d+\.\d %")
+            assert terminal.screen.columns == 120 and "Dashboard" in terminal.text()
+            assert opened(server.log_path.read_text()) == [spare], "the tab took the spare"
+            wait_until(lambda: len(descendants(server.pid)) == 2, what="the next spare")
+            await ws.close()
+            wait_until(lambda: spare not in descendants(server.pid), what="the tab's console")
+        left = descendants(server.pid)
+        assert len(left) == 1 and left != [spare]
+    finally:
+        stop_serve(server)
+    assert not any(Path(f"/proc/{pid}").exists() for pid in [spare, *left])
+
+
+def cpu_s(pid: int) -> float:
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
 @pytest.mark.slow
@@ -217,3 +263,52 @@ def test_a_port_in_use_is_said(tmp_path):
         assert second.returncode == 2 and f"cannot listen on 127.0.0.1:{port}" in second.stderr
     finally:
         stop_serve(server)
+
+
+async def send_keys(ws, text: str) -> None:
+    await ws.send_str(json.dumps(["stdin", text]))
+
+
+def pose_x(terminal: Terminal) -> float | None:
+    found = re.search(r"pose\s+x\s+(-?\d+\.\d+) m", terminal.text())
+    return float(found.group(1)) if found else None
+
+
+@pytest.mark.slow
+@pytest.mark.ros
+async def test_every_tab_sees_one_shared_simulated_robot_and_its_estop(tmp_path):
+    require_ros()
+    port = free_port()
+    server = start_serve(tmp_path / "a.db", port, "--no-warm", sim="shared")
+    url = f"http://127.0.0.1:{port}"
+    try:
+        async with aiohttp.ClientSession() as http:
+            async with http.get(url + "/") as page:
+                assert "shared by every tab" in await page.text()
+            one, two = Terminal(), Terminal()
+            first = await http.ws_connect(url + "/ws?width=120&height=40")
+            second = await http.ws_connect(url + "/ws?width=120&height=40")
+            await read_until(first, one, r"pose\s+x\s+1\.15 m", timeout=60)
+            await read_until(second, two, r"pose\s+x\s+1\.15 m", timeout=60)
+            await send_keys(first, "\x1bOQ")  # F2: Chat
+            await read_until(first, one, r"Ask the robot")
+            await send_keys(first, "go to shipping\r")
+            await read_until(first, one, r"Run this command\? It moves the robot", timeout=60)
+            await send_keys(first, "y")
+            # the robot the first tab sent away is the one the second tab shows
+            await read_until(second, two, r"pose\s+x\s+(?!1\.15)\d+\.\d+ m", timeout=60)
+            async with http.post(url + "/estop", headers={"Origin": url, "X-Astiop": "estop"}) as r:
+                body = await r.json()
+                assert r.status == 200 and body["ok"], body
+            await read_until(second, two, r"E.STOPPED", timeout=30)
+            settled = pose_x(two)
+            await asyncio.sleep(2)
+            await read_until(second, two, r"pose")
+            assert abs(pose_x(two) - settled) < 0.05, "the shared robot stays stopped"
+            await first.close()
+            await second.close()
+        processes = descendants(server.pid)
+        assert len(processes) == 3, "two consoles and the simulator"
+    finally:
+        stop_serve(server)
+    assert not any(Path(f"/proc/{pid}").exists() for pid in processes), "nothing outlives it"

@@ -7,7 +7,9 @@ screen are kept in test-artifacts/browser/."""
 from __future__ import annotations
 
 import asyncio
+import re
 import time
+from pathlib import Path
 
 import pytest
 
@@ -26,6 +28,10 @@ SCREENS = {  # key -> what only that screen shows
 }
 
 pytestmark = pytest.mark.slow
+
+
+def opened(log: str) -> list[int]:
+    return [int(pid) for pid in re.findall(r"console (\d+) opened", log)]
 
 
 def latch(db):
@@ -58,10 +64,10 @@ async def test_the_console_in_a_browser_behind_its_token(tmp_path):
             assert page.url.endswith("/login")
             await tab.shot("0-login")
             await page.fill("#token", TOKEN)
-            opened = time.monotonic()
+            t_login = time.monotonic()
             await page.click("button[type=submit]")
             await tab.shows(SCREENS["F1"])  # a live battery on the Dashboard
-            print(f"log-in to a live dashboard: {time.monotonic() - opened:.2f} s")
+            print(f"log-in to a live dashboard: {time.monotonic() - t_login:.2f} s")
             assert await page.title() == "astiop: simulator (one per tab)"
             await tab.shot("1-dashboard")
             await page.click("#terminal")
@@ -110,21 +116,27 @@ async def test_the_console_in_a_browser_behind_its_token(tmp_path):
             await page.keyboard.press("Enter")
             await tab.shows(SCREENS["F3"])
 
-            assert len(descendants(server.pid)) >= 2
+            tabs = opened(server.log_path.read_text())
+            assert len(tabs) == 2 and set(tabs) <= set(descendants(server.pid))
             await page.keyboard.press("Control+q")  # the console quits; the page says so
             await page.wait_for_selector("#ended", state="visible")
             await tab.shot("11-ended")
             await second.page.close(run_before_unload=False)
-            await until(lambda: descendants(server.pid) == [], what="every console to end")
+            await until(
+                lambda: not set(tabs) & set(descendants(server.pid)), what="the tabs' consoles"
+            )
             await browser.close()
+        assert len(descendants(server.pid)) == 1, "only the spare waits for the next tab"
+        kept = descendants(server.pid)
     finally:
         stop_serve(server)
+    assert not any(Path(f"/proc/{pid}").exists() for pid in kept), "nothing outlives the server"
 
 
 async def test_a_wrong_token_in_the_page_starts_nothing(tmp_path):
     async_playwright = browser_or_skip()
     db, port = tmp_path / "a.db", free_port()
-    server = start_serve(db, port, env={**ENV, "ASTIOP_SERVE_TOKEN": TOKEN})
+    server = start_serve(db, port, "--no-warm", env={**ENV, "ASTIOP_SERVE_TOKEN": TOKEN})
     try:
         async with async_playwright() as pw:
             browser = await pw.chromium.launch(executable_path=CHROMIUM, args=FLAGS)

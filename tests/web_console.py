@@ -23,9 +23,17 @@ def free_port() -> int:
         return sock.getsockname()[1]
 
 
-def start_serve(db: Path, port: int, *flags: str, env: dict | None = None, model: str = "rules"):
-    """`astiop --db DB --model MODEL serve --port PORT FLAGS`, once its port accepts."""
+def start_serve(
+    db: Path,
+    port: int,
+    *flags: str,
+    env: dict | None = None,
+    model: str = "rules",
+    sim: str = "per-tab",
+):
+    """`astiop --db DB --model MODEL serve --port PORT --sim SIM FLAGS`, once its port accepts."""
     args = [sys.executable, "-m", "astiop", "--db", str(db), "--model", model, "serve"]
+    args += ["--sim", sim]
     log = open(db.parent / f"serve-{port}.log", "wb")  # noqa: SIM115 - closed with the process
     proc = subprocess.Popen(
         [*args, "--port", str(port), *flags],
@@ -35,7 +43,7 @@ def start_serve(db: Path, port: int, *flags: str, env: dict | None = None, model
         stdin=subprocess.DEVNULL,
     )
     proc.log_path = db.parent / f"serve-{port}.log"
-    deadline = time.monotonic() + 30
+    deadline = time.monotonic() + 90  # a shared simulator starts first
     while time.monotonic() < deadline:
         try:
             socket.create_connection(("127.0.0.1", port), 0.2).close()

@@ -2,11 +2,31 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import typer
 
 from astiop.cli.common import CliState
+
+# `astiop serve`'s warm console: its services built (nothing running yet), waits for a tab
+SPARE = "ASTIOP_CONSOLE_SPARE"
+
+
+def _wait_for_tab() -> None:
+    """Block until `astiop serve` hands this console a tab: one line, "go WIDTH HEIGHT", read
+    byte by byte from stdin (what follows is the web driver's, not ours). EOF: not needed."""
+    line = b""
+    while not line.endswith(b"\n"):
+        byte = os.read(0, 1)
+        if not byte:
+            raise SystemExit(0)
+        line += byte
+        if len(line) > 64:
+            raise SystemExit("astiop: a spare console got something else than its tab")
+    words = line.decode("ascii", "replace").split()
+    if len(words) == 3 and words[0] == "go" and words[1].isdigit() and words[2].isdigit():
+        os.environ["COLUMNS"], os.environ["ROWS"] = words[1], words[2]
 
 
 def run_console(st: CliState, record: str | None = None) -> None:
@@ -16,6 +36,7 @@ def run_console(st: CliState, record: str | None = None) -> None:
     from astiop.recording import default_path
     from astiop.robot.backend import BackendError
 
+    spare = os.environ.pop(SPARE, None) == "1"
     record_path = None
     if record is not None:
         record_path = Path(record).expanduser() if record else default_path(st.db_path.parent)
@@ -23,6 +44,8 @@ def run_console(st: CliState, record: str | None = None) -> None:
         app = make_app(st.settings, st.store, record=record_path)
     except (SpecError, BackendError) as exc:
         fail(str(exc))
+    if spare:  # built ahead (a ROS 2 robot discovered, the model loading): now its tab
+        _wait_for_tab()
     app.run()
 
 

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import logging
 import os
+import subprocess
 import sys
+import threading
 from pathlib import Path
 
 import typer
@@ -35,6 +37,77 @@ def _robot_said(st: CliState) -> str:
     return f"ros2 ({robot.ros2_transport} transport)"
 
 
+# the shared simulator is this server's own robot: its DDS traffic stays on this machine
+LOOPBACK = {"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST", "ROS_LOCALHOST_ONLY": "1"}
+NODE_START_S = 60.0
+
+
+def _shared_simulator(st: CliState, mode: str) -> subprocess.Popen | None:
+    """With `--robot sim`, one simulated robot for every tab: `astiop sim node` (real ROS 2 nodes,
+    on the loopback) and the tabs on `--robot ros2 --ros2-transport rclpy`. None: each tab
+    simulates its own (`--sim per-tab`, or auto where ROS 2 is not installed)."""
+    if st.settings.robot.backend != "sim" or mode == "per-tab":
+        return None
+    from astiop.sim_robots.ros2_node.run import NodeSetupError, check_imports
+
+    try:
+        check_imports()
+    except NodeSetupError as exc:
+        if mode == "shared":
+            fail(f"--sim shared: {exc}")
+        typer.echo(f"astiop serve: each tab simulates its own robot ({exc})", err=True)
+        return None
+    sim = st.settings.sim
+    argv = [sys.executable, "-m", "astiop", "sim", "node", "--seed", str(sim.seed)]
+    node = subprocess.Popen(
+        [*argv, "--speed", str(min(sim.speed, 20.0))],
+        env={**os.environ, **LOOPBACK},
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,  # Ctrl-C reaches the server, which ends the robot last
+        preexec_fn=_ends_with_its_parent,
+    )
+    said: list[str] = []
+    up = threading.Event()
+    threading.Thread(target=_drain, args=(node, said, up), daemon=True).start()
+    if not up.wait(NODE_START_S) or node.poll() is not None:
+        _end_node(node)
+        fail("the shared simulator did not start: " + (said[-1] if said else "no output"))
+    return node
+
+
+def _ends_with_its_parent() -> None:
+    """A server killed outright (SIGKILL, OOM) takes its simulator with it (Linux)."""
+    if sys.platform.startswith("linux"):
+        import ctypes
+        import signal
+
+        ctypes.CDLL(None).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+
+
+def _drain(node: subprocess.Popen, said: list[str], up: threading.Event) -> None:
+    """The simulator's lines: kept until it says it is up, then passed on to the server's."""
+    for line in node.stderr:
+        if up.is_set():
+            print(f"astiop serve: simulator: {line.rstrip()}", file=sys.stderr)
+            continue
+        said.append(line.rstrip())
+        if "up as ROS 2 nodes" in line:
+            up.set()
+
+
+def _end_node(node: subprocess.Popen) -> None:
+    if node.poll() is None:
+        node.terminate()
+        try:
+            node.wait(10)
+        except subprocess.TimeoutExpired:
+            node.kill()
+            node.wait(5)
+
+
 def serve(
     ctx: typer.Context,
     host: str = typer.Option("127.0.0.1", "--host", help="Address to listen on."),
@@ -47,8 +120,20 @@ def serve(
         "ASTIOP_SERVE_TOKEN. Needed off the loopback.",
     ),
     token_given: str | None = typer.Option(None, "--token", hidden=True),
+    sim_mode: str = typer.Option(
+        "auto",
+        "--sim",
+        metavar="auto|shared|per-tab",
+        help="With --robot sim: one simulated robot for every tab (`astiop sim node`, needs "
+        "ROS 2), or one per tab; auto: shared where ROS 2 is installed.",
+    ),
     max_consoles: int = typer.Option(
         8, "--max-consoles", min=1, max=64, help="Tabs open at once (each is a console process)."
+    ),
+    warm: bool = typer.Option(
+        True,
+        "--warm/--no-warm",
+        help="Keep one console process started ahead (its imports done, idle) for the next tab.",
     ),
 ) -> None:
     """Serve the console to a web browser: every screen, key and dialog, one console process per
@@ -65,6 +150,8 @@ def serve(
     if not loopback(host) and not token:
         fail(f"--host {host} (not the loopback) needs a token ({where(SERVE_TOKEN)}): anyone who "
              "reaches it would get a console that drives the robot")  # fmt: skip
+    if sim_mode not in ("auto", "shared", "per-tab"):
+        fail(f"--sim must be auto, shared or per-tab, not {sim_mode!r}")
     st = state(ctx)
     st.settings  # a bad settings file fails here, not in every tab  # noqa: B018
     st.store  # the database opens (and is made) once, before any tab  # noqa: B018
@@ -72,6 +159,11 @@ def serve(
     from astiop.web.server import ServeConfig, serve_until_stopped
 
     base = [sys.executable, "-m", "astiop", *_global_args(st)]
+    robot, env = _robot_said(st), {}
+    node = _shared_simulator(st, sim_mode)
+    if node is not None:
+        base += ["--robot", "ros2", "--ros2-transport", "rclpy"]  # the last --robot wins
+        robot, env = "simulator (shared by every tab; astiop sim node)", LOOPBACK
     config = ServeConfig(
         host=host,
         port=port,
@@ -79,8 +171,10 @@ def serve(
         console_argv=base,
         estop_argv=[*base, "estop"],
         db=Path(st.db_path),
-        robot=_robot_said(st),
+        robot=robot,
+        console_env=env,
         max_consoles=max_consoles,
+        warm=warm,
     )
     logging.basicConfig(level=logging.INFO, format="astiop serve: %(message)s", stream=sys.stderr)
     access = "the token is asked first" if token else "no token: this machine only"
@@ -94,3 +188,6 @@ def serve(
         asyncio.run(serve_until_stopped(config, ready))
     except OSError as exc:
         fail(f"cannot listen on {host}:{port}: {exc.strerror or exc}")
+    finally:
+        if node is not None:
+            _end_node(node)

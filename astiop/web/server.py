@@ -7,6 +7,7 @@ import asyncio
 import contextlib
 import json
 import logging
+import os
 import signal
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -39,6 +40,7 @@ class ServeConfig:
     robot: str  # said in the page's title and header
     console_env: dict[str, str] = field(default_factory=dict)
     max_consoles: int = 8
+    warm: bool = True  # a console started ahead, waiting for the next tab
 
 
 class WebServer:
@@ -50,6 +52,7 @@ class WebServer:
         self._db = ThreadPoolExecutor(1, thread_name_prefix="astiop-serve-db")
         self._store = None  # made on the executor's thread, used only there
         self._estop_lock = asyncio.Lock()
+        self.spare: ConsoleProcess | None = None
 
     # --- who may ------------------------------------------------------------------------------
 
@@ -169,6 +172,7 @@ class WebServer:
     async def _stop_robot(self) -> tuple[bool, str]:
         process = await asyncio.create_subprocess_exec(
             *self.config.estop_argv,
+            env={**os.environ, **self.config.console_env},
             stdin=asyncio.subprocess.DEVNULL,
             stdout=asyncio.subprocess.PIPE,
             stderr=asyncio.subprocess.STDOUT,
@@ -195,17 +199,16 @@ class WebServer:
         await socket.prepare(request)
         width = _bounded_int(request.query.get("width"), 80, 20, 500)
         height = _bounded_int(request.query.get("height"), 24, 8, 200)
-        console = ConsoleProcess(
-            self.config.console_argv,
-            self.config.console_env,
-            write_bytes=socket.send_bytes,
-            write_str=socket.send_str,
-            close=socket.close,
-            download_manager=self.downloads,
-        )
-        self.consoles.add(console)
+        console, self.spare = self.spare, None
+        self._warm_next()
+        if console is not None and not await console.ready():
+            await console.end()  # a spare that failed: its error is in the server's log
+            console = None
+        self.consoles.add(console := console or self._console())
         try:
-            await console.start(width, height)
+            if not console.alive:
+                await console.start(width, height)
+            await console.attach(socket.send_bytes, socket.send_str, socket.close, width, height)
             log.info(
                 "console %s opened for %s (%d open)",
                 console.pid,
@@ -223,8 +226,24 @@ class WebServer:
                 await socket.close()
         return socket
 
+    def _console(self, spare: bool = False) -> ConsoleProcess:
+        return ConsoleProcess(
+            self.config.console_argv, self.config.console_env, self.downloads, spare=spare
+        )
+
+    def _warm_next(self) -> None:
+        """Start the spare the next tab will take (none with --no-warm)."""
+        if self.config.warm and self.spare is None:
+            self.spare = self._console(spare=True)
+            self.spare.begin()
+
+    async def started(self, _app: web.Application) -> None:
+        self._warm_next()
+
     async def end_all(self, _app: web.Application | None = None) -> None:
-        await asyncio.gather(*(console.end() for console in list(self.consoles)))
+        ending = list(self.consoles) + ([self.spare] if self.spare is not None else [])
+        self.spare = None
+        await asyncio.gather(*(console.end() for console in ending))
         self._db.shutdown(wait=False)
 
 
@@ -285,6 +304,7 @@ def make_web_app(config: ServeConfig) -> tuple[web.Application, WebServer]:
             web.static("/static", STATIC),
         ]
     )
+    app.on_startup.append(server.started)
     app.on_shutdown.append(server.end_all)
     return app, server
 
