@@ -37,8 +37,15 @@ def _robot_said(st: CliState) -> str:
     return f"ros2 ({robot.ros2_transport} transport)"
 
 
-# the shared simulator is this server's own robot: its DDS traffic stays on this machine
-LOOPBACK = {"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST", "ROS_LOCALHOST_ONLY": "1"}
+def _loopback() -> dict[str, str]:
+    """The shared simulator is this server's own robot: its DDS traffic stays on this machine
+    (Humble knows ROS_LOCALHOST_ONLY; Jazzy on takes the discovery range and calls it
+    deprecated)."""
+    if os.environ.get("ROS_DISTRO", "").lower() == "humble":
+        return {"ROS_LOCALHOST_ONLY": "1"}
+    return {"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+
+
 NODE_START_S = 60.0
 
 
@@ -61,7 +68,7 @@ def _shared_simulator(st: CliState, mode: str) -> subprocess.Popen | None:
     argv = [sys.executable, "-m", "astiop", "sim", "node", "--seed", str(sim.seed)]
     node = subprocess.Popen(
         [*argv, "--speed", str(min(sim.speed, 20.0))],
-        env={**os.environ, **LOOPBACK},
+        env={**os.environ, **_loopback()},
         stdin=subprocess.DEVNULL,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,
@@ -163,7 +170,7 @@ def serve(
     node = _shared_simulator(st, sim_mode)
     if node is not None:
         base += ["--robot", "ros2", "--ros2-transport", "rclpy"]  # the last --robot wins
-        robot, env = "simulator (shared by every tab; astiop sim node)", LOOPBACK
+        robot, env = "simulator (shared by every tab; astiop sim node)", _loopback()
     config = ServeConfig(
         host=host,
         port=port,
@@ -180,6 +187,8 @@ def serve(
     access = "the token is asked first" if token else "no token: this machine only"
 
     def ready(url: str) -> None:
+        if host in ("0.0.0.0", "::"):
+            url += " (every address of this machine)"
         typer.echo(f"astiop serve: {url} ({access}; robot: {config.robot}); Ctrl-C stops", err=True)
 
     import asyncio
