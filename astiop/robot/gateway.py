@@ -260,7 +260,7 @@ class RobotGateway:
             if not confirm(checked):
                 result.reason = "not confirmed by the operator"
                 return result
-        if checked.kind == "actuate" and self._held(checked):
+        if checked.kind == "actuate" and self._held_by_estop(checked):
             result.reason = ESTOP_REASON  # pressed while the operator was deciding
             return result
         if journal is not None:
@@ -270,12 +270,12 @@ class RobotGateway:
             result.executed = True
             result.provenance = self._provenance(checked)
             if checked.command.verb == "topic" and checked.command.sub == "echo":
-                self._date(checked.command.name, result)
+                self._date_reading(checked.command.name, result)
         except BackendError as exc:
             result.executed = True
             result.error = str(exc)
             result.output = f"error: {exc}\n"
-        self._after(checked, result)
+        self._adopt_speed_limits(checked, result)
         result.duration_s = time.perf_counter() - t0
         return result
 
@@ -288,7 +288,7 @@ class RobotGateway:
             return "accepted" if spec is not None and spec.starts_job else "reported"
         return "commanded" if checked.kind == "actuate" else "reported"
 
-    def _date(self, topic: str, result: Execution) -> None:
+    def _date_reading(self, topic: str, result: Execution) -> None:
         """A reading's period and its age by its header stamp, when the robot's clock is known
         here and agrees with the stamp (a stamp on another clock, e.g. sim time, says nothing)."""
         spec = self.catalog.topics.get(topic)
@@ -328,7 +328,7 @@ class RobotGateway:
             return result
         if not review.allowed:
             return result
-        if self._held(review.checked):
+        if self._held_by_estop(review.checked):
             result.reason = ESTOP_REASON
             return result
         result.notes = list(review.checked.notes)
@@ -341,10 +341,13 @@ class RobotGateway:
             result.error = str(exc)
         return result
 
-    def _held(self, checked: Checked) -> bool:
+    def _held_by_estop(self, checked: Checked) -> bool:
+        """Latched, and not a command the E-STOP always lets through (/stop)."""
         return checked.command.name not in ALWAYS_ALLOWED and self.e_stopped
 
-    def _after(self, checked: Checked, result: Execution) -> None:
+    def _adopt_speed_limits(self, checked: Checked, result: Execution) -> None:
+        """A `param set` of the robot's own speed limit that went through becomes safety's
+        clamp too (the robot's limit is the one it enforces; safety must not allow more)."""
         cmd = checked.command
         if result.error or cmd.key != ("param", "set"):
             return
