@@ -462,3 +462,38 @@ def test_display_options_shape_the_text_but_the_values_stay_whole(robot):
         assert sent and "--no-arr" not in sent[-1] and "-l" not in sent[-1]
     finally:
         gateway.close()
+
+
+def test_param_and_interface_lists_print_as_ros2cli_on_the_emulated_and_in_process_robots(robot):
+    """One printing for both (ros2/printing.py): the node's header only when no node is named,
+    --param-type, --filter (re.match), --param-prefixes (the name or under it), -s."""
+    from astiop.config import load_settings
+    from astiop.robot.factory import make_sim_gateway
+
+    gateway = make_gateway(stream=False)
+    cfg = load_settings({}, env={}, path=robot / "none.toml")
+    sim = make_sim_gateway(cfg, Store(robot / "sim.db"), realtime=False)
+    try:
+        for command, expected in (
+            ("ros2 param list /navigator", "  goal_tolerance\n  inflation_radius\n"),
+            ("ros2 param list /astibot_base --param-type", "  max_angular_speed (type: double)\n"),
+            ("ros2 param list --filter 'max_l.*'", "/astibot_base:\n  max_linear_speed\n"),
+            ("ros2 param list --param-prefixes max", ""),
+            ("ros2 interface list -s", "Services:\n    astiop_msgs/srv/GotoPosition\n"),
+        ):
+            for where, gw in (("emulated ros2", gateway), ("in process", sim)):
+                r = gw.run(command)
+                assert r.executed and not r.error, (where, command, r.error)
+                assert r.output.startswith(expected), (where, command, r.output)
+        refused = sim.run("ros2 param list --filter 'max_('")
+        assert not refused.executed and "--filter is not a regular expression" in refused.reason
+    finally:
+        gateway.close()
+        sim.close()
+
+
+def test_every_verb_the_grammar_accepts_has_its_handler_in_the_simulator():
+    from astiop.robot.backends.sim.backend import SimBackend
+    from astiop.ros2.grammar import SUPPORTED
+
+    assert set(SimBackend.VERBS) == SUPPORTED

@@ -310,3 +310,18 @@ def test_stage_2_runs_on_the_live_robot_and_is_checked_against_what_it_reported(
         assert r["outcome"] == "ok" and r["command"] == 100.0 and r["interpretation"] == 100.0, r
     assert rows["nav"]["outcome_checks"] == {"arrive": True}
     assert rows["obs"]["outcome"] == "skipped" and "obstacles" in rows["obs"]["skipped"]
+
+
+def test_param_list_is_asked_of_the_robot_and_printed_as_ros2cli(robot_gateway):
+    from astiop.robot.backends.rclpy.backend import RclpyBackend
+    from astiop.ros2.grammar import SUPPORTED
+
+    # the wheels carry no ament index of the installed interfaces: the CLI transport lists them
+    assert SUPPORTED - set(RclpyBackend.VERBS) == {("interface", "list")}
+    r = robot_gateway.run("ros2 param list /navigator --param-type")
+    assert r.executed and not r.error, r.error
+    assert "  goal_tolerance (type: double)\n" in r.output and not r.output.startswith("/")
+    r = robot_gateway.run("ros2 param list --filter 'max_.*'")
+    assert r.output == "/astibot_base:\n  max_angular_speed\n  max_linear_speed\n", r.output
+    refused = robot_gateway.run("ros2 interface list")
+    assert refused.error and "--ros2-transport cli" in refused.error

@@ -75,8 +75,14 @@ _FLAGS = {
     "count_topics": "count_topics",  # list -c: printed as the count (ros2topic/verb/list.py)
     "count_services": "count_services",
     "count_actions": "count_actions",
+    "param_type": "param_type",  # param list --param-type (ros2param/verb/list.py)
+    "only_msgs": "only_msgs",  # interface list -m|-s|-a (ros2interface/verb/list.py)
+    "only_srvs": "only_srvs",
+    "only_actions": "only_actions",
 }
 _OPTIONS = {
+    "param_prefixes": "param_prefixes",
+    "filter": "filter",  # param list --filter RE (topic and service lists use filter_expr)
     "rate": "rate",
     "times": "times",
     "window_size": "window",

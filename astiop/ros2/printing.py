@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 from typing import Any
 
 import yaml
@@ -101,3 +102,66 @@ def list_text(pairs: list[tuple[str, str]], flags) -> tuple[str, list[str]]:
     if "show_types" in flags:
         return "".join(f"{n} [{t}]\n" for n, t in pairs), names
     return "".join(f"{n}\n" for n in names), names
+
+
+def param_list_text(
+    params: list[tuple[str, str, str]], node: str | None, flags, options
+) -> tuple[str, dict[str, list[str]]]:
+    """`ros2 param list [NODE] [--filter RE] [--param-prefixes P ...] [--param-type]` as ros2cli
+    prints it (ros2param/verb/list.py, jazzy and humble): nodes sorted, each `NODE:` line only
+    when no node was named, names sorted, `  name (type: T)` with --param-type; a prefix keeps a
+    name equal to it or under it (`prefix.`), as rclpy's Node.list_parameters does. `params` are
+    (node, name, type); the values are each node's listed names."""
+    prefixes = options.get("param_prefixes") or []
+    pattern = re.compile(options["filter"]) if options.get("filter") else None
+    by_node: dict[str, dict[str, str]] = {}
+    for owner, name, type_ in params:
+        by_node.setdefault(owner, {})[name] = type_
+    lines: list[str] = []
+    values: dict[str, list[str]] = {}
+    for owner in sorted(by_node):
+        if node and owner != node:
+            continue
+        names = sorted(
+            n for n in by_node[owner]
+            if not prefixes or any(n == p or n.startswith(p + ".") for p in prefixes)
+        )  # fmt: skip
+        if pattern is not None:
+            names = [n for n in names if pattern.match(n)]
+        if not node and names:
+            lines.append(f"{owner}:")
+        typed = "param_type" in flags
+        lines += [f"  {n} (type: {by_node[owner][n]})" if typed else f"  {n}" for n in names]
+        values[owner] = names
+    return "".join(f"{line}\n" for line in lines), values
+
+
+INTERFACE_KINDS = (("msg", "Messages:", "only_msgs"), ("srv", "Services:", "only_srvs"),
+                   ("action", "Actions:", "only_actions"))  # fmt: skip
+INTERFACE_FLAGS = tuple(flag for _kind, _heading, flag in INTERFACE_KINDS)
+
+
+def interface_list_text(names: list[str], flags) -> tuple[str, list[str]]:
+    """`ros2 interface list [-m] [-s] [-a]` as ros2cli prints it (ros2interface/verb/list.py,
+    jazzy and humble): a heading per kind, then `    pkg/kind/Name` sorted; with -m, -s or -a
+    only those kinds. `names` are full names (pkg/msg/Name); the values are those printed."""
+    chosen = [k for k in INTERFACE_KINDS if k[2] in flags] or list(INTERFACE_KINDS)
+    lines, shown = [], []
+    for kind, heading, _flag in chosen:
+        lines.append(heading)
+        of_kind = sorted(n for n in names if n.split("/")[1:2] == [kind])
+        lines += [f"    {n}" for n in of_kind]
+        shown += of_kind
+    return "".join(f"{line}\n" for line in lines), shown
+
+
+def type_of(value: object) -> str:
+    """A parameter's type as `ros2 param list --param-type` names it (ros2param/api
+    get_parameter_type_string), from its value."""
+    if isinstance(value, bool):
+        return "boolean"
+    if isinstance(value, int):
+        return "integer"
+    if isinstance(value, float):
+        return "double"
+    return "string" if isinstance(value, str) else "not set"

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import re
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -150,6 +151,10 @@ def _validate_param(cmd: Ros2Command, catalog: Catalog) -> Checked:
     if node and node not in catalog.nodes:
         raise InterfaceError(f"there is no node {node}" + _suggest(node, catalog.nodes))
     if cmd.sub == "list":
+        try:
+            re.compile(cmd.options.get("filter") or "")
+        except re.error as exc:
+            raise InterfaceError(f"--filter is not a regular expression: {exc}") from None
         return Checked(cmd.text, cmd, True)
     spec = catalog.params.get((node, cmd.args["param"]))
     if spec is None:

@@ -25,16 +25,19 @@ from astiop.robot.state import yaw_of
 from astiop.ros2.catalog import astibot_catalog
 from astiop.ros2.definitions import DEFINITIONS
 from astiop.ros2.interfaces import InterfaceError, fill, interface_show, python_repr
-from astiop.ros2.printing import indent_yaml
+from astiop.ros2.printing import (
+    INTERFACE_FLAGS,
+    indent_yaml,
+    interface_list_text,
+    param_list_text,
+    type_of,
+)
 from astiop.sim.simulator import GoalError, Simulator
 from astiop.sim_robots.emulated_cli.call import Call, Interrupted
 from astiop.sim_robots.emulated_cli.topics import HIDDEN_TOPICS, TopicVerbs
 from astiop.store import LocationError, Store
 
 MAP_TYPE = "nav_msgs/msg/OccupancyGrid"
-
-
-_PARAM_TYPES = {bool: "boolean", int: "integer", float: "double", str: "string"}
 
 
 class EmulatedRobot(TopicVerbs):
@@ -252,26 +255,20 @@ class EmulatedRobot(TopicVerbs):
         return 0
 
     def _interface_list(self, call: Call, a: dict) -> int:
-        call.out("".join(f"    {n}\n" for n in sorted(DEFINITIONS)))
+        call.out(
+            interface_list_text(list(DEFINITIONS), {k for k in INTERFACE_FLAGS if a.get(k)})[0]
+        )
         return 0
 
     def _param_list(self, call: Call, a: dict) -> int:
-        # as ros2param/verb/list.py prints it: a "/node:" header only when no node is named
         node_name = a.get("node_name")
         if node_name and node_name not in self.catalog.nodes:
-            call.out("Node not found\n")
+            call.out("Node not found\n")  # ros2param/verb/list.py
             return 0
-        lines = []
-        for node in sorted(self.catalog.nodes):
-            if node_name and node != node_name:
-                continue
-            names = sorted(p for (n, p) in self.backend.params if n == node)
-            if names and not node_name:
-                lines.append(f"{node}:")
-            for p in names:
-                typ = _PARAM_TYPES[type(self.backend.params[(node, p)])]
-                lines.append(f"  {p} (type: {typ})" if a.get("param_type") else f"  {p}")
-        call.out("".join(f"{line}\n" for line in lines))
+        params = [(n, p, type_of(v)) for (n, p), v in self.backend.params.items()]
+        flags = {"param_type"} if a.get("param_type") else set()
+        options = {"filter": a.get("filter"), "param_prefixes": a.get("param_prefixes")}
+        call.out(param_list_text(params, node_name, flags, options)[0])
         return 0
 
     def _param_get(self, call: Call, a: dict) -> int:

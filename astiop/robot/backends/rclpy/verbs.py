@@ -13,12 +13,19 @@ from rclpy.action import ActionClient
 from rclpy.qos import qos_profile_sensor_data
 
 from astiop.robot.backend import BackendError
-from astiop.robot.backends.rclpy.graph import full_name, hidden, matched_qos
+from astiop.robot.backends.rclpy.graph import full_name, hidden, matched_qos, read_params
 from astiop.robot.backends.rclpy.node import RosTimeout
 from astiop.robot.inflight import ENDED, Job
+from astiop.robot.verb_table import ServesVerbs, runs
 from astiop.ros2.interfaces import interface_show
 from astiop.ros2.message_objects import MessageTypeError, interface_class, to_dict, to_message
-from astiop.ros2.printing import echo_text, list_text, node_info_text, ros2cli_yaml
+from astiop.ros2.printing import (
+    echo_text,
+    list_text,
+    node_info_text,
+    param_list_text,
+    ros2cli_yaml,
+)
 from astiop.ros2.render import STAMPED
 from astiop.ros2.validation import Checked
 
@@ -40,14 +47,17 @@ PARAM_WORDS = {
 PARAM_FIELDS = {1: "bool_value", 2: "integer_value", 3: "double_value", 4: "string_value"}
 
 
-class RclpyVerbs:
+class RclpyVerbs(ServesVerbs):
     """Mixed into RclpyBackend: uses its proc, catalog, watches, goals and events."""
 
     def execute(self, checked: Checked, timeout: float) -> tuple[str, Any]:
         cmd = checked.command
-        handler = getattr(self, f"_{cmd.verb}_{cmd.sub}", None)
+        handler = self.verb_handler(cmd.key)
         if handler is None:
-            raise BackendError(f"ros2 {cmd.verb} {cmd.sub} is not served through rclpy")
+            raise BackendError(
+                f"ros2 {cmd.verb} {cmd.sub} is not served through rclpy (the CLI transport, "
+                "--ros2-transport cli, runs it)"
+            )
         try:
             with self.actuating(checked):  # refused while the E-STOP holds, ended by it
                 return handler(checked, timeout)
@@ -60,30 +70,35 @@ class RclpyVerbs:
     def _listing(self, kind: str, c: Checked) -> tuple[str, list[str]]:
         return list_text(self._lists[kind], c.command.flags)
 
+    @runs("topic list")
     def _topic_list(self, c: Checked, timeout: float):
         return self._listing("topic", c)
 
+    @runs("service list")
     def _service_list(self, c: Checked, timeout: float):
         return self._listing("service", c)
 
+    @runs("action list")
     def _action_list(self, c: Checked, timeout: float):
         return self._listing("action", c)
 
+    @runs("node list")
     def _node_list(self, c: Checked, timeout: float):
         names = [n for n, _ in self._lists["node"]]
         return "".join(f"{n}\n" for n in names), names
 
+    @runs("topic type", "service type")
     def _topic_type(self, c: Checked, timeout: float):
         return c.type + "\n", c.type
 
-    _service_type = _topic_type
-
+    @runs("topic info")
     def _topic_info(self, c: Checked, timeout: float):
         node, name = self.proc.node, c.command.name
         pubs, subs = node.count_publishers(name), node.count_subscribers(name)
         text = f"Type: {c.type}\nPublisher count: {pubs}\nSubscription count: {subs}\n"
         return text, {"type": c.type, "publishers": pubs, "subscribers": subs}
 
+    @runs("action info")
     def _action_info(self, c: Checked, timeout: float):
         from rclpy.action import get_action_server_names_and_types_by_node
 
@@ -102,6 +117,7 @@ class RclpyVerbs:
         ]
         return "\n".join(lines + [f"    {s}" for s in servers]) + "\n", {"servers": servers}
 
+    @runs("node info")
     def _node_info(self, c: Checked, timeout: float):
         from rclpy.action import (
             get_action_client_names_and_types_by_node,
@@ -124,10 +140,12 @@ class RclpyVerbs:
         }
         return node_info_text(target, info), info
 
+    @runs("interface show")
     def _interface_show(self, c: Checked, timeout: float):
         return interface_show(c.command.args["type"]), None
 
     # -- topics -----------------------------------------------------------------------------
+    @runs("topic echo")
     def _topic_echo(self, c: Checked, timeout: float):
         name = c.command.name
         timeout = c.command.options.get("timeout", timeout)
@@ -160,6 +178,7 @@ class RclpyVerbs:
         finally:
             w.close()
 
+    @runs("topic hz")
     def _topic_hz(self, c: Checked, timeout: float):
         name, windows = c.command.name, 2
         times: list[float] = []
@@ -196,6 +215,7 @@ class RclpyVerbs:
             raise BackendError(f"{name} is not being published (no rate within {timeout:g} s)")
         return "\n".join(lines) + "\n", {"average_rate": round(rates[-1], 3), "windows": len(rates)}
 
+    @runs("topic pub")
     def _topic_pub(self, c: Checked, timeout: float):
         cmd = c.command
         name, times = cmd.name, 1 if "once" in cmd.flags else cmd.options.get("times", 1)
@@ -239,6 +259,7 @@ class RclpyVerbs:
         return "\n".join(lines) + "\n", values
 
     # -- services -----------------------------------------------------------------------------
+    @runs("service call")
     def _service_call(self, c: Checked, timeout: float):
         name = c.command.name
         srv = interface_class(c.type)
@@ -258,6 +279,7 @@ class RclpyVerbs:
         return "\n".join(lines) + "\n", to_dict(response)
 
     # -- the action ----------------------------------------------------------------------------
+    @runs("action send_goal")
     def _action_send_goal(self, c: Checked, timeout: float):
         """Return at acceptance; the goal is followed to its end in the background."""
         action = interface_class(c.type)
@@ -309,6 +331,17 @@ class RclpyVerbs:
             handle.cancel_goal_async()
 
     # -- parameters ----------------------------------------------------------------------------
+    @runs("param list")
+    def _param_list(self, c: Checked, timeout: float):
+        # asked of each node now, as ros2cli does (ros2param/verb/list.py)
+        served = {n for n, _ in self._lists["service"]}
+        nodes = [n for n, _ in self._lists["node"] if f"{n}/list_parameters" in served]
+        named = c.command.args.get("node")
+        read = read_params(self.proc, [named] if named else nodes, timeout)
+        params = [(*key.split(" ", 1), type_) for key, type_ in read]
+        return param_list_text(params, named, c.command.flags, c.command.options)
+
+    @runs("param get")
     def _param_get(self, c: Checked, timeout: float):
         from rcl_interfaces.srv import GetParameters
 
@@ -324,6 +357,7 @@ class RclpyVerbs:
         v = getattr(value, PARAM_FIELDS[value.type])
         return f"{PARAM_WORDS[value.type]} {v}\n", {"value": v}
 
+    @runs("param set")
     def _param_set(self, c: Checked, timeout: float):
         from rcl_interfaces.msg import Parameter, ParameterValue
         from rcl_interfaces.srv import SetParameters

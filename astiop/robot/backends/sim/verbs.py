@@ -9,14 +9,23 @@ from typing import Any
 
 from astiop.robot.backend import BackendError
 from astiop.robot.state import yaw_of
+from astiop.robot.verb_table import ServesVerbs, runs
 from astiop.ros2.interfaces import interface_show, python_repr
-from astiop.ros2.printing import echo_text, indent_yaml, list_text, node_info_text
+from astiop.ros2.printing import (
+    echo_text,
+    indent_yaml,
+    interface_list_text,
+    list_text,
+    node_info_text,
+    param_list_text,
+    type_of,
+)
 from astiop.ros2.validation import Checked
 from astiop.sim.simulator import GoalError
 from astiop.store import LocationError
 
 
-class SimVerbs:
+class SimVerbs(ServesVerbs):
     """Mixed into SimBackend: uses its sim, store, catalog, params and topic messages."""
 
     # -- execution ------------------------------------------------------------------
@@ -24,7 +33,9 @@ class SimVerbs:
         cmd = checked.command
         if checked.kind == "actuate" and self.sim.e_stopped and cmd.name != "/stop":
             raise BackendError("the E-STOP is engaged: nothing was sent")
-        handler = getattr(self, f"_{cmd.verb}_{cmd.sub}")
+        handler = self.verb_handler(cmd.key)
+        if handler is None:
+            raise BackendError(f"ros2 {cmd.verb} {cmd.sub} is not served by the simulator")
         try:
             with self.actuating(checked):  # refused while the E-STOP holds, ended by it
                 return handler(checked, timeout)
@@ -35,6 +46,7 @@ class SimVerbs:
         except Exception as exc:  # the simulator must never take the caller down
             raise BackendError(f"the simulator failed: {type(exc).__name__}: {exc}") from None
 
+    @runs("topic list")
     def _topic_list(self, c: Checked, timeout: float):
         return self._listing(self.catalog.topics, c)
 
@@ -42,20 +54,24 @@ class SimVerbs:
     def _listing(entries: dict, c: Checked) -> tuple[str, list[str]]:
         return list_text(sorted((n, e.type) for n, e in entries.items()), c.command.flags)
 
+    @runs("topic type", "service type")
     def _topic_type(self, c: Checked, timeout: float):
         return c.type + "\n", c.type
 
+    @runs("topic info")
     def _topic_info(self, c: Checked, timeout: float):
         spec = self.catalog.topics[c.command.name]
         pubs, subs = int(bool(spec.publisher)), int(bool(spec.subscriber))
         text = f"Type: {spec.type}\nPublisher count: {pubs}\nSubscription count: {subs}\n"
         return text, {"type": spec.type, "publishers": pubs, "subscribers": subs}
 
+    @runs("topic echo")
     def _topic_echo(self, c: Checked, timeout: float):
         timeout = c.command.options.get("timeout", timeout)
         msg = self._wait_for_message(c.command.name, timeout)
         return echo_text(msg, c.command), msg
 
+    @runs("topic hz")
     def _topic_hz(self, c: Checked, timeout: float):
         spec = self.catalog.topics[c.command.name]
         if spec.rate_hz == 0 or (c.command.name == "/plan" and self.sim.goal is None):
@@ -70,6 +86,7 @@ class SimVerbs:
         )
         return text, {"average_rate": spec.rate_hz, "window": window}
 
+    @runs("topic pub")
     def _topic_pub(self, c: Checked, timeout: float):
         cmd = c.command
         twist = c.message
@@ -86,11 +103,11 @@ class SimVerbs:
                 self.advance(1.0 / rate, timeout + 1.0 / rate)
         return "\n".join(lines) + "\n", {"published": times, "twist": twist}
 
+    @runs("service list")
     def _service_list(self, c: Checked, timeout: float):
         return self._listing(self.catalog.services, c)
 
-    _service_type = _topic_type
-
+    @runs("service call")
     def _service_call(self, c: Checked, timeout: float):
         name, req = c.command.name, c.message
         response = self.serve(name, req)
@@ -157,14 +174,17 @@ class SimVerbs:
             raise LocationError(f"no location named '{name}'")
         return (*st.pose, st.name)
 
+    @runs("action list")
     def _action_list(self, c: Checked, timeout: float):
         return self._listing(self.catalog.actions, c)
 
+    @runs("action info")
     def _action_info(self, c: Checked, timeout: float):
         spec = self.catalog.actions[c.command.name]
         text = f"Action: {spec.name}\nAction clients: 0\nAction servers: 1\n    {spec.node}\n"
         return text, {"servers": [spec.node]}
 
+    @runs("action send_goal")
     def _action_send_goal(self, c: Checked, timeout: float):
         goal_msg = c.message
         pose = goal_msg["pose"]["pose"]
@@ -223,41 +243,39 @@ class SimVerbs:
             "final_pose": {"x": px, "y": py, "theta": pth},
         }
 
+    @runs("node list")
     def _node_list(self, c: Checked, timeout: float):
         return "\n".join(self.catalog.nodes) + "\n", list(self.catalog.nodes)
 
+    @runs("node info")
     def _node_info(self, c: Checked, timeout: float):
         info = self.catalog.node_info(c.command.name)
         return node_info_text(c.command.name, info), info
 
+    @runs("interface show")
     def _interface_show(self, c: Checked, timeout: float):
         return interface_show(c.command.args["type"]), None
 
+    @runs("interface list")
     def _interface_list(self, c: Checked, timeout: float):
         from astiop.ros2.definitions import DEFINITIONS
 
-        names = sorted(DEFINITIONS)
-        return "\n".join(f"    {n}" for n in names) + "\n", names
+        return interface_list_text(list(DEFINITIONS), c.command.flags)
 
+    @runs("param list")
     def _param_list(self, c: Checked, timeout: float):
-        node = c.command.args.get("node")
-        lines, values = [], {}
-        for n in self.catalog.nodes:
-            if node and n != node:
-                continue
-            names = [p for (pn, p) in self.params if pn == n]
-            if names:
-                lines.append(f"{n}:")
-                lines += [f"  {p}" for p in sorted(names)]
-                values[n] = sorted(names)
-        return "\n".join(lines) + "\n", values
+        params = [(node, name, type_of(value)) for (node, name), value in self.params.items()]
+        return param_list_text(params, c.command.args.get("node"), c.command.flags,
+                               c.command.options)  # fmt: skip
 
+    @runs("param get")
     def _param_get(self, c: Checked, timeout: float):
         key = (c.command.args["node"], c.command.args["param"])
         value = self.params[key]
         word = {float: "Double", int: "Integer", str: "String", bool: "Boolean"}[type(value)]
         return f"{word} value is: {value}\n", value
 
+    @runs("param set")
     def _param_set(self, c: Checked, timeout: float):
         key = (c.command.args["node"], c.command.args["param"])
         value = c.message["value"]
