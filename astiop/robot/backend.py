@@ -7,7 +7,7 @@ import time
 from abc import ABC, abstractmethod
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field
-from typing import TYPE_CHECKING, Any, Union
+from typing import Any, Union
 
 from astiop.robot.errors import BackendError  # noqa: F401 - its home for every caller
 from astiop.robot.inflight import InFlight
@@ -16,9 +16,6 @@ from astiop.robot.state import OccupancyGrid, RobotEvent, RobotState, TopicStat
 from astiop.ros2.catalog import Catalog
 from astiop.ros2.validation import Checked
 from astiop.warehouse import WarehouseMap
-
-if TYPE_CHECKING:
-    from astiop.robot.backends.replay.backend import Playback
 
 # A known layout (the simulator's warehouse), the robot's /map, or nothing: then the map view
 # follows the robot and shows its scan.
@@ -80,7 +77,6 @@ class RobotBackend(ABC):
     capabilities: frozenset[str]  # "commands", "teleop"; a replay has neither
     label: str = ""  # how the header names it, when `name` alone is not enough
     read_only: str = ""  # why commands are refused, when they are
-    playback: Playback | None = None  # a replay's clock
     refreshed_at: float = 0.0  # time.monotonic() of the last read of the robot's graph
     refresh_every_s: float = 5.0  # a missing name reads the graph again at most this often
     inflight: InFlight  # what this process has running that moves the robot

@@ -14,6 +14,7 @@ from collections.abc import Callable
 
 from astiop.robot.backend import BackendError, Execution, MapGeometry, RobotBackend
 from astiop.robot.latch_watch import LatchWatcher
+from astiop.robot.playback import Playback, PlaysBack
 from astiop.robot.safety import ALWAYS_ALLOWED, Review, SafetyPolicy
 from astiop.robot.state import RobotEvent, RobotState, TopicStat
 from astiop.ros2.catalog import Catalog
@@ -172,9 +173,9 @@ class RobotGateway:
         return self.backend.read_only or f"the {self.backend.name} robot is read-only"
 
     @property
-    def playback(self):
+    def playback(self) -> Playback | None:
         """The replay's clock (pause, step, speed), or None on a live robot."""
-        return self.backend.playback
+        return self.backend.playback if isinstance(self.backend, PlaysBack) else None
 
     # -- commands --------------------------------------------------------------------------
     def review(self, text: str) -> Review:
