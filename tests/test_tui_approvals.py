@@ -49,7 +49,7 @@ async def test_a_request_nobody_answers_closes_and_the_estop_answers_no(tmp_path
     server = Store(tmp_path / "console.db")
     async with app.run_test(size=SIZE) as pilot:
         await wait_for(pilot, server.console_open, what="the console's heartbeat")
-        late = await asyncio.to_thread(server.request_approval, "agent", GOTO, "", 1.0)
+        late = await asyncio.to_thread(server.request_approval, "agent", GOTO, "", 3.0)
         await wait_for(pilot, lambda: asked(app) != "")
         await wait_for(pilot, lambda: type(app.screen).__name__ != "ConfirmModal", timeout=10)
         assert server.expire_approval(late) and server.approval(late)["status"] == "expired"
