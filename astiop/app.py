@@ -18,7 +18,7 @@ from textual.app import App, SystemCommand
 from textual.binding import Binding
 from textual.worker import Worker, WorkerState
 
-from astiop.agent.specs import LLMEndpoint, open_endpoint
+from astiop.agent.models.specs import LLMEndpoint, open_endpoint
 from astiop.config import Settings
 from astiop.recording import RecordingError, SessionRecorder, default_path
 from astiop.robot.factory import make_robot_gateway, make_sim_gateway

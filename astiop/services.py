@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from astiop.agent.specs import LLMEndpoint
+from astiop.agent.models.specs import LLMEndpoint
 from astiop.config import Settings
 from astiop.robot.gateway import RobotGateway
 from astiop.store import Store

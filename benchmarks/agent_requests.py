@@ -24,8 +24,8 @@ import yaml
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from astiop.agent import grounding  # noqa: E402
-from astiop.agent.reply_stream import repeating  # noqa: E402
-from astiop.agent.specs import open_endpoint  # noqa: E402
+from astiop.agent.models.reply_stream import repeating  # noqa: E402
+from astiop.agent.models.specs import open_endpoint  # noqa: E402
 from astiop.agent.turn import Agent  # noqa: E402
 from astiop.bench import stage2  # noqa: E402
 from astiop.bench.suites import RobotCase  # noqa: E402

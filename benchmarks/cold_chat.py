@@ -26,7 +26,7 @@ from pathlib import Path
 
 WARM = """
 import asyncio, json, sys, time
-from astiop.agent.specs import open_endpoint
+from astiop.agent.models.specs import open_endpoint
 from astiop.agent.turn import Agent
 from astiop.config import load_settings
 from astiop.robot.factory import make_robot_gateway

@@ -5,7 +5,7 @@ import math
 
 import pytest
 
-from astiop.agent.specs import open_endpoint
+from astiop.agent.models.specs import open_endpoint
 from astiop.agent.turn import Agent
 from astiop.robot.backends.sim.backend import SimBackend
 from astiop.robot.gateway import RobotGateway

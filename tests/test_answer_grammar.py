@@ -8,7 +8,7 @@ import pytest
 
 from astiop.agent import grounding
 from astiop.agent.answer_grammar import _alternatives, answer_grammar, quantities
-from astiop.agent.embedded import EmbeddedServer, smollm2_path
+from astiop.agent.models.embedded import EmbeddedServer, smollm2_path
 
 BATTERY = "ros2 topic echo --once /battery_status sensor_msgs/msg/BatteryState\n  battery 85.0 %, 27.12 V, 4.40 A, charging"
 OBSTACLE = "ros2 topic echo --once /obstacles astiop_msgs/msg/ObstacleArray\n  1 obstacle(s) detected: pallet at 2.4 m, bearing 2 deg"

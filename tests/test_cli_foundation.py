@@ -180,7 +180,7 @@ def test_chat_ends_at_once_with_its_answer_and_its_record(tmp_path):
 
 
 def test_astiop_chat_starts_a_model_process_first_and_ends_it_when_unused(tmp_path, monkeypatch):
-    from astiop.agent import model_spawn
+    from astiop.agent.models import model_spawn
 
     started = []
 

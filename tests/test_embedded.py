@@ -8,9 +8,9 @@ import time
 import httpx
 import pytest
 
-from astiop.agent.embedded import EmbeddedModelError, EmbeddedServer, smollm2_path
-from astiop.agent.llm import OpenAIClient
-from astiop.agent.specs import LLMEndpoint, parse_spec
+from astiop.agent.models.embedded import EmbeddedModelError, EmbeddedServer, smollm2_path
+from astiop.agent.models.llm import OpenAIClient
+from astiop.agent.models.specs import LLMEndpoint, parse_spec
 from astiop.agent.turn import Agent
 from astiop.robot.backends.sim.backend import SimBackend
 from astiop.robot.gateway import RobotGateway
@@ -147,7 +147,7 @@ def test_the_model_serves_from_its_own_process_until_stopped():
 
 def test_the_model_stops_when_the_process_that_started_it_is_killed():
     code = (
-        "import sys; from astiop.agent.embedded import EmbeddedServer, smollm2_path; "
+        "import sys; from astiop.agent.models.embedded import EmbeddedServer, smollm2_path; "
         "s = EmbeddedServer(smollm2_path(), threads=1, n_ctx=512, prompt_cache=False).start(); "
         "print(s.port, flush=True); sys.stdin.read()"
     )
@@ -179,7 +179,7 @@ def test_a_file_that_is_no_model_is_a_one_line_error(tmp_path):
 
 
 def test_a_model_process_started_ahead_is_the_one_that_serves():
-    from astiop.agent import model_spawn
+    from astiop.agent.models import model_spawn
 
     model_spawn.start_ahead()  # as `astiop chat` does before its imports
     ahead = model_spawn._ahead

@@ -8,7 +8,7 @@ import threading
 
 import pytest
 
-from astiop.agent.prompt_cache import PromptCache, SlotFile, prefix_of, system_of
+from astiop.agent.models.prompt_cache import PromptCache, SlotFile, prefix_of, system_of
 
 pytestmark = [pytest.mark.xdist_group("embedded")]  # one model server at a time
 
@@ -102,7 +102,7 @@ def test_the_prefix_is_the_messages_before_the_request():
 
 @pytest.fixture
 def model_path():
-    from astiop.agent.embedded import EmbeddedModelError, smollm2_path
+    from astiop.agent.models.embedded import EmbeddedModelError, smollm2_path
 
     pytest.importorskip("xllamacpp")
     try:
@@ -119,7 +119,7 @@ async def replies(server, calls) -> list:
 
 
 def start(model_path, cache_dir, prompt_cache=True):
-    from astiop.agent.embedded import EmbeddedServer
+    from astiop.agent.models.embedded import EmbeddedServer
 
     return EmbeddedServer(
         model_path, threads=1, n_ctx=2048, prompt_cache=prompt_cache, cache_dir=cache_dir
@@ -200,7 +200,7 @@ async def test_a_damaged_or_stale_cache_is_skipped_and_written_anew(model_path, 
 
 
 def test_a_state_file_is_hashed_once_per_version(tmp_path, monkeypatch):
-    from astiop.agent import prompt_cache
+    from astiop.agent.models import prompt_cache
 
     path = tmp_path / "state.bin"
     path.write_bytes(os.urandom(4096))

@@ -5,8 +5,8 @@ import time
 import pytest
 
 from astiop.agent import grounding
-from astiop.agent.llm import OpenAIClient
-from astiop.agent.reply_stream import repeating
+from astiop.agent.models.llm import OpenAIClient
+from astiop.agent.models.reply_stream import repeating
 from astiop.robot.backend import Execution
 from astiop.robot.backends.sim.backend import SimBackend
 from astiop.robot.gateway import RobotGateway

@@ -12,7 +12,7 @@ import threading
 
 import pytest
 
-from astiop.agent.specs import SpecError, parse_spec
+from astiop.agent.models.specs import SpecError, parse_spec
 from astiop.config import ConfigError, load_settings
 from astiop.robot.backends.sim.backend import SimBackend
 from astiop.robot.gateway import RobotGateway

@@ -5,7 +5,7 @@ import pytest
 from astiop.agent import rules
 from astiop.agent.gate import action_of, check
 from astiop.agent.intent import classify
-from astiop.agent.specs import open_endpoint
+from astiop.agent.models.specs import open_endpoint
 from astiop.ros2.catalog import astibot_catalog
 from astiop.ros2.validation import validate
 from astiop.store import Store

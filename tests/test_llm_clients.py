@@ -5,7 +5,7 @@ import time
 
 import pytest
 
-from astiop.agent.llm import (
+from astiop.agent.models.llm import (
     LLMHTTPError,
     LLMProtocolError,
     LLMTimeout,

@@ -397,7 +397,7 @@ def test_the_emulated_ros2_refuses_what_real_ros2_refuses(robot):
 async def test_a_turn_on_the_robot_says_started_then_follows_up_arrived(robot, store):
     """A service goal reports no outcome on a real robot: the follow-up reads the robot's
     own pose at the target, and the gate and grounding work on the live graph."""
-    from astiop.agent.specs import open_endpoint
+    from astiop.agent.models.specs import open_endpoint
     from astiop.agent.turn import Agent
 
     gateway = make_gateway()

@@ -95,7 +95,7 @@ def test_state_messages_are_taken_by_the_poller_each_at_its_receive_time(robot_g
 def test_a_chat_read_agrees_with_the_robot_and_a_goal_is_followed_to_arrival(robot_gateway):
     import asyncio
 
-    from astiop.agent.specs import open_endpoint
+    from astiop.agent.models.specs import open_endpoint
     from astiop.agent.turn import Agent
 
     gateway = robot_gateway

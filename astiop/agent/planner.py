@@ -12,9 +12,9 @@ from dataclasses import dataclass
 
 from astiop.agent import prompts
 from astiop.agent.intent import Intent
-from astiop.agent.llm import LLMProtocolError
+from astiop.agent.models.llm import LLMProtocolError
+from astiop.agent.models.reply_stream import Completion
 from astiop.agent.replies import ReplyError, commands_from_reply, steps_from_reply
-from astiop.agent.reply_stream import Completion
 from astiop.agent.result import TurnResult
 from astiop.agent.tools import (
     build_tools,

@@ -18,11 +18,11 @@ from typing import Any
 from astiop.agent import gate, goals, grounding, intent, planner, prompts, rules
 from astiop.agent.answer_grammar import answer_grammar
 from astiop.agent.intent import Intent
-from astiop.agent.llm import LLMError, LLMHTTPError, LLMTimeout, LLMUnavailable
+from astiop.agent.models.llm import LLMError, LLMHTTPError, LLMTimeout, LLMUnavailable
+from astiop.agent.models.reply_stream import Completion
+from astiop.agent.models.specs import LLMEndpoint
 from astiop.agent.recorder import Recorder
-from astiop.agent.reply_stream import Completion
 from astiop.agent.result import TurnResult
-from astiop.agent.specs import LLMEndpoint
 from astiop.agent.summaries import summarize
 from astiop.robot.backend import Execution
 from astiop.robot.gateway import Confirm, RobotGateway

@@ -15,8 +15,8 @@ from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-from astiop.agent.llm import LLMError, LLMTimeout
-from astiop.agent.specs import LLMEndpoint, open_endpoint, parse_spec
+from astiop.agent.models.llm import LLMError, LLMTimeout
+from astiop.agent.models.specs import LLMEndpoint, open_endpoint, parse_spec
 from astiop.bench import library, paper_protocol, stage1, stage2
 from astiop.bench.case_turn import case_agent, scored
 from astiop.bench.live import close_live, live_case

@@ -5,8 +5,8 @@ from __future__ import annotations
 import time
 from typing import Any
 
-from astiop.agent.llm import LLMError, LLMTimeout
-from astiop.agent.specs import LLMEndpoint
+from astiop.agent.models.llm import LLMError, LLMTimeout
+from astiop.agent.models.specs import LLMEndpoint
 from astiop.bench import scoring
 from astiop.bench.suites import KnowledgeCase
 

@@ -59,7 +59,7 @@ def run(argv: list[str] | None = None) -> None:
         from astiop import latch
 
         latch.latch_early(args)
-    from astiop.agent import model_spawn
+    from astiop.agent.models import model_spawn
 
     if _serves_a_local_model(args):  # the model's process starts before our imports
         model_spawn.start_ahead()

@@ -28,8 +28,8 @@ def chat(
     as_json: bool = typer.Option(False, "--json"),
 ) -> None:
     """Run one agent turn against the robot (the simulator by default) and print the answer."""
-    from astiop.agent.embedded import EmbeddedModelError
-    from astiop.agent.specs import SpecError, open_endpoint
+    from astiop.agent.models.embedded import EmbeddedModelError
+    from astiop.agent.models.specs import SpecError, open_endpoint
 
     st = state(ctx)
     settings = st.settings
@@ -127,7 +127,7 @@ def chat(
 
 def models(ctx: typer.Context, as_json: bool = typer.Option(False, "--json")) -> None:
     """List the configured model endpoints, whether each answers, and what it serves."""
-    from astiop.agent.probe import probe
+    from astiop.agent.models.probe import probe
 
     settings = state(ctx).settings
     specs = list(dict.fromkeys([settings.llm.model, "rules", "embedded", *settings.llm.endpoints]))

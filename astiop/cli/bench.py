@@ -58,8 +58,8 @@ def run_bench(
     as_json: bool = typer.Option(False, "--json"),
 ) -> None:
     """Run a benchmark; each case's result is stored as it finishes."""
-    from astiop.agent.embedded import EmbeddedModelError
-    from astiop.agent.specs import SpecError, parse_spec
+    from astiop.agent.models.embedded import EmbeddedModelError
+    from astiop.agent.models.specs import SpecError, parse_spec
     from astiop.bench import runner
     from astiop.bench.report import load_report
 

@@ -30,7 +30,7 @@ def _wait_for_tab() -> None:
 
 
 def run_console(st: CliState, record: str | None = None) -> None:
-    from astiop.agent.specs import SpecError
+    from astiop.agent.models.specs import SpecError
     from astiop.app import make_app
     from astiop.cli.common import fail
     from astiop.recording import default_path
@@ -61,7 +61,7 @@ def replay(
     """
     import tempfile
 
-    from astiop.agent.specs import SpecError
+    from astiop.agent.models.specs import SpecError
     from astiop.app import make_app
     from astiop.cli.common import fail, state
     from astiop.recording import RecordingError

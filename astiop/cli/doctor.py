@@ -91,7 +91,7 @@ def _check_database(st, add) -> None:
 
 
 def _check_models(settings, add) -> None:
-    from astiop.agent.probe import probe
+    from astiop.agent.models.probe import probe
 
     specs = list(dict.fromkeys([settings.llm.model, "embedded", *settings.llm.endpoints]))
 
@@ -113,7 +113,7 @@ def _check_models(settings, add) -> None:
 
 
 async def _server_problem(spec: str) -> str | None:
-    from astiop.agent.specs import SpecError, open_endpoint
+    from astiop.agent.models.specs import SpecError, open_endpoint
 
     try:
         ep = open_endpoint(spec)

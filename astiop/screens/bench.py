@@ -21,7 +21,7 @@ from textual.widgets import (
     Static,
 )
 
-from astiop.agent.specs import SpecError, parse_spec
+from astiop.agent.models.specs import SpecError, parse_spec
 from astiop.bench import runner
 from astiop.bench.library import all_suites, load_suite
 from astiop.bench.report import SIDE_FIGURES, Report, list_runs, load_report

@@ -11,8 +11,8 @@ from textual.binding import Binding
 from textual.containers import VerticalScroll
 from textual.widgets import Collapsible, Footer, Header, Input, Static
 
-from astiop.agent.embedded import EmbeddedModelError
-from astiop.agent.specs import SpecError, open_endpoint
+from astiop.agent.models.embedded import EmbeddedModelError
+from astiop.agent.models.specs import SpecError, open_endpoint
 from astiop.agent.turn import Agent, TurnResult
 from astiop.bounded import escape_controls
 from astiop.robot.backend import Execution

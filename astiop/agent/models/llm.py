@@ -17,7 +17,7 @@ from typing import Any, Protocol
 
 import httpx
 
-from astiop.agent.reply_stream import Completion, StreamState
+from astiop.agent.models.reply_stream import Completion, StreamState
 from astiop.bounded import one_line
 
 Messages = list[dict[str, str]]

@@ -45,7 +45,7 @@ from astiop.config import APP_NAME
 if TYPE_CHECKING:
     import httpx
 
-    from astiop.agent.llm import Messages
+    from astiop.agent.models.llm import Messages
 
 FORMAT = 1  # of the index and of what a build is named for
 SLOTS = 2  # planning and interpretation, each in its own slot
@@ -63,7 +63,7 @@ def default_cache_dir() -> Path:
 def _client(base_url: str) -> httpx.Client:
     import httpx
 
-    from astiop.agent.llm import tls_for
+    from astiop.agent.models.llm import tls_for
 
     return httpx.Client(timeout=30.0, verify=tls_for(base_url))
 
