@@ -31,6 +31,7 @@ class TurnResult:
     waited: dict[int, str] = field(default_factory=dict)  # command seq -> how its goal ended
     outcome: str | None = None  # how that goal ended, once it has
     target: tuple[float, float] | None = None  # where that goal is, when known
+    mission_id: int | None = None  # the mission this turn started (it runs on after the turn)
 
     def as_json(self) -> dict[str, Any]:
         return {
@@ -56,4 +57,5 @@ class TurnResult:
             "grounding": self.grounding or None,
             "started": self.started or None,
             "outcome": self.outcome,
+            "mission_id": self.mission_id,
         }

@@ -15,7 +15,16 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from astiop.agent import gate, goals, grounding, intent, planner, prompts, rules
+from astiop.agent import (
+    gate,
+    goals,
+    grounding,
+    intent,
+    mission_turn,
+    planner,
+    prompts,
+    rules,
+)
 from astiop.agent.answer_grammar import answer_grammar
 from astiop.agent.intent import Intent
 from astiop.agent.models.llm import LLMError, LLMHTTPError, LLMTimeout, LLMUnavailable
@@ -24,6 +33,7 @@ from astiop.agent.models.specs import LLMEndpoint
 from astiop.agent.recorder import Recorder
 from astiop.agent.result import TurnResult
 from astiop.agent.summaries import summarize
+from astiop.missions.runner import MissionRunner
 from astiop.robot.backend import Execution
 from astiop.robot.gateway import Confirm, RobotGateway
 from astiop.robot.safety import Review
@@ -52,6 +62,8 @@ class Agent:
         interpretation: str = "grounded",
         interpret_tokens: int = 96,
         narrow_tools: bool = True,
+        missions: MissionRunner | None = None,
+        confirm_mission: mission_turn.ConfirmMission | None = None,
     ):
         if interpretation not in ("grounded", "raw"):
             raise ValueError(f"interpretation must be 'grounded' or 'raw', not '{interpretation}'")
@@ -74,6 +86,15 @@ class Agent:
         self.interpret_tokens = interpret_tokens
         self.narrow_tools = narrow_tools
         self._schema_ok = True
+        self._missions = missions
+        self.confirm_mission = confirm_mission
+
+    @property
+    def missions(self) -> MissionRunner | None:
+        """The runner of this robot's missions (None without a store: a mission is stored)."""
+        if self._missions is None and self.store is not None:
+            self._missions = MissionRunner(self.gateway, self.store)
+        return self._missions
 
     @property
     def model(self) -> str:
@@ -132,6 +153,8 @@ class Agent:
             fallback = False
             # classified once: the planner narrows the tools by it, the gate holds plans to it
             intents = intent.classify(request, self.locations())
+            if await mission_turn.without_model(self, request, intents, result, emit):
+                return await self._finish(request, result, t0)
             try:
                 commands = await self._plan(request, intents, result, emit)
             except (LLMUnavailable, LLMTimeout, LLMHTTPError) as exc:
@@ -143,8 +166,15 @@ class Agent:
                 result.error = f"{exc}; answered by the rules fallback"
                 commands, fallback = rules.plan_intents(intents), True
             refused = await asyncio.to_thread(self._gate_reason, intents, commands)
+            steps = None
+            if not refused and self.missions is not None:
+                steps, refused = await asyncio.to_thread(
+                    mission_turn.plan_as_mission, request, commands, self._review, self.places()
+                )
             if refused:
                 await self._refuse(commands, refused, result, emit)
+            elif steps:
+                await mission_turn.begin(self, request, steps, result, emit)
             else:
                 await self._execute(commands, result, emit)
                 result.answer = await self._interpret(request, result, emit, fallback)
@@ -163,6 +193,9 @@ class Agent:
             result.total_s = time.perf_counter() - t0
             self.recorder.finish_now(result, status="error")
             raise
+        return await self._finish(request, result, t0)
+
+    async def _finish(self, request: str, result: TurnResult, t0: float) -> TurnResult:
         result.total_s = time.perf_counter() - t0
         await self.recorder.finish(result)
         self.history.append((request, result.answer))

@@ -30,7 +30,11 @@ from astiop.resources import prompts_path
 
 MAX_SUITE_BYTES = 5_000_000
 NAME_RE = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
-BUILTIN = {"astiop-stage1": "stage1.yaml", "astiop-stage2": "stage2.yaml"}
+BUILTIN = {
+    "astiop-stage1": "stage1.yaml",
+    "astiop-stage2": "stage2.yaml",
+    "multistep": "multistep.yaml",  # stage 2: missions, scored by order (`bench.multistep`)
+}
 
 
 @dataclass(frozen=True)

@@ -17,7 +17,7 @@ from pathlib import Path
 
 from astiop.agent.models.llm import LLMError, LLMTimeout
 from astiop.agent.models.specs import LLMEndpoint, open_endpoint, parse_spec
-from astiop.bench import library, paper_protocol, stage1, stage2
+from astiop.bench import library, multistep, paper_protocol, stage1, stage2
 from astiop.bench.case_turn import case_agent, scored
 from astiop.bench.live import close_live, live_case
 from astiop.bench.suites import SuiteError
@@ -285,6 +285,9 @@ def _case_recorder(config, gateway, sim, case, mode, who):
 
 
 async def _drive_case(store, config, endpoint, case, mode, sim, gateway):
+    if "visits" in case.outcome:  # a multi-step case: run as a mission, scored by order
+        agent = multistep.mission_agent(store, config, endpoint, mode, gateway, case)
+        return await multistep.drive(store, case, agent, sim)
     agent = case_agent(store, config, endpoint, mode, gateway)
     turn = await agent.turn(case.request)
     truth = stage2.Truth.of_sim(sim)

@@ -272,6 +272,8 @@ LIVE_SETUP = {"start"}  # what a live robot's case can be set up with: driving i
 
 def live_refusal(case: RobotCase) -> str:
     """Why the case cannot run on a live robot ("" when it can)."""
+    if "visits" in case.outcome:
+        return "a multi-step case's ground truth (the places visited) is the simulator's"
     extra = sorted(set(case.setup) - LIVE_SETUP)
     if extra:
         return f"its set-up ({', '.join(extra)}) can only be made in the simulator"

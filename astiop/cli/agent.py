@@ -62,6 +62,22 @@ def chat(
         return typer.confirm(f"run '{checked.command.display()}' (it moves the robot)?", err=True)
 
     confirm = (lambda _c: True) if yes else (ask if interactive() else None)
+
+    def ask_mission(steps) -> bool:
+        from astiop.missions.steps import describe
+
+        return typer.confirm(f"run this mission (it moves the robot)? {describe(steps)}", err=True)
+
+    confirm_mission = (lambda _s: True) if yes else (ask_mission if interactive() else None)
+
+    def on_step(report) -> None:
+        if not as_json:
+            typer.echo(report.line(), err=True)
+
+    from astiop.missions.runner import MissionRunner
+
+    runner = MissionRunner(gateway, st.store, on_step=on_step)
+    runner.queue_only = not wait  # --no-wait: a process of its own drives the mission
     agent = Agent(
         gateway,
         endpoint,
@@ -71,6 +87,8 @@ def chat(
         confirm=confirm,
         session="cli",
         interpretation=interpretation,
+        missions=runner,
+        confirm_mission=confirm_mission,
     )
 
     def on_event(kind: str, data) -> None:
@@ -95,7 +113,20 @@ def chat(
     async def turn_and_follow():
         result = await agent.turn(text, on_event)
         follow = ""
-        if result.started and wait:
+        if result.mission_id is not None:
+            if not as_json:
+                typer.echo("", err=True)
+            if wait:
+                follow = await asyncio.to_thread(follow_mission, runner, result.mission_id)
+            else:
+                from astiop.cli.mission import drive_detached
+
+                log = drive_detached(st, result.mission_id)
+                follow = (
+                    f"mission {result.mission_id} is driven by a process of its own "
+                    f"(astiop mission show {result.mission_id}; its log: {log})"
+                )
+        elif result.started and wait:
             if not as_json:
                 typer.echo(f"\n... {result.started}; waiting for it to end", err=True)
             gateway.start()  # the robot's state, to see how the goal ends
@@ -123,6 +154,18 @@ def chat(
     Ending.at_once = settings.robot.backend != "ros2"
     if result.error:
         raise typer.Exit(1)
+
+
+def follow_mission(runner, mission_id: int) -> str:
+    """Wait for the mission to end (each step is printed as it ends); Ctrl-C cancels it."""
+    try:
+        while not runner.wait(0.5):
+            pass
+    except KeyboardInterrupt:
+        runner.cancel()
+        runner.wait(30)
+    row = runner.store.mission(mission_id) or {}
+    return f"mission {mission_id} {row.get('status', '?')}: {row.get('reason') or ''}".rstrip(": ")
 
 
 def models(ctx: typer.Context, as_json: bool = typer.Option(False, "--json")) -> None:

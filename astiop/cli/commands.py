@@ -17,6 +17,7 @@ from astiop.cli import (
     export,
     locations,
     mcp,
+    mission,
     record,
     robot,
     ros2,
@@ -37,6 +38,7 @@ app.add_typer(sim.app, name="sim")
 app.add_typer(bench.app, name="bench")
 app.add_typer(export.app, name="export")
 app.add_typer(ros2.app, name="ros2")
+app.add_typer(mission.app, name="mission")
 app.command("exec")(robot.exec_command)
 app.command("estop")(robot.estop)
 app.command("chat")(agent.chat)

@@ -49,6 +49,15 @@ DESCRIPTIONS = {
     "it. Always allowed; no approval.",
     "ros2_command": "Run one ros2 command line through astiop's validation and safety. Lines "
     "that move the robot need approval.",
+    "start_mission": "Run steps one after the other, each starting when the one before has "
+    "ended as the robot reported it: {kind: goto, place | x, y}, {kind: dock|undock|load|unload}, "
+    "{kind: wait, seconds}, {kind: read, what: battery|obstacles}; any step may hold "
+    "'if': {what: battery|obstacles, op: '<'|'>', value}. One approval shows every step. "
+    "A failed step ends the mission.",
+    "mission_status": "A mission (default: the latest): each step's status, detail and the "
+    "robot's pose at its end, as stored.",
+    "cancel_mission": "Cancel the running mission (default) and stop the robot; drops an "
+    "interrupted one. Always allowed.",
 }
 
 
@@ -106,7 +115,9 @@ class AstiopMCP(MCPServer):
                 description=DESCRIPTIONS[name],
                 annotations=ToolAnnotations(
                     read_only_hint=cls == "read",
-                    destructive_hint=False if cls == "read" else name != "stop",
+                    destructive_hint=False
+                    if cls == "read"
+                    else name not in ("stop", "cancel_mission"),
                     open_world_hint=True,
                 ),
                 meta={"astiop/class": cls},

@@ -13,6 +13,7 @@ from astiop.agent import goals
 from astiop.bounded import MAX_COMMAND_CHARS, has_controls, one_line, preview
 from astiop.mcp.approval import Policy, clear
 from astiop.mcp.audit import CALL, AuditTrail, Call
+from astiop.mcp.mission_tools import MissionTools
 from astiop.robot.backend import Execution
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.safety import Review
@@ -36,6 +37,9 @@ TOOL_CLASSES: dict[str, str] = {
     "stop": "actuate",
     "estop": "actuate",
     "ros2_command": "actuate",
+    "mission_status": "read",
+    "start_mission": "actuate",
+    "cancel_mission": "actuate",
 }
 
 MAX_MOVE_S = 3.0
@@ -65,7 +69,7 @@ def bounded_text(name: str, value: str, limit: int = MAX_COMMAND_CHARS) -> str:
     return value.strip()
 
 
-class RobotTools:
+class RobotTools(MissionTools):
     def __init__(self, gateway: RobotGateway, store: Store, policy: Policy):
         self.gateway = gateway
         self.store = store

@@ -11,6 +11,7 @@ import math
 from rich.text import Text
 from textual import work
 from textual.app import ComposeResult
+from textual.binding import Binding
 from textual.containers import Vertical, VerticalScroll
 from textual.widgets import DataTable, Footer, Header, Static
 
@@ -22,6 +23,7 @@ from astiop.screens.messages import RobotStateSampled, TurnFinished
 from astiop.screens.panel_text import show_text
 from astiop.widgets.gauges import BatteryGauge
 from astiop.widgets.map_view import Place, WarehouseMapView
+from astiop.widgets.mission_panel import MissionPanel
 
 STATE_COLOURS = {
     "idle": "green",
@@ -89,6 +91,8 @@ def robot_text(st: RobotState) -> Text:
 
 
 class DashboardScreen(ConsoleScreen):
+    BINDINGS = [Binding("escape", "cancel_mission", "Cancel mission", show=False)]
+
     def compose(self) -> ComposeResult:
         yield Header(show_clock=False)
         with Vertical(id="dash-grid"):
@@ -96,6 +100,7 @@ class DashboardScreen(ConsoleScreen):
                 yield WarehouseMapView(self.services.gateway.map_geometry(), id="map-panel")
                 yield DataTable(id="events", cursor_type="none", zebra_stripes=True)
             with VerticalScroll(id="dash-right"):
+                yield MissionPanel(id="mission", classes="panel")
                 yield Static(id="robot", classes="panel")
                 yield BatteryGauge(id="battery", classes="panel")
                 yield Static(id="agent", classes="panel")
@@ -122,6 +127,31 @@ class DashboardScreen(ConsoleScreen):
         self.show_state(self.app.robot_state)
         self.show_topics(self.app.topic_stats)
         self._show_events()
+        self.set_interval(1.0, self.read_mission)
+        self.read_mission()
+
+    @work(thread=True, exclusive=True, group="mission", exit_on_error=False)
+    def read_mission(self) -> None:
+        """The latest mission, from the store (any process may be driving it)."""
+        from astiop.missions import view
+
+        store = self.services.store
+        row = store.latest_mission()
+        m = view.as_json(store, row["id"]) if row else None
+        self.app.call_from_thread(self.query_one(MissionPanel).show, m)
+
+    @work(thread=True, group="mission-cancel", exit_on_error=False)
+    def action_cancel_mission(self) -> None:
+        """Escape: the running mission is canceled by the process driving it (this one or
+        another), which stops the robot."""
+        row = self.services.store.latest_mission()
+        if row is None or row["status"] != "running":
+            return
+        self.services.store.request_mission_cancel(row["id"])
+        self.app.call_from_thread(
+            self.notify, f"mission {row['id']}: cancel asked", title="mission"
+        )
+        self.app.call_from_thread(self.read_mission)
 
     def on_screen_resume(self) -> None:
         # on first show too; locations may have changed on the Locations screen, and events

@@ -19,6 +19,7 @@ from astiop.store.approvals import ApprovalTables
 from astiop.store.bench import BenchTables
 from astiop.store.journal import JournalTables
 from astiop.store.locations import LocationTables
+from astiop.store.missions import MissionTables
 from astiop.store.records import Location, LocationError, StoreError
 from astiop.store.schema import (
     _OUR_TABLES,
@@ -64,7 +65,7 @@ def _read_only_uri(path: Path) -> str:
     return f"{path.as_uri()}?mode=ro"
 
 
-class Store(LocationTables, JournalTables, BenchTables, ApprovalTables):
+class Store(LocationTables, JournalTables, BenchTables, ApprovalTables, MissionTables):
     """One connection per thread, all to the same file."""
 
     def __init__(self, path: Path | str, bounds: Rect | None = None):
@@ -145,6 +146,7 @@ class Store(LocationTables, JournalTables, BenchTables, ApprovalTables):
                     "WHERE id = ?",
                     [(i,) for i in dead],
                 )
+        self.mark_missions_interrupted()
 
     def _migrate(self) -> None:
         try:

@@ -179,9 +179,42 @@ def _migrate_v6(conn: sqlite3.Connection) -> None:
     )
 
 
+def _migrate_v7(conn: sqlite3.Connection) -> None:
+    # Missions: steps run one after the other, each with what the robot reported at its end.
+    _run(
+        conn,
+        """
+        CREATE TABLE missions (
+            id INTEGER PRIMARY KEY,
+            robot TEXT NOT NULL, request TEXT NOT NULL DEFAULT '', source TEXT NOT NULL DEFAULT '',
+            status TEXT NOT NULL DEFAULT 'running', step INTEGER NOT NULL DEFAULT 0,
+            reason TEXT, pid INTEGER, cancel_requested INTEGER NOT NULL DEFAULT 0,
+            created_at REAL NOT NULL, finished_at REAL
+        );
+        CREATE TABLE mission_steps (
+            id INTEGER PRIMARY KEY,
+            mission_id INTEGER NOT NULL REFERENCES missions(id),
+            seq INTEGER NOT NULL, spec TEXT NOT NULL, label TEXT NOT NULL,
+            status TEXT NOT NULL DEFAULT 'pending', detail TEXT,
+            started_at REAL, ended_at REAL, x REAL, y REAL, theta REAL, docked INTEGER,
+            UNIQUE (mission_id, seq)
+        );
+        CREATE INDEX missions_by_robot ON missions (robot, status);
+        """,
+    )
+
+
 # Ordered; the database's PRAGMA user_version counts how many have run. Each runs inside one
 # transaction (Store._run_migrations): on a plain connection, with execute only.
-MIGRATIONS = [_migrate_v1, _migrate_v2, _migrate_v3, _migrate_v4, _migrate_v5, _migrate_v6]
+MIGRATIONS = [
+    _migrate_v1,
+    _migrate_v2,
+    _migrate_v3,
+    _migrate_v4,
+    _migrate_v5,
+    _migrate_v6,
+    _migrate_v7,
+]
 SCHEMA_VERSION = len(MIGRATIONS)
 _OUR_TABLES = {
     "locations",
@@ -193,6 +226,8 @@ _OUR_TABLES = {
     "estop",
     "approvals",
     "consoles",
+    "missions",
+    "mission_steps",
 }
 
 

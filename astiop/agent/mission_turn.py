@@ -1,0 +1,153 @@
+"""A turn that starts a mission instead of sending its goals at once: the steps are reviewed
+up front (nothing runs if one is invalid or unsafe), approved once as a whole, then handed to
+the mission runner, which drives them one after the other after the turn has answered."""
+
+from __future__ import annotations
+
+import asyncio
+import re
+from collections.abc import Callable
+from typing import Any
+
+from astiop.agent import gate, mission_plan
+from astiop.agent.intent import Intent
+from astiop.agent.result import TurnResult
+from astiop.missions import view
+from astiop.missions.runner import MissionError, MissionRunner
+from astiop.missions.steps import Step, describe
+from astiop.robot.gateway import RobotGateway
+from astiop.robot.safety import Review
+from astiop.store import Store
+
+ConfirmMission = Callable[[list[Step]], bool]
+GOAL_KINDS = ("navigate", "dock", "undock")
+
+
+def plan_as_mission(
+    request: str,
+    commands: list[str],
+    review: Callable[[str], Review],
+    places: dict[str, tuple[float, float]],
+) -> tuple[list[Step] | None, str | None]:
+    """A model's plan that holds two or more goals is a mission: (steps, None), or (None, why
+    it may not run), or (None, None) when the plan is not a mission."""
+    actions = [gate.action_of(review(c).checked) for c in commands]
+    if sum(a.kind in GOAL_KINDS for a in actions) < 2:
+        return None, None
+    return mission_plan.from_actions(request, actions, places)
+
+
+def confirmer(
+    confirm_mission: ConfirmMission | None,
+    confirm: Callable | None,
+    review: Callable[[str], Review],
+) -> ConfirmMission | None:
+    """How the operator approves a mission: as a whole where the caller can show it whole,
+    else each distinct command that needs it, all asked before any runs; None: nobody can."""
+    if confirm_mission is not None:
+        return confirm_mission
+    if confirm is None:
+        return None
+
+    def each(steps: list[Step]) -> bool:
+        commands = dict.fromkeys(c for c in (s.command() for s in steps) if c)
+        return all(confirm(review(c).checked) for c in commands if review(c).needs_confirmation)
+
+    return each
+
+
+def check_steps(steps: list[Step], review: Callable[[str], Review]) -> str | None:
+    """Why the mission may not start (a step's command invalid or refused by safety)."""
+    for n, step in enumerate(steps, 1):
+        command = step.command()
+        if command is None:
+            continue
+        r = review(command)
+        # a named place the robot does not know is the robot's to refuse, as the step's end
+        if not r.checked.valid or not r.allowed:
+            return f"step {n} ({step.label()}): {r.reason or r.checked.reason}"
+    return None
+
+
+def start(
+    gateway: RobotGateway,
+    runner: MissionRunner,
+    request: str,
+    steps: list[Step],
+    review: Callable[[str], Review],
+    confirm: ConfirmMission | None,
+    result: TurnResult,
+) -> str:
+    """Start the mission; the turn's answer (started, or why not)."""
+    total = len(steps)
+    plan = describe(steps)
+    why = check_steps(steps, review)
+    if why is not None:
+        result.refused = why
+        return f"I did not start this mission: {why}. Nothing was sent to the robot. ({plan})"
+    if confirm is None:
+        result.refused = "needs the operator's confirmation"
+        return f"This mission moves the robot and needs the operator's confirmation: {plan}"
+    if not confirm(steps):
+        result.refused = "not confirmed by the operator"
+        return f"Mission not started: not confirmed by the operator. ({plan})"
+    gateway.start()  # the robot's live state: each step's end is read from it
+    try:
+        result.mission_id = runner.start(steps, request, source="chat")
+    except MissionError as exc:
+        result.refused = str(exc)
+        return f"Mission not started: {exc}"
+    return f"mission {result.mission_id} started: {total} step{'s' * (total != 1)} — {plan}"
+
+
+_ABOUT = re.compile(
+    r"\bmission\b|\bhow far along\b|\bwhat (?:did|has) the robot (?:do|done)\b"
+    r"|\bwhat (?:have|did) you (?:do|done)\b|\bwhich step\b|\bsteps? (?:done|left)\b",
+    re.I,
+)
+_START = re.compile(r"^(?:start|run|begin|launch|do)\b", re.I)
+
+
+def about_mission(request: str) -> bool:
+    """A question about the mission ("how far along is the mission?"), not an order."""
+    text = request.strip()
+    return bool(_ABOUT.search(text)) and not _START.match(text)
+
+
+def mission_answer(store: Store, robot: str) -> str | None:
+    """The latest mission, from its stored steps only; None when there is none."""
+    row = store.running_mission(robot) or store.latest_mission()
+    if row is None:
+        return None
+    m = view.as_json(store, row["id"])
+    return None if m is None else view.done_text(m)
+
+
+async def without_model(agent: Any, request: str, intents: list[Intent], result, emit) -> bool:
+    """A question about the mission (answered from its stored steps), or a plain request of
+    several steps (started as a mission); False: neither, the turn plans as usual."""
+    runner = agent.missions
+    if runner is None:
+        return False
+    if about_mission(request):
+        said = await asyncio.to_thread(mission_answer, agent.store, runner.robot)
+        if said is not None:  # grounded in the stored steps, not in a model's words
+            result.answer, result.grounding = said, "mission record"
+            emit("answer_token", said)
+            return True
+    if not mission_plan.may_be_mission(request, intents):
+        return False
+    steps = await asyncio.to_thread(mission_plan.steps_for, request, agent.places())
+    if steps:
+        await begin(agent, request, steps, result, emit)
+    return bool(steps)
+
+
+async def begin(agent: Any, request: str, steps: list[Step], result: TurnResult, emit) -> None:
+    """The agent's mission started (or refused, and why), as the turn's answer."""
+    confirm = confirmer(agent.confirm_mission, agent.confirm, agent._review)
+    result.answer = await asyncio.to_thread(
+        start, agent.gateway, agent.missions, request, steps, agent._review, confirm, result
+    )
+    result.grounding = "mission"
+    emit("answer_token", result.answer)

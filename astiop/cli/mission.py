@@ -1,0 +1,154 @@
+"""`astiop mission`: list, show, cancel and resume the robot's missions (multi-step work)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import typer
+
+from astiop.cli.common import Ending, fail, print_json, state
+
+app = typer.Typer(help="List, show, cancel and resume missions.", no_args_is_help=True)
+
+
+def _one(ctx: typer.Context, mission_id: int) -> dict:
+    from astiop.missions import view
+
+    m = view.as_json(state(ctx).store, mission_id)
+    if m is None:
+        fail(f"no mission {mission_id} (astiop mission list shows them)")
+    return m
+
+
+@app.command("list")
+def list_missions(
+    ctx: typer.Context,
+    limit: int = typer.Option(20, "--limit", "-n", min=1, max=1000),
+    as_json: bool = typer.Option(False, "--json"),
+) -> None:
+    """The latest missions, newest first."""
+    from astiop.missions import view
+
+    store = state(ctx).store
+    missions = [view.as_json(store, row["id"]) for row in store.missions(limit)]
+    if as_json:
+        print_json(missions)
+        return
+    if not missions:
+        typer.echo("no missions")
+    for m in missions:
+        typer.echo(view.summary(m))
+
+
+@app.command("show")
+def show(
+    ctx: typer.Context, mission_id: int, as_json: bool = typer.Option(False, "--json")
+) -> None:
+    """One mission: each step, how it ended and where the robot was."""
+    from astiop.missions import view
+
+    m = _one(ctx, mission_id)
+    if as_json:
+        print_json(m)
+        return
+    typer.echo(view.summary(m))
+    typer.echo(view.escape_controls(f"request: {m['request']}"))
+    for line in view.step_lines(m):
+        typer.echo(f"  {line}")
+
+
+@app.command("cancel")
+def cancel(
+    ctx: typer.Context, mission_id: int, as_json: bool = typer.Option(False, "--json")
+) -> None:
+    """Cancel a running mission (its process stops the robot) or drop an interrupted one."""
+    m = _one(ctx, mission_id)
+    before = state(ctx).store.request_mission_cancel(mission_id)
+    if before not in ("running", "interrupted"):
+        fail(f"mission {mission_id} is {m['status']}: nothing to cancel")
+    said = "cancel asked of its process" if before == "running" else "dropped"
+    if as_json:
+        print_json({"id": mission_id, "was": before, "now": said})
+    else:
+        typer.echo(f"mission {mission_id}: {said}")
+
+
+@app.command("resume")
+def resume(
+    ctx: typer.Context,
+    mission_id: int,
+    from_step: int = typer.Option(
+        None, "--from", help="Step to resume from (default: the one it was on)."
+    ),
+    yes: bool = typer.Option(False, "--yes", "-y", help="Do not ask before moving the robot."),
+    as_json: bool = typer.Option(False, "--json"),
+) -> None:
+    """Go on with an interrupted mission in this process, and wait for it to end."""
+    from astiop.cli.agent import follow_mission
+    from astiop.cli.common import interactive
+    from astiop.missions import view
+    from astiop.missions.runner import MissionError, MissionRunner
+    from astiop.robot.backend import BackendError
+    from astiop.robot.factory import make_robot_gateway
+
+    st = state(ctx)
+    m = _one(ctx, mission_id)
+    if m["status"] not in ("interrupted", "queued"):
+        fail(f"mission {mission_id} is {m['status']}, not interrupted: nothing to resume")
+    start = from_step or m["step"]
+    if not 1 <= start <= m["steps_total"]:
+        fail(f"--from must be a step of mission {mission_id}: 1 to {m['steps_total']}")
+    rest = "; ".join(s["label"] for s in m["steps"][start - 1 :])
+    if not yes:
+        if not interactive():
+            fail("resuming moves the robot: confirm it with --yes")
+        if not typer.confirm(f"resume mission {mission_id} from step {start}: {rest}?", err=True):
+            fail("not confirmed: nothing was sent to the robot")
+    try:
+        gateway = make_robot_gateway(st.settings, st.store)
+    except BackendError as exc:
+        fail(str(exc))
+
+    def on_step(report) -> None:
+        if not as_json:
+            typer.echo(report.line(), err=True)
+
+    runner = MissionRunner(gateway, st.store, on_step=on_step)
+    gateway.start()
+    try:
+        runner.resume(mission_id, start)
+    except MissionError as exc:
+        gateway.close()
+        fail(str(exc))
+    ending = follow_mission(runner, mission_id)
+    gateway.close()
+    if as_json:
+        print_json(view.as_json(st.store, mission_id))
+    else:
+        typer.echo(ending)
+    Ending.at_once = st.settings.robot.backend != "ros2"
+    final = st.store.mission(mission_id) or {}
+    if final.get("status") != "succeeded":
+        raise typer.Exit(1)
+
+
+def drive_detached(st, mission_id: int) -> Path:
+    """`astiop chat --no-wait`: a process of its own drives the queued mission (`mission
+    resume`), on the same database and robot, after this one has ended; its output goes to a
+    log file beside the database."""
+    robot = st.settings.robot
+    log = Path(st.db_path).parent / "logs" / f"mission-{mission_id}.log"
+    log.parent.mkdir(parents=True, exist_ok=True)
+    argv = [sys.executable, "-m", "astiop", "--db", str(st.db_path), "--robot", robot.backend]
+    argv += ["--ros2-transport", robot.ros2_transport, "mission", "resume", str(mission_id)]
+    with open(log, "ab") as out:
+        subprocess.Popen(
+            [*argv, "--yes"],
+            stdin=subprocess.DEVNULL,
+            stdout=out,
+            stderr=subprocess.STDOUT,
+            start_new_session=True,  # not ended with this process's terminal
+        )
+    return log

@@ -1,0 +1,170 @@
+"""Missions and their steps: every SQL statement about them. A mission is `running` while a live
+process drives it; one whose process is gone is `interrupted` at its step on the next open."""
+
+from __future__ import annotations
+
+import os
+import time
+from typing import Any
+
+# a mission in one of these is over; `interrupted` may still be resumed or dropped
+ENDED = ("succeeded", "failed", "canceled", "stopped", "dropped")
+QUEUED_S = 60.0  # a queued mission no process claimed within this is interrupted
+
+
+class MissionTables:
+    def create_mission(
+        self,
+        robot: str,
+        request: str,
+        source: str,
+        steps: list[tuple[str, str]],
+        queued: bool = False,
+    ) -> int:
+        """A new mission, running in this process, or queued for another to claim (astiop
+        chat --no-wait hands it to a process of its own); steps are (spec JSON, label)."""
+        now = time.time()
+        status, pid = ("queued", None) if queued else ("running", os.getpid())
+        with self._tx():
+            cur = self.db.conn.execute(
+                "INSERT INTO missions (robot, request, source, status, pid, created_at) "
+                "VALUES (?, ?, ?, ?, ?, ?)",
+                [robot, request, source, status, pid, now],
+            )
+            mission_id = int(cur.lastrowid)
+            self.db.conn.executemany(
+                "INSERT INTO mission_steps (mission_id, seq, spec, label) VALUES (?, ?, ?, ?)",
+                [(mission_id, seq, spec, label) for seq, (spec, label) in enumerate(steps)],
+            )
+        return mission_id
+
+    def running_mission(self, robot: str) -> dict[str, Any] | None:
+        """The mission a live process drives on this robot, if any."""
+        self.mark_missions_interrupted()
+        rows = list(
+            self.db.query(
+                "SELECT * FROM missions WHERE robot = ? AND status IN ('running', 'queued') "
+                "ORDER BY id DESC LIMIT 1",
+                [robot],
+            )
+        )
+        return rows[0] if rows else None
+
+    def mission(self, mission_id: int) -> dict[str, Any] | None:
+        rows = list(self.db.query("SELECT * FROM missions WHERE id = ?", [mission_id]))
+        return rows[0] if rows else None
+
+    def latest_mission(self) -> dict[str, Any] | None:
+        rows = list(self.db.query("SELECT * FROM missions ORDER BY id DESC LIMIT 1"))
+        return rows[0] if rows else None
+
+    def missions(self, limit: int = 20) -> list[dict[str, Any]]:
+        return list(self.db.query("SELECT * FROM missions ORDER BY id DESC LIMIT ?", [limit]))
+
+    def mission_steps(self, mission_id: int) -> list[dict[str, Any]]:
+        return list(
+            self.db.query(
+                "SELECT * FROM mission_steps WHERE mission_id = ? ORDER BY seq", [mission_id]
+            )
+        )
+
+    def step_started(self, mission_id: int, seq: int) -> None:
+        with self._tx():
+            self.db.conn.execute(
+                "UPDATE mission_steps SET status = 'running', started_at = ?, ended_at = NULL, "
+                "detail = NULL WHERE mission_id = ? AND seq = ?",
+                [time.time(), mission_id, seq],
+            )
+            self.db.conn.execute("UPDATE missions SET step = ? WHERE id = ?", [seq, mission_id])
+
+    def step_ended(
+        self,
+        mission_id: int,
+        seq: int,
+        status: str,
+        detail: str,
+        pose: tuple[float, float, float] | None,
+        docked: bool | None,
+    ) -> None:
+        x, y, theta = pose if pose is not None else (None, None, None)
+        with self._tx():
+            self.db.conn.execute(
+                "UPDATE mission_steps SET status = ?, detail = ?, ended_at = ?, x = ?, y = ?, "
+                "theta = ?, docked = ? WHERE mission_id = ? AND seq = ?",
+                [status, detail, time.time(), x, y, theta, docked, mission_id, seq],
+            )
+
+    def finish_mission(self, mission_id: int, status: str, reason: str) -> None:
+        with self._tx():
+            self.db.conn.execute(
+                "UPDATE missions SET status = ?, reason = ?, finished_at = ? WHERE id = ?",
+                [status, reason, time.time(), mission_id],
+            )
+
+    def request_mission_cancel(self, mission_id: int) -> str | None:
+        """Ask the process driving a mission to cancel it; an interrupted one is dropped at
+        once. The mission's status before, or None when there is no such mission."""
+        self.mark_missions_interrupted()
+        row = self.mission(mission_id)
+        if row is None:
+            return None
+        with self._tx():
+            if row["status"] == "running":
+                self.db.conn.execute(
+                    "UPDATE missions SET cancel_requested = 1 WHERE id = ?", [mission_id]
+                )
+            elif row["status"] in ("interrupted", "queued"):
+                self.db.conn.execute(
+                    "UPDATE missions SET status = 'dropped', finished_at = ?, "
+                    "reason = 'dropped by the operator' WHERE id = ?",
+                    [time.time(), mission_id],
+                )
+        return row["status"]
+
+    def mission_cancel_requested(self, mission_id: int) -> bool:
+        row = self.db.conn.execute(
+            "SELECT cancel_requested FROM missions WHERE id = ?", [mission_id]
+        ).fetchone()
+        return bool(row and row[0])
+
+    def claim_mission(self, mission_id: int, from_step: int) -> bool:
+        """Resume an interrupted mission in this process; False if it is not interrupted."""
+        with self._tx():
+            cur = self.db.conn.execute(
+                "UPDATE missions SET status = 'running', pid = ?, cancel_requested = 0, "
+                "reason = NULL, finished_at = NULL, step = ? "
+                "WHERE id = ? AND status IN ('interrupted', 'queued')",
+                [os.getpid(), from_step, mission_id],
+            )
+            if cur.rowcount != 1:
+                return False
+            self.db.conn.execute(
+                "UPDATE mission_steps SET status = 'pending', detail = NULL, started_at = NULL, "
+                "ended_at = NULL WHERE mission_id = ? AND seq >= ?",
+                [mission_id, from_step],
+            )
+        return True
+
+    def mark_missions_interrupted(self) -> None:
+        """Missions left `running` by a process that is gone: `interrupted` at their step."""
+        from astiop.store import _alive  # the store's own liveness check
+
+        rows = self.db.conn.execute(
+            "SELECT id, pid, step FROM missions WHERE status = 'running' OR "
+            "(status = 'queued' AND created_at < ?)",
+            [time.time() - QUEUED_S],
+        ).fetchall()
+        dead = [(i, step) for i, pid, step in rows if pid is None or not _alive(pid)]
+        if not dead or self.readonly:
+            return
+        with self._tx():
+            for mission_id, step in dead:
+                self.db.conn.execute(
+                    "UPDATE missions SET status = 'interrupted', reason = ? WHERE id = ?",
+                    [f"the astiop process ended during step {step + 1}", mission_id],
+                )
+                self.db.conn.execute(
+                    "UPDATE mission_steps SET status = 'interrupted' "
+                    "WHERE mission_id = ? AND status = 'running'",
+                    [mission_id],
+                )
