@@ -24,6 +24,7 @@ import yaml
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from astiop.agent import grounding  # noqa: E402
+from astiop.agent.facts import facts_of
 from astiop.agent.models.reply_stream import repeating  # noqa: E402
 from astiop.agent.models.specs import open_endpoint  # noqa: E402
 from astiop.agent.turn import Agent  # noqa: E402
@@ -83,7 +84,7 @@ async def run_one(
     )
     waited = [f"goal {outcome}" for outcome in turn.waited.values()]
     outcome = "succeeded" if "succeeded" in turn.waited.values() else None
-    facts = grounding.facts_of(case.request, turn.commands, outcome, [turn.started, *waited])
+    facts = facts_of(case.request, turn.commands, outcome, [turn.started, *waited])
     return {
         "request": case.request,
         "commands": [c.command for c in turn.commands],

@@ -6,8 +6,8 @@ import re
 import httpx
 import pytest
 
-from astiop.agent import grounding
 from astiop.agent.answer_grammar import _alternatives, answer_grammar, quantities
+from astiop.agent.figures import quantities_in
 from astiop.agent.models.embedded import EmbeddedServer, smollm2_path
 
 BATTERY = "ros2 topic echo --once /battery_status sensor_msgs/msg/BatteryState\n  battery 85.0 %, 27.12 V, 4.40 A, charging"
@@ -80,9 +80,7 @@ def test_the_server_holds_the_model_to_the_grammar():
         text = reply["choices"][0]["message"]["content"]
         assert text and text[0].isupper()
         allowed = [float(q.split()[0]) for q in quantities(results)]
-        assert all(
-            any(abs(v - a) < 1e-9 for a in allowed) for v, _ in grounding.quantities_in(text)
-        )
+        assert all(any(abs(v - a) < 1e-9 for a in allowed) for v, _ in quantities_in(text))
         assert "arrived" not in text.lower() and "99" not in text
     finally:
         server.stop()

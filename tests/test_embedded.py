@@ -8,6 +8,7 @@ import time
 import httpx
 import pytest
 
+from astiop.agent.facts import facts_of
 from astiop.agent.models.embedded import EmbeddedModelError, EmbeddedServer, smollm2_path
 from astiop.agent.models.llm import OpenAIClient
 from astiop.agent.models.specs import LLMEndpoint, parse_spec
@@ -125,7 +126,7 @@ async def test_a_grounded_answer_states_only_what_the_robot_reported(endpoint, s
     from astiop.agent import grounding
 
     result = await make_agent(endpoint, store, 96).turn("is anything blocking the robot?")
-    facts = grounding.facts_of(result.prompt, result.commands)
+    facts = facts_of(result.prompt, result.commands)
     assert result.grounding in ("kept",) or result.grounding.startswith("replaced: ")
     assert grounding.unsupported(result.answer, facts) is None
     assert grounding.missing(result.answer, result.commands) is None

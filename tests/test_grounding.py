@@ -5,6 +5,7 @@ import time
 import pytest
 
 from astiop.agent import grounding
+from astiop.agent.facts import facts_of
 from astiop.agent.models.llm import OpenAIClient
 from astiop.agent.models.reply_stream import repeating
 from astiop.robot.backend import Execution
@@ -32,7 +33,7 @@ def results():
 
 
 def check(answer, *executions, request="?"):
-    facts = grounding.facts_of(request, list(executions))
+    facts = facts_of(request, list(executions))
     return grounding.unsupported(answer, facts) or grounding.missing(answer, list(executions))
 
 
@@ -196,7 +197,7 @@ def test_each_sentence_is_checked_and_only_the_true_ones_stay(results):
     the results never mention (a service, an error) makes it unsupported."""
     bat = results["/battery_status"]
     pct = bat.values["percentage"] * 100
-    facts = grounding.facts_of("what is the battery level?", [bat])
+    facts = facts_of("what is the battery level?", [bat])
     answer = (
         f"The battery is at {pct:.1f} %. "
         "This is measured by the EchoBite-USB system, see the ROS documentation. "
@@ -210,7 +211,7 @@ def test_each_sentence_is_checked_and_only_the_true_ones_stay(results):
     assert text == "" and "GotoPosition" in reason
     # a true sentence that leaves out what the robot reported does not stand alone
     status = results["/robot_status"]
-    facts = grounding.facts_of("status and battery?", [status, bat])
+    facts = facts_of("status and battery?", [status, bat])
     _, reason, _ = grounding.grounded("The robot is idle.", facts, [status, bat])
     assert reason and "battery" in reason
 
@@ -237,7 +238,7 @@ def test_the_parts_of_a_sentence_are_held_one_by_one():
         values={"success": True, "message": "navigating to shipping, 36.5 m along the path"},
         provenance="accepted",
     )
-    facts = grounding.facts_of("go to shipping", [goto], None, ["goal accepted: shipping, 36.5 m"])
+    facts = facts_of("go to shipping", [goto], None, ["goal accepted: shipping, 36.5 m"])
     cases = {
         "The robot is on its way, and it has not been on its way for 36.5 m.": (
             "The robot is on its way.", 1),
@@ -262,7 +263,7 @@ def test_a_goal_no_result_speaks_of_is_not_said():
         executed=True,
         values={"success": True, "message": "stopped"},
     )
-    facts = grounding.facts_of("stop the goal", [stop])  # the request's words are no report
+    facts = facts_of("stop the goal", [stop])  # the request's words are no report
     text, reason, n = grounding.grounded(
         "The robot stopped, and its goal was stopped.", facts, [stop]
     )
@@ -271,6 +272,6 @@ def test_a_goal_no_result_speaks_of_is_not_said():
         stop.command, True, kind="actuate", executed=True,
         values={"success": True, "message": "stopped; goal canceled"},
     )  # fmt: skip
-    facts = grounding.facts_of("stop", [canceled])
+    facts = facts_of("stop", [canceled])
     answer = "The robot stopped, and its goal was canceled."
     assert grounding.grounded(answer, facts, [canceled]) == (answer, None, 0)

@@ -161,6 +161,11 @@ def test_cancel_through_the_store_stops_the_robot_and_one_mission_at_a_time(stor
     assert m["steps"][1]["status"] == "canceled"
     time.sleep(0.2)
     assert gateway.state().status.active_goal == ""
+    assert gateway.state().state_word != "e_stopped", "a cancel does not latch the robot's stop"
+    assert "canceled by the operator" in m["steps"][1]["detail"]
+    after = MissionRunner(gateway, store)  # the robot was not left held: it moves again
+    again = after.start([Step("goto", place="inspection_zone_a")])
+    assert after.wait(60) and store.mission(again)["status"] == "succeeded"
     gateway.close()
 
 

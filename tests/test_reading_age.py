@@ -9,6 +9,7 @@ import time
 import pytest
 
 from astiop.agent import grounding
+from astiop.agent.facts import facts_of
 from astiop.agent.summaries import summarize
 from astiop.config import load_settings
 from astiop.robot.backend import Execution
@@ -36,7 +37,7 @@ def test_a_reading_older_than_two_periods_is_said_with_its_age():
 
 def test_an_answer_that_leaves_out_a_stale_readings_age_is_replaced():
     ex = reading(30.0)
-    facts = grounding.facts_of("what is the battery level?", [ex])
+    facts = facts_of("what is the battery level?", [ex])
     text, gap, _ = grounding.grounded("The battery is at 85.0 %.", facts, [ex])
     assert gap == "it leaves out how old the robot's reading is"
     assert "read 30 s ago" in grounding.factual_answer([ex])
@@ -48,7 +49,7 @@ def test_a_service_that_takes_a_job_on_reads_accepted_not_succeeded():
     values = {"success": True, "message": "navigating to shipping, 36.1 m along the path"}
     ex = Execution(GOTO, True, kind="actuate", executed=True, values=values, provenance="accepted")
     assert summarize(ex).endswith("accepted: navigating to shipping, 36.1 m along the path")
-    facts = grounding.facts_of("go to shipping", [ex])
+    facts = facts_of("go to shipping", [ex])
     kept, reason, _ = grounding.grounded(
         "The robot successfully went to shipping. The goal to shipping was accepted.", facts, [ex]
     )

@@ -13,19 +13,19 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Iterable
-from dataclasses import dataclass, field
-from typing import Any
 
+from astiop.agent.facts import GOAL, Facts
+from astiop.agent.figures import (
+    NUMBER,
+    decimals,
+    figures,
+)
 from astiop.agent.summaries import (
-    STATUS_WORDS,
-    commanded_twist,
-    directions,
     stale_age,
     summarize,
 )
 from astiop.robot.backend import Execution
 
-_NUMBER = re.compile(r"(?<![\w.])-?\d+(?:\.\d+)?(?![\w])")
 _COUNT_WORDS = {
     "no": 0, "zero": 0, "one": 1, "a single": 1, "two": 2, "three": 3, "four": 4, "five": 5,
     "six": 6, "seven": 7, "eight": 8, "nine": 9, "ten": 10,
@@ -93,211 +93,21 @@ OBSTACLE_KINDS = re.compile(
     r"wall of boxes|crate|animal)s?\b",
     re.I,
 )
-_GOAL = re.compile(r"\bgoals?\b", re.I)
-_PLACE_IN_COMMAND = re.compile(r"name:\s*'?([\w-]+)")
-_PLACE_IN_REPORT = re.compile(
-    r"(?:goal accepted|arrived|still going to|stopped short of):? ([\w-]+)"
-)
 # what names a thing: a ROS name, a CamelCase identifier, a code with letters and digits
 _NAMED = re.compile(
     r"(?<![\w/])/[A-Za-z_][\w/]*|\b[A-Z][a-z0-9]+(?:[A-Z][a-z0-9]*)+\b|"
     r"\b(?=[A-Za-z-]*\d)(?=[\d-]*[A-Za-z])[A-Za-z][\w-]*\d[\w-]*\b"
 )
-# a number and the unit written after it; the unit's normal form is the group's name
-_UNIT = re.compile(
-    r"\s*(?:(?P<ms>m/s|m per second|met(?:er|re)s? per second)|(?P<rads>rad/s)|"
-    r"(?P<pct>%|percent\b)|(?P<V>V\b|volts?\b)|(?P<A>A\b|amps?\b|amperes?\b)|"
-    r"(?P<deg>deg\b|degrees?\b)|(?P<m>m\b|met(?:er|re)s?\b))"
-)
-_UNIT_NAMES = {"ms": "m/s", "rads": "rad/s", "pct": "%", "V": "V", "A": "A", "deg": "deg", "m": "m"}
 _DIRECTIONS = {
     "left": "left", "right": "right", "forward": "forward", "forwards": "forward",
     "backward": "backward", "backwards": "backward", "clockwise": "right",
     "counterclockwise": "left", "anticlockwise": "left",
-}  # fmt: skip
-# a word that names what a figure is, and the unit such a figure has
-_QUANTITY_WORDS = {
-    "speed": "m/s", "velocity": "m/s", "fast": "m/s", "voltage": "V", "heading": "deg",
-    "bearing": "deg", "angle": "deg", "battery": "%", "charge": "%", "charged": "%",
-    "percentage": "%",
 }  # fmt: skip
 _QUANTITY_NOUNS = {"m/s": "a speed", "V": "a voltage", "deg": "an angle", "%": "a charge"}
 _CLAUSE = re.compile(r"(;\s+|,\s+(?:and|but)\s+)")  # a sentence's parts, kept with their joints
 _SENTENCE_END = re.compile(r"(?<=[.!?])\s+(?=\S)")
 REPLY_CUT = {"length": "it ran past its token cap", "repetition": "it repeated itself",
              "deadline": "it ran past its deadline"}  # fmt: skip
-
-
-@dataclass
-class Facts:
-    numbers: list[float] = field(default_factory=list)
-    words: set[str] = field(default_factory=set)
-    kinds: set[str] = field(default_factory=set)  # obstacle kinds reported
-    measured: list[float] = field(
-        default_factory=list
-    )  # numbers the results hold (not the request's)
-    places: set[str] = field(
-        default_factory=set
-    )  # named places in this turn's commands and reports
-    text: str = ""  # everything the results and the commands say, lower case (for names)
-    goal_said: bool = False  # a result or command (not the request) speaks of a goal
-    quantities: list[tuple[float, str]] = field(default_factory=list)  # (value, unit) reported
-    directions: set[str] | None = None  # the directions astiop commanded, when it published
-
-
-def _walk(value: Any, key: str = "") -> Iterable[tuple[str, float]]:
-    if isinstance(value, dict):
-        for k, v in value.items():
-            yield from _walk(v, str(k))
-    elif isinstance(value, list):
-        for v in value[:400]:
-            yield from _walk(v, key)
-    elif isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value):
-        yield key, float(value)
-
-
-def _strings(value: Any) -> Iterable[str]:
-    if isinstance(value, dict):
-        for v in value.values():
-            yield from _strings(v)
-    elif isinstance(value, list):
-        for v in value[:100]:
-            yield from _strings(v)
-    elif isinstance(value, str) and len(value) <= 80:
-        yield value.lower()
-
-
-def facts_of(
-    request: str,
-    executions: list[Execution],
-    outcome: str | None = None,
-    reported: Iterable[str] = (),
-) -> Facts:
-    """What this turn's results support; `reported` is other text the robot reported (the
-    started goal's distance to go, a waited goal's outcome)."""
-    facts = Facts()
-    facts.numbers += [float(n) for n in _NUMBER.findall(request)]
-    texts = [request, *reported]
-    for line in reported:
-        facts.quantities += quantities_in(line)
-        numbers = [float(n) for n in _NUMBER.findall(line)]
-        facts.numbers += numbers
-        facts.measured += numbers
-        facts.words |= set(re.findall(r"[a-z_-]+", line.lower()))
-        facts.places |= set(_PLACE_IN_REPORT.findall(line))
-    for ex in executions:
-        facts.numbers += [float(n) for n in _NUMBER.findall(ex.command)]
-        facts.places |= set(_PLACE_IN_COMMAND.findall(ex.command))
-        texts += [ex.command, ex.reason, ex.error]
-        if not ex.executed or ex.error:
-            facts.words.add("error")
-            continue
-        summary = summarize(ex)
-        texts += [ex.output, summary]
-        facts.quantities += quantities_in(summary)
-        if (twist := commanded_twist(ex)) is not None:
-            facts.directions = (facts.directions or set()) | directions(twist)
-        numbers = [float(n) for n in _NUMBER.findall(summary)]
-        facts.numbers += numbers
-        facts.measured += numbers
-        for text in _strings(ex.values):
-            facts.words |= {text, *re.findall(r"[a-z_-]+", text)}
-        for key, v in _walk(ex.values):
-            extra = [v]
-            if key in ("percentage",):
-                extra.append(v * 100)
-            if key in ("theta", "bearing", "angle_min", "angle_max", "yaw", "z", "w"):
-                extra.append(math.degrees(v))
-            facts.numbers += extra
-            facts.measured += extra
-        _words(ex, facts)
-    facts.text = " ".join(t for t in texts if t).lower()
-    # a job the robot accepted (a trip, a dock) is a goal, whether or not a result says so
-    facts.goal_said = "accepted" in facts.words or any(_GOAL.search(t) for t in texts[1:] if t)
-    if outcome == "succeeded":
-        facts.words |= {"arrived", "succeeded", "stopped"}
-    elif outcome:
-        facts.words.add(outcome)
-    return facts
-
-
-def _words(ex: Execution, facts: Facts) -> None:
-    v = ex.values if isinstance(ex.values, dict) else {}
-    cmd = ex.command
-    if "/robot_status" in cmd and "state" in v:
-        facts.words.add(str(v["state"]))
-        if v.get("fault"):
-            facts.words.add("fault")
-        if float(v.get("speed", 0.0)) < 0.05:
-            facts.words.add("stopped")
-        else:
-            facts.words.add("moving")
-        facts.words.add("docked" if v.get("docked") else "undocked")
-        if v.get("e_stopped"):
-            facts.words.add("e_stopped")
-    if "/battery_status" in cmd and "percentage" in v:
-        facts.words.add(STATUS_WORDS.get(v.get("power_supply_status"), "unknown"))
-    if "/conveyor/status" in cmd and "loaded" in v:
-        facts.words.add("loaded" if v["loaded"] else "empty")
-        facts.words.add("running" if v.get("running") else "stopped")
-    if "/obstacles" in cmd and "count" in v:
-        facts.words.add("obstacles" if v["count"] else "clear")
-        facts.kinds |= {str(o.get("kind", "")).lower() for o in v.get("obstacles", [])}
-    if "/diagnostics" in cmd and "status" in v:
-        levels = [s.get("level", 0) for s in v["status"]]
-        facts.words.add("healthy" if all(lv == 0 for lv in levels) else "fault")
-    if "/odom" in cmd and "twist" in v:
-        t = v["twist"]["twist"]["linear"]
-        facts.words.add("moving" if math.hypot(t["x"], t["y"]) >= 0.05 else "stopped")
-    if "success" in v:
-        if not v["success"]:
-            facts.words.add("error")
-        elif ex.provenance != "accepted":  # a goal accepted has not succeeded yet
-            facts.words.add("succeeded")
-        if v["success"] and "/goto_position" in cmd:
-            facts.words |= {"accepted", "navigating", "moving"}
-        if v["success"] and "/stop" in cmd:
-            facts.words.add("stopped")
-        if v["success"] and "/dock" in cmd:
-            facts.words |= {"accepted", "docking", "moving"}
-        if v["success"] and "/undock" in cmd:
-            facts.words |= {"accepted", "undocking", "moving"}
-        if v["success"] and "/conveyor/load" in cmd:
-            facts.words |= {"accepted", "loading"}
-        if v["success"] and "/conveyor/unload" in cmd:
-            facts.words |= {"accepted", "unloading"}
-    if v.get("accepted"):
-        facts.words |= {"accepted", "navigating", "moving"}
-
-
-def quantities_in(text: str) -> list[tuple[float, str]]:
-    """Each number of `text` with the unit written after it ("" when none)."""
-    return [(value, unit) for value, unit, _ in _figures(text)]
-
-
-def written_figures(text: str) -> Iterable[tuple[str, str]]:
-    """Each number of `text` as written, with the unit written after it ("" when none)."""
-    for m in _NUMBER.finditer(text):
-        yield m.group(), _unit_after(text, m.end())
-
-
-def _unit_after(text: str, end: int) -> str:
-    unit = _UNIT.match(text, end)
-    name = next((k for k, v in unit.groupdict().items() if v), "") if unit else ""
-    return _UNIT_NAMES.get(name, "")
-
-
-def _figures(text: str) -> Iterable[tuple[float, str, str]]:
-    """(number, unit, what the clause before it calls it: a unit or "")."""
-    for m in _NUMBER.finditer(text):
-        clause = re.split(r"[,;:]|\band\b", text[: m.start()])[-1].lower()
-        words = re.findall(r"[a-z]+", clause)[-4:]
-        called = next((_QUANTITY_WORDS[w] for w in reversed(words) if w in _QUANTITY_WORDS), "")
-        yield float(m.group()), _unit_after(text, m.end()), called
-
-
-def _decimals(text: str) -> int:
-    return len(text.split(".", 1)[1]) if "." in text else 0
 
 
 def _negated(answer: str, start: int, end: int | None = None) -> bool:
@@ -310,12 +120,12 @@ def _negated(answer: str, start: int, end: int | None = None) -> bool:
 
 def unsupported(answer: str, facts: Facts) -> str | None:
     """The first claim of `answer` the results do not support, as a reason; None if none."""
-    for m in _NUMBER.finditer(answer):
+    for m in NUMBER.finditer(answer):
         claim = float(m.group())
-        tol = 10.0 ** -_decimals(m.group()) + 1e-9
+        tol = 10.0 ** -decimals(m.group()) + 1e-9
         if not any(abs(claim - f) <= tol for f in facts.numbers):
             return f"it states {m.group()}, which no result reported"
-    for value, unit, called in _figures(answer):
+    for value, unit, called in figures(answer):
         if unit and not _reported_as(value, unit, facts):
             return f"it states {value:g} {unit}, which no result reported"
         if unit and called and called != unit:
@@ -353,14 +163,14 @@ def _reported_as(value: float, unit: str, facts: Facts) -> bool:
     """A figure with its unit, as the results gave it (a coordinate without a unit is metres)."""
     for v, u in facts.quantities:
         same = u == unit or (not u and unit == "m")
-        if same and abs(v - value) <= 10.0 ** -_decimals(f"{value:g}") + 1e-9:
+        if same and abs(v - value) <= 10.0 ** -decimals(f"{value:g}") + 1e-9:
             return True
     return False
 
 
 def missing(answer: str, executions: list[Execution]) -> str | None:
     """The first fact a read command reported that the answer leaves out; None if none."""
-    numbers = [float(n) for n in _NUMBER.findall(answer)]
+    numbers = [float(n) for n in NUMBER.findall(answer)]
     text = answer.lower()
 
     def said(value: float, tol: float) -> bool:
@@ -459,7 +269,7 @@ def unnamed(sentence: str, facts: Facts) -> str | None:
         spaced = re.sub(r"(?<=[a-z0-9])(?=[A-Z])", " ", m.group()).lower()
         if name not in facts.text and spaced not in facts.text:
             return f"it names '{m.group()}', which no result mentions"
-    if (m := _GOAL.search(sentence)) and not facts.goal_said:
+    if (m := GOAL.search(sentence)) and not facts.goal_said:
         return f"it speaks of a {m.group().lower()}, which no result mentions"
     return None
 
@@ -468,8 +278,8 @@ def checked_facts(sentence: str, facts: Facts) -> int:
     """How many facts the results hold the sentence states (the request's own numbers and
     words do not count)."""
     n = 0
-    for m in _NUMBER.finditer(sentence):
-        tol = 10.0 ** -_decimals(m.group()) + 1e-9
+    for m in NUMBER.finditer(sentence):
+        tol = 10.0 ** -decimals(m.group()) + 1e-9
         n += any(abs(float(m.group()) - f) <= tol for f in facts.measured)
     lowered = sentence.lower()
     for m in re.finditer(rf"\b({'|'.join(_COUNT_WORDS)})\s+(?:\w+\s+)?{_COUNTED}", lowered):

@@ -26,6 +26,7 @@ from astiop.agent import (
     rules,
 )
 from astiop.agent.answer_grammar import answer_grammar
+from astiop.agent.facts import facts_of
 from astiop.agent.intent import Intent
 from astiop.agent.models.llm import LLMError, LLMHTTPError, LLMTimeout, LLMUnavailable
 from astiop.agent.models.reply_stream import Completion
@@ -341,7 +342,7 @@ class Agent:
         if result.started:
             results += f"\n{result.started} (the robot is on its way; it has not arrived)"
         outcome = "succeeded" if "succeeded" in result.waited.values() else None
-        facts = grounding.facts_of(
+        facts = facts_of(
             request, result.commands, outcome, [result.started, *self._waited_lines(result)]
         )
         messages = prompts.interpret_messages(request, results)

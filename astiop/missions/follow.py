@@ -15,6 +15,7 @@ from astiop.robot.state import LOST
 
 MOVING = ("navigating", "docking", "undocking", "blocked")
 ARRIVED_M = 0.3
+YES = lambda _c: True  # noqa: E731  (the operator approved the mission, and asks its cancel)
 STATUS_LAG_S = 2.0  # a status stream may still say idle this long after a goal starts
 NO_STATUS_S = 15.0  # a robot that reports no status at all: the pose decides after this
 
@@ -82,8 +83,7 @@ def follow_goal(
     ours = first.active_goal if first else ""
     while True:
         if cancel.is_set():
-            gateway.run("ros2 service call /stop std_srvs/srv/Trigger", lambda _c: True)
-            return StepEnd("canceled", f"canceled by the operator during '{step.label()}'")
+            return _cancel_goal(gateway, step)
         if time.monotonic() - t0 > timeout_s:
             return StepEnd("failed", f"did not end within {timeout_s:g} s")
         outcome = gateway.wait_until_idle(0.5)
@@ -104,6 +104,27 @@ def follow_goal(
         if idle and state.state_word not in MOVING and settled:
             break
     return _checked(gateway, step, target, outcome)
+
+
+def _cancel_goal(gateway: RobotGateway, step: Step) -> StepEnd:
+    """End the step's goal without latching the robot: a zero velocity (the ASTIbot's
+    navigation yields to /cmd_vel); if the robot still reports the goal after 2 s, /stop, which
+    holds the robot until it is released, and the answer says so."""
+    said = f"canceled by the operator during '{step.label()}'"
+    spec = gateway.catalog.topics.get("/cmd_vel")
+    if spec is not None:
+        gateway.run(f'ros2 topic pub --once /cmd_vel {spec.type} "{{}}"', YES, source="mission")
+        deadline = time.monotonic() + 2.0
+        while time.monotonic() < deadline:
+            status = gateway.state().status
+            if status is not None and not status.active_goal:
+                return StepEnd("canceled", said)
+            time.sleep(0.1)
+    gateway.run("ros2 service call /stop std_srvs/srv/Trigger", YES, source="mission")
+    return StepEnd(
+        "canceled", f"{said}; the goal went on after a zero velocity, so /stop was called: the "
+        "robot holds until the E-STOP is released (ctrl+r)"
+    )  # fmt: skip
 
 
 def _checked(
