@@ -305,10 +305,10 @@ async def test_every_tab_sees_one_shared_simulated_robot_and_its_estop(tmp_path)
             await asyncio.sleep(2)
             await read_until(second, two, r"pose")
             assert abs(pose_x(two) - settled) < 0.05, "the shared robot stays stopped"
+            processes = descendants(server.pid)
+            assert len(processes) == 3, "two consoles and the simulator"
             await first.close()
             await second.close()
-        processes = descendants(server.pid)
-        assert len(processes) == 3, "two consoles and the simulator"
     finally:
         stop_serve(server)
     assert not any(Path(f"/proc/{pid}").exists() for pid in processes), "nothing outlives it"
