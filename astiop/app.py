@@ -342,10 +342,28 @@ class AstiopApp(App):
     def confirm_from_thread(self, checked: Checked, timeout_s: float | None = None) -> bool:
         """The gateway's confirmation hook, called from a worker thread: ask with a modal that
         shows the command as it will be sent (after clamping)."""
+        return self._ask_from_thread(
+            f"Run this command? It moves the robot.\n\n{sent_text(checked)}", timeout_s
+        )
+
+    def confirm_mission_from_thread(self, steps) -> bool:
+        """A mission is approved whole, every step shown, before its first step runs (as each
+        command is, unless the operator turned confirmation off)."""
+        from astiop.missions.steps import describe
+
+        if not self.services.settings.robot.confirm_actuation:
+            return True
+
+        listed = describe(steps).replace("; ", "\n")
+        return self._ask_from_thread(
+            f"Start this mission of {len(steps)} steps? It moves the robot.\n\n{listed}", None
+        )
+
+    def _ask_from_thread(self, question: str, timeout_s: float | None) -> bool:
         timeout_s = self.confirm_timeout_s if timeout_s is None else timeout_s
         answer: list[bool] = []
         ready = threading.Event()
-        modal = ConfirmModal(f"Run this command? It moves the robot.\n\n{sent_text(checked)}")
+        modal = ConfirmModal(question)
 
         def done(ok: bool | None) -> None:
             answer.append(bool(ok))

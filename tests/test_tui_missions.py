@@ -41,3 +41,27 @@ async def test_escape_cancels_the_running_mission(tmp_path):
         assert store.mission(mission_id)["status"] == "canceled"
         assert "✗ 1. wait 60 s" in panel() and "· 2. undock" in panel()
         assert store.mission_steps(mission_id)[1]["status"] == "pending"  # never started
+
+
+async def test_the_console_asks_once_for_the_whole_mission_every_step_shown(tmp_path):
+    from tests.test_tui_approvals import asked
+
+    app = console(tmp_path)  # confirmation on, as shipped
+    async with app.run_test(size=SIZE) as pilot:
+        from textual.widgets import Input
+
+        await pilot.press("f2")
+        app.screen.query_one(Input).value = "go to shipping, then inspection zone a, then dock"
+        await pilot.press("enter")
+        await wait_for(pilot, lambda: asked(app) != "")
+        question = asked(app)
+        assert "Start this mission of 3 steps?" in question
+        assert "1. go to shipping" in question and "3. dock" in question
+        await pilot.press("n")
+
+        def answers() -> str:
+            return " ".join(str(w.render()) for w in app.screen.query(".answer"))
+
+        await wait_for(pilot, lambda: "Mission not started" in answers())
+        assert app.services.store.missions() == [], "nothing stored as started"
+        assert app.services.gateway.backend.sim.goal is None, "nothing was sent"

@@ -117,6 +117,7 @@ class ChatScreen(ConsoleScreen):
             mode=services.settings.llm.mode,
             max_tokens=services.settings.llm.max_tokens,
             confirm=self.app.confirm_from_thread,
+            confirm_mission=self.app.confirm_mission_from_thread,
             session="console",
         )
         self.query_one(Input).focus()
