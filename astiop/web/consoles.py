@@ -88,6 +88,20 @@ class ConsoleProcess(AppService):
         self.pid = process.pid
         return process
 
+    async def run(self) -> None:
+        """textual-serve's reading of the console's output; when the console's process ends on
+        its own (a crash, a signal: no "exit" message), the tab is told and the end is said."""
+        await super().run()
+        process = self._process
+        if process is None or self.spare:
+            return
+        code = await process.wait()
+        if code != 0:
+            how = f"signal {-code}" if code < 0 else f"exit status {code}"
+            log.error("console %s ended on its own (%s)", self.pid, how)
+        with contextlib.suppress(Exception):
+            await self.remote_close()
+
     async def end(self) -> None:
         """Ask the console to quit; terminate it if it does not, then its whole group."""
         await self.ready()
