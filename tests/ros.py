@@ -84,6 +84,13 @@ class SimNode:
         self.proc.wait(10)
 
 
+def whole_robot(gateway, timeout: float = 60.0) -> None:
+    """Wait until this process has discovered the robot whole (its services and its state): on a
+    loaded machine discovery takes seconds, and a command meanwhile is refused as unknown."""
+    assert gateway.serves("/undock", timeout), sorted(gateway.catalog.services)
+    assert until(lambda: gateway.state().status is not None, timeout), "no /robot_status"
+
+
 @contextlib.contextmanager
 def sim_node(**kw):
     node = SimNode(**kw)

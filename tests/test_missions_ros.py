@@ -13,7 +13,7 @@ from astiop.missions.steps import Step
 from astiop.robot.factory import make_robot_gateway
 from astiop.store import Store
 from tests.emulator import emulated_robot, on_path
-from tests.ros import require_ros, sim_node
+from tests.ros import require_ros, sim_node, whole_robot
 from tests.test_ros2_emulated import make_gateway
 from tests.test_ros2_rclpy import settings
 
@@ -45,6 +45,7 @@ def test_a_mission_on_sim_node_over_dds(tmp_path):
         gateway = make_robot_gateway(settings(tmp_path), store)
         gateway.start()
         try:
+            whole_robot(gateway)
             runner = MissionRunner(gateway, store, step_timeout_s=120)
             mission_id = runner.start(STEPS, "over dds")
             assert runner.wait(240)

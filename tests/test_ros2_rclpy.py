@@ -15,7 +15,7 @@ import pytest
 from astiop.config import load_settings
 from astiop.robot.factory import make_robot_gateway
 from astiop.store import Store
-from tests.ros import require_ros, sim_node, until
+from tests.ros import require_ros, sim_node, until, whole_robot
 
 pytestmark = [pytest.mark.slow, pytest.mark.ros]
 YES = lambda _c: True  # noqa: E731
@@ -38,6 +38,7 @@ def robot_gateway(tmp_path):
         gateway = make_robot_gateway(settings(tmp_path), store)
         gateway.start()
         try:
+            whole_robot(gateway)
             yield gateway
         finally:
             gateway.close()
@@ -45,7 +46,8 @@ def robot_gateway(tmp_path):
 
 
 def undocked(gateway) -> None:
-    gateway.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=YES)
+    r = gateway.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=YES)
+    assert r.executed and r.values["success"], r.reason or r.error or r.output
 
     def idle() -> bool:
         st = gateway.state()
