@@ -55,6 +55,10 @@ class RobotSettings(_Section):
     # packages import, else the CLI
     ros2_transport: Literal["auto", "rclpy", "cli"] = "auto"
     ros2_timeout_s: float = Field(10.0, gt=0, le=3600, allow_inf_nan=False)
+    # which names play which role: auto (matched on the graph), a shipped profile's name
+    # (astibot, turtlebot3_burger, turtlebot3_waffle) or a profile file's path
+    profile: str = "auto"
+    namespace: str = Field("", description="the robot's ROS 2 namespace, e.g. /tb3_1")
 
 
 class SimSettings(_Section):

@@ -20,6 +20,7 @@ from astiop.cli import (
     mission,
     record,
     robot,
+    robot_profile,
     ros2,
     serve,
     sim,
@@ -39,6 +40,7 @@ app.add_typer(bench.app, name="bench")
 app.add_typer(export.app, name="export")
 app.add_typer(ros2.app, name="ros2")
 app.add_typer(mission.app, name="mission")
+app.add_typer(robot_profile.app, name="robot")
 app.command("exec")(robot.exec_command)
 app.command("estop")(robot.estop)
 app.command("chat")(agent.chat)
@@ -75,6 +77,15 @@ def main(
         help="How --robot ros2 talks: rclpy (in process), cli (the ros2 executable) or auto "
         "(rclpy where it and the robot's message packages import).",
     ),
+    namespace: str | None = typer.Option(
+        None, "--namespace", help="The robot's ROS 2 namespace, e.g. /tb3_1 (robot.namespace)."
+    ),
+    profile: str | None = typer.Option(
+        None,
+        "--profile",
+        help="Which names play which role: auto (from the robot's graph), a shipped profile "
+        "(astibot, turtlebot3_burger, turtlebot3_waffle) or a profile file (robot.profile).",
+    ),
     record: str | None = typer.Option(
         None,
         "--record",
@@ -94,6 +105,10 @@ def main(
         overrides.setdefault("robot", {})["backend"] = robot
     if ros2_transport is not None:
         overrides.setdefault("robot", {})["ros2_transport"] = ros2_transport
+    if namespace is not None:
+        overrides.setdefault("robot", {})["namespace"] = namespace
+    if profile is not None:
+        overrides.setdefault("robot", {})["profile"] = profile
     ctx.obj = CliState(overrides=overrides)
     if ctx.invoked_subcommand is None:
         from astiop.cli.console import run_console

@@ -9,16 +9,24 @@ from astiop.sim.simulator import Simulator
 from astiop.store import Store
 
 
-def make_safety(settings: Settings, store: Store | None) -> SafetyPolicy:
+def make_safety(settings: Settings, store: Store | None, profile=None) -> SafetyPolicy:
+    """The settings' limits, lowered to the robot's own where its profile knows them (a
+    TurtleBot3 Burger: 0.22 m/s, not the ASTIbot's 0.8)."""
     bounds = store.bounds if store else (0.0, 0.0, 40.0, 25.0)
 
     def locate(name: str) -> tuple[float, float] | None:
         loc = store.get_location(name) if store else None
         return (loc.x, loc.y) if loc else None
 
+    linear, angular = settings.robot.max_linear_speed, settings.robot.max_angular_speed
+    limits = profile.limits if profile is not None else None
+    if limits is not None and limits.max_linear_speed is not None:
+        linear = min(linear, limits.max_linear_speed)
+    if limits is not None and limits.max_angular_speed is not None:
+        angular = min(angular, limits.max_angular_speed)
     return SafetyPolicy(
-        max_linear=settings.robot.max_linear_speed,
-        max_angular=settings.robot.max_angular_speed,
+        max_linear=linear,
+        max_angular=angular,
         geofence=bounds,
         confirm_actuation=settings.robot.confirm_actuation,
         locate=locate,
@@ -58,6 +66,18 @@ def ros2_transport(settings: Settings) -> tuple[str, str]:
     return ("cli", missing) if missing else ("rclpy", "")
 
 
+def profile_spec(settings: Settings):
+    """What the settings fix of the robot's profile (robot.profile, robot.namespace);
+    BackendError in one line for a profile that cannot be used."""
+    from astiop.robot.backend import BackendError
+    from astiop.ros2.profile_file import ProfileError, read_spec
+
+    try:
+        return read_spec(settings.robot.profile, settings.robot.namespace)
+    except ProfileError as exc:
+        raise BackendError(str(exc)) from None
+
+
 def make_robot_gateway(
     settings: Settings,
     store: Store | None,
@@ -71,20 +91,24 @@ def make_robot_gateway(
     graph first (an E-STOP sends as soon as the base is found); `restore_latch`: `RobotGateway`."""
     if settings.robot.backend == "ros2":
         transport, why = ros2_transport(settings)
+        fixed = profile_spec(settings)
         if transport == "rclpy":
             from astiop.robot.backends.rclpy.backend import RclpyBackend
 
-            backend = RclpyBackend(settings.robot.ros2_timeout_s, discover=discover)
+            backend = RclpyBackend(settings.robot.ros2_timeout_s, discover=discover, fixed=fixed)
         else:
             from astiop.robot.backends.ros2cli.backend import Ros2Backend
 
             backend = Ros2Backend(
-                settings.robot.ros2_executable, settings.robot.ros2_timeout_s, discover=discover
+                settings.robot.ros2_executable,
+                settings.robot.ros2_timeout_s,
+                discover=discover,
+                fixed=fixed,
             )
             backend.label = f"ros2 via the CLI: {why}"
         return RobotGateway(
             backend,
-            make_safety(settings, store),
+            make_safety(settings, store, backend.catalog.profile),
             settings.robot.ros2_timeout_s,
             store=store,
             who=who,

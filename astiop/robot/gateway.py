@@ -18,6 +18,7 @@ from astiop.robot.playback import Playback, PlaysBack
 from astiop.robot.safety import ALWAYS_ALLOWED, Review, SafetyPolicy
 from astiop.robot.state import RobotEvent, RobotState, TopicStat
 from astiop.ros2.catalog import Catalog
+from astiop.ros2.profile import Profile, match_profile
 from astiop.ros2.render import STAMPED
 from astiop.ros2.validation import Checked, validate
 from astiop.store import Store, StoreError
@@ -63,6 +64,12 @@ class RobotGateway:
     @property
     def catalog(self) -> Catalog:
         return self.backend.catalog
+
+    @property
+    def profile(self) -> Profile:
+        """Which of the robot's names play which role (ros2/profile.py)."""
+        cat = self.backend.catalog
+        return cat.profile if cat.profile is not None else match_profile(cat)
 
     @property
     def kind(self) -> str:

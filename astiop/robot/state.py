@@ -202,31 +202,84 @@ def _f(value: Any, default: float = math.nan) -> float:
     return v
 
 
+ASTIBOT_NAMES = {
+    "pose": "/robot_pose",
+    "odometry": "/odom",
+    "battery": "/battery_status",
+    "status": "/robot_status",
+    "scan": "/scan",
+    "obstacles": "/obstacles",
+    "plan": "/plan",
+    "conveyor": "/conveyor/status",
+}
+
+
+def role_names(profile: Any) -> dict[str, str]:
+    """Role -> the robot's topic for the state's roles (the ASTIbot's without a profile)."""
+    if profile is None:
+        return dict(ASTIBOT_NAMES)
+    return {r: profile.name(r) or "" for r in ASTIBOT_NAMES}
+
+
+def _pose(msg: dict[str, Any]) -> Pose2D:
+    """A Pose2D, or the pose of a PoseWithCovarianceStamped or an Odometry."""
+    if "x" in msg:
+        return Pose2D(_f(msg.get("x")), _f(msg.get("y")), _f(msg.get("theta")))
+    p = msg.get("pose", {}).get("pose", {})
+    pos = p.get("position", {})
+    return Pose2D(_f(pos.get("x")), _f(pos.get("y")), yaw_of(p.get("orientation", {})))
+
+
+def battery_fraction(value: Any, units: str | None) -> float:
+    """BatteryState.percentage as 0-1: "percent" robots (a TurtleBot3) send 0-100; a robot that
+    did not say sends the message's 0-1, and a reading over 1 can only be a percentage."""
+    v = _f(value)
+    if units == "percent" or (units is None and v > 1.0):
+        return v / 100.0
+    return v
+
+
+def _ranges(sc: dict[str, Any]) -> np.ndarray:
+    """The beams in m, inf where nothing was hit: sensor_msgs/LaserScan says a range outside
+    [range_min, range_max] is to be discarded (a lidar's no-return 0.0 is not an obstacle)."""
+    ranges = np.array([_f(r, math.inf) for r in sc.get("ranges") or []], dtype=float)
+    lo, hi = _f(sc.get("range_min"), 0.0), _f(sc.get("range_max"), math.inf)
+    bad = ~np.isfinite(ranges) | (ranges <= 0.0) | (ranges < lo) | (ranges > hi)
+    ranges[bad] = math.inf
+    return ranges
+
+
 def from_messages(
-    t: float, messages: dict[str, dict[str, Any]], *, e_stopped: bool = False, event_seq: int = 0
+    t: float,
+    messages: dict[str, dict[str, Any]],
+    *,
+    e_stopped: bool = False,
+    event_seq: int = 0,
+    profile: Any = None,
 ) -> RobotState:
-    """The state from the latest message of each topic (missing topics stay `None`)."""
+    """The state from the latest message of each role's topic (missing roles stay `None`), the
+    names from the robot's profile (ros2/profile.py; the ASTIbot's without one)."""
+    n = role_names(profile)
     pose = velocity = wheels = battery = status = scan = obstacles = conveyor = None
-    if (p := messages.get("/robot_pose")) is not None:
-        pose = Pose2D(_f(p.get("x")), _f(p.get("y")), _f(p.get("theta")))
-    if (o := messages.get("/odom")) is not None:
+    if (p := messages.get(n["pose"])) is not None:
+        pose = _pose(p)
+    if (o := messages.get(n["odometry"])) is not None:
         tw = o.get("twist", {}).get("twist", {})
         lin, ang = tw.get("linear", {}), tw.get("angular", {})
         velocity = (_f(lin.get("x"), 0.0), _f(lin.get("y"), 0.0), _f(ang.get("z"), 0.0))
-        if pose is None:  # a robot without /robot_pose: the odometry pose
-            op = o.get("pose", {}).get("pose", {})
-            pos = op.get("position", {})
-            pose = Pose2D(_f(pos.get("x")), _f(pos.get("y")), yaw_of(op.get("orientation", {})))
+        if pose is None and profile is None:  # no profile to say what the pose is: odometry's
+            pose = _pose(o)
     if velocity is not None and all(math.isfinite(v) for v in velocity):
         wheels = wheel_speeds(*velocity)
-    if (b := messages.get("/battery_status")) is not None:
+    if (b := messages.get(n["battery"])) is not None:
+        units = profile.units.battery_percentage if profile is not None else None
         battery = Battery(
-            _f(b.get("percentage")),
+            battery_fraction(b.get("percentage"), units),
             _f(b.get("voltage")),
             _f(b.get("current")),
             int(_f(b.get("power_supply_status"), 0)) == 1,  # POWER_SUPPLY_STATUS_CHARGING
         )
-    if (s := messages.get("/robot_status")) is not None:
+    if (s := messages.get(n["status"])) is not None:
         status = Status(
             str(s.get("state", "")),
             str(s.get("mode", "")),
@@ -236,16 +289,15 @@ def from_messages(
             bool(s.get("e_stopped", False)),
             bool(s.get("docked", False)),
         )
-    if (sc := messages.get("/scan")) is not None:
-        ranges = np.array([_f(r, math.inf) for r in sc.get("ranges") or []], dtype=float)
+    if (sc := messages.get(n["scan"])) is not None:
         stamp = sc.get("header", {}).get("stamp", {})
         scan = Scan(
             _f(sc.get("angle_min"), -math.pi),
             _f(sc.get("angle_increment"), 0.0),
-            ranges,
+            _ranges(sc),
             _f(stamp.get("sec"), 0.0) + _f(stamp.get("nanosec"), 0.0) * 1e-9,
         )
-    if (ob := messages.get("/obstacles")) is not None:
+    if (ob := messages.get(n["obstacles"])) is not None:
         obstacles = tuple(
             Obstacle(
                 str(o.get("kind", "unknown")),
@@ -258,10 +310,10 @@ def from_messages(
             for o in ob.get("obstacles") or []
         )
     plan: tuple[tuple[float, float], ...] = ()
-    if (pl := messages.get("/plan")) is not None:
+    if (pl := messages.get(n["plan"])) is not None:
         points = [ps.get("pose", {}).get("position", {}) for ps in pl.get("poses") or []]
         plan = tuple((_f(p.get("x")), _f(p.get("y"))) for p in points)
-    if (c := messages.get("/conveyor/status")) is not None:
+    if (c := messages.get(n["conveyor"])) is not None:
         conveyor = Conveyor(
             bool(c.get("running")),
             int(_f(c.get("direction"), 0)),

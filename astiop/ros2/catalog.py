@@ -6,6 +6,10 @@ A contract: prompts, the rules baseline, the benchmark and the tests all use the
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from astiop.ros2.profile import Profile
 
 # The robot's release of its own latched stop: the operator's to call, never the model's
 RELEASE = "/release"
@@ -68,6 +72,7 @@ class Catalog:
     actions: dict[str, ActionSpec] = field(default_factory=dict)
     nodes: tuple[str, ...] = ()
     params: dict[tuple[str, str], ParamSpec] = field(default_factory=dict)
+    profile: Profile | None = None  # which names play which role (ros2/profile.py)
 
     def node_info(self, node: str) -> dict[str, list[tuple[str, str]]]:
         return {
@@ -79,11 +84,14 @@ class Catalog:
 
     def state_topics(self) -> list[str]:
         """The topics the robot's live state is built from, where the robot has them."""
+        if self.profile is not None:
+            return [n for n in self.profile.state_topics() if n in self.topics]
         return [t.name for t in self.topics.values() if t.role == "state"]
 
     def recorded_topics(self) -> list[str]:
         """The topics a session recording keeps, where the robot has them."""
-        return [t.name for t in self.topics.values() if t.role in ("state", "record")]
+        kept = [t.name for t in self.topics.values() if t.role in ("state", "record")]
+        return sorted(set(kept) | set(self.state_topics()))
 
 
 _TOPICS = [
@@ -299,10 +307,14 @@ _PARAMS = [
 
 
 def astibot_catalog() -> Catalog:
-    return Catalog(
+    from astiop.ros2.profile import match_profile
+
+    cat = Catalog(
         topics={t.name: t for t in _TOPICS},
         services={s.name: s for s in _SERVICES},
         actions={a.name: a for a in _ACTIONS},
         nodes=_NODES,
         params={(p.node, p.name): p for p in _PARAMS},
     )
+    cat.profile = match_profile(cat)
+    return cat

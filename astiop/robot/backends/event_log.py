@@ -73,7 +73,7 @@ class EstopWork:
         return [
             e.message
             for e in self.events.since(self._seq)
-            if e.kind == "estop" and e.message not in self._said
+            if e.kind == "estop" and e.severity != "info" and e.message not in self._said
         ]
 
 

@@ -15,7 +15,13 @@ from astiop.ros2.catalog import (  # noqa: F401 - RELEASE: its home for the tran
     TopicSpec,
     astibot_catalog,
 )
+from astiop.ros2.profile import NAVIGATE_TO_POSE, ProfileSpec, match_profile
 from astiop.ros2.render import STAMPED
+
+# Cancels every goal of an action server when sent with a zero goal id and stamp (the E-STOP
+# on a robot without a stop service)
+CANCEL_GOAL = "action_msgs/srv/CancelGoal"
+NAVIGATE = "/navigate_to_pose"  # Nav2's, and the ASTIbot's: the default before the graph is read
 
 # verb -> sorted (name, type) pairs; "node": (name, ""); "param": ("/node name", type)
 GraphLists = dict[str, list[tuple[str, str]]]
@@ -34,6 +40,16 @@ def stop_service_type(catalog: Catalog) -> str:
     return spec.type
 
 
+def navigation_actions(catalog: Catalog, namespace: str) -> list[str]:
+    """The robot's NavigateToPose action servers: an E-STOP on a robot without a stop service
+    cancels every goal of each (another client's too)."""
+    return [
+        a.name
+        for a in catalog.actions.values()
+        if a.type == NAVIGATE_TO_POSE and (not namespace or a.name.startswith(namespace + "/"))
+    ]
+
+
 def _params(known: Catalog, listed: list[tuple[str, str]]) -> dict[tuple[str, str], ParamSpec]:
     """The robot's parameters: astiop's own entry where it has one (limits, writable), else
     read-only with the type the robot gave. Before the robot lists any, astiop's table."""
@@ -49,7 +65,9 @@ def _params(known: Catalog, listed: list[tuple[str, str]]) -> dict[tuple[str, st
     return params
 
 
-def describe_graph(lists: GraphLists) -> Catalog:
+def describe_graph(lists: GraphLists, fixed: ProfileSpec | None = None) -> Catalog:
+    """The catalog of the graph read, with the robot's profile matched on it, over what the
+    operator `fixed` (a profile file, a namespace)."""
     known = astibot_catalog()
     nodes = tuple(n for n, _ in lists["node"]) or known.nodes
     cat = Catalog(nodes=nodes, params=_params(known, lists.get("param", [])))
@@ -67,4 +85,5 @@ def describe_graph(lists: GraphLists) -> Catalog:
     for name, typ in lists["action"]:
         spec = known.actions.get(name)
         cat.actions[name] = spec if spec and spec.type == typ else ActionSpec(name, typ, "?")
+    cat.profile = match_profile(cat, fixed)
     return cat

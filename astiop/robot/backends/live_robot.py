@@ -12,11 +12,12 @@ from astiop.robot.state import LOST
 MOVING = frozenset({"navigating", "docking", "undocking", "blocked"})
 
 
-def without_finished_plan(messages: dict[str, dict[str, Any]]) -> dict[str, dict[str, Any]]:
-    """The state's messages, less the last /plan of a goal that has ended."""
-    status = messages.get("/robot_status") or {}
-    if status.get("state") not in MOVING:
-        messages.pop("/plan", None)
+def without_finished_plan(messages: dict[str, dict[str, Any]], profile: Any) -> dict:
+    """The state's messages, less the last plan of a goal that has ended (on a robot that
+    reports its state; Nav2 publishes a plan only while it plans)."""
+    status_name, plan = (profile.name("status"), profile.name("plan")) if profile else ("", "")
+    if status_name and plan and (messages.get(status_name) or {}).get("state") not in MOVING:
+        messages.pop(plan, None)
     return messages
 
 

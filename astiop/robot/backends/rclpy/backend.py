@@ -11,7 +11,14 @@ from typing import Any
 from astiop.robot.backend import BackendError, RobotBackend
 from astiop.robot.backends import live_robot
 from astiop.robot.backends.event_log import Contact, EstopWork, EventLog
-from astiop.robot.backends.live_catalog import RELEASE, describe_graph, stop_service_type
+from astiop.robot.backends.live_catalog import (
+    CANCEL_GOAL,
+    NAVIGATE,
+    RELEASE,
+    describe_graph,
+    navigation_actions,
+    stop_service_type,
+)
 from astiop.robot.backends.live_robot import MOVING, without_finished_plan
 from astiop.robot.backends.rclpy.graph import read_lists, read_params
 from astiop.robot.backends.rclpy.node import ros_process
@@ -30,6 +37,7 @@ from astiop.robot.state import (
 from astiop.ros2.catalog import Catalog
 from astiop.ros2.grammar import current_distro
 from astiop.ros2.message_objects import interface_class, to_dict, to_message
+from astiop.ros2.profile import ProfileSpec
 from astiop.ros2.render import velocity_message, zero_twist
 
 GRAPH_POLL_S = 1.0
@@ -41,11 +49,11 @@ SILENT_S = 3.0  # a state topic's last message older than this is no longer the 
 TELEOP_HZ = 10.0
 LAPSE_S = 0.5
 ESTOP_BURST_S = 1.0
+ABSENT_S = 2.0  # a robot seen this long without its stop service has none
 # Watched only while wanted: /odom at 50 Hz was most of the console's rclpy cost, and what the
 # state takes from it, /robot_status (speed) and /robot_pose (pose) carry too. Wanted while this
 # process drives, while the robot moves (its status says so), and while a reader (a recording)
 # asks for its messages; always where the robot lacks /robot_pose or /robot_status.
-ON_DEMAND = ("/odom",)
 WANTED_S = 2.0  # an on-demand topic stays watched this long after it was last wanted
 MOVING_SPEED = 0.005  # m/s: /robot_status's speed above this is a robot that moves
 
@@ -55,8 +63,11 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
     capabilities = frozenset({"commands", "teleop"})
     refresh_every_s = 0.0  # the graph is this process's discovery cache: reading it is free
 
-    def __init__(self, timeout_s: float = 10.0, *, discover: bool = True):
+    def __init__(
+        self, timeout_s: float = 10.0, *, discover: bool = True, fixed: ProfileSpec | None = None
+    ):
         self.timeout_s = timeout_s
+        self._fixed = fixed or ProfileSpec()  # what the operator fixed: a file, a namespace
         self.distro = current_distro()
         self.proc = ros_process()
         self.label = f"ros2 via rclpy, {self.distro}, domain {self.proc.domain_id}"
@@ -84,7 +95,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         self._lists = self._discover(DISCOVERY_S if discover else 0.0)
         self._params: list[tuple[str, str]] = []  # read by start(), or when a command needs them
         self._params_of: dict[str, list[tuple[str, str]]] = {}  # node -> its parameters
-        self.catalog: Catalog = describe_graph({**self._lists, "param": self._params})
+        self.catalog: Catalog = describe_graph({**self._lists, "param": self._params}, self._fixed)
         self.refreshed_at = 0.0  # the parameters are not read yet
 
     def _discover(self, settle_s: float) -> dict:
@@ -102,6 +113,12 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         return lists
 
     # -- the live graph --------------------------------------------------------------------
+    def _name(self, role: str, default: str = "") -> str:
+        """The robot's name for `role` (its profile); before the graph is read, `default` under
+        the robot's namespace ("" for a role without a conventional name)."""
+        name = self.catalog.profile.name(role) if self.catalog.profile else None
+        return name or (self._fixed.namespace + default if default else "")
+
     @property
     def robot_nodes(self) -> list[str]:
         """The nodes discovered on the robot's domain (not this process's own)."""
@@ -128,7 +145,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         self._params_of = {n: ps for n, ps in self._params_of.items() if n in nodes}
         self._params = sorted(p for ps in self._params_of.values() for p in ps)
         self._lists = lists
-        self.catalog = describe_graph({**lists, "param": self._params})
+        self.catalog = describe_graph({**lists, "param": self._params}, self._fixed)
         self.refreshed_at = time.monotonic()
         self._watch_state_topics()
         return True
@@ -160,7 +177,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
 
     # -- lifecycle ---------------------------------------------------------------------------
     def start(self) -> None:
-        if "/cmd_vel" in self.catalog.topics:
+        if self._name("velocity_command"):
             self._publisher()  # matched now, so the first key and the E-STOP do not wait for it
         self._watch_state_topics()
         threading.Thread(target=self._graph_loop, name="rclpy-graph", daemon=True).start()
@@ -174,18 +191,19 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
     def _watch_state_topics_locked(self) -> None:
         if self._closed.is_set():
             return  # a refresh that outlived close(): no watch the process would keep
-        for name in self.catalog.state_topics() + ["/map"]:
+        map_name = self._name("map")
+        for name in self.catalog.state_topics() + ([map_name] if map_name else []):
             spec = self.catalog.topics.get(name)
-            if spec is None or name in self._watches or (name == "/map" and self._map_watch):
+            if spec is None or name in self._watches or (name == map_name and self._map_watch):
                 continue
-            if name in ON_DEMAND and not self._is_wanted(name):
+            if name == self._name("odometry") and not self._is_wanted(name):
                 continue
             if not self.proc.node.get_publishers_info_by_topic(name):
                 continue  # subscribed when a publisher appears, with its QoS
-            if name == "/map":
+            if name == map_name:
                 self._map_watch = watch(self.proc, name, spec.type, self._on_map)
                 continue
-            on_message = self._on_message if name == "/robot_status" else None  # its events
+            on_message = self._on_message if name == self._name("status") else None  # events
             w = watch(self.proc, name, spec.type, on_message)
             if w is not None:  # a new dict: the sampler may be iterating the old one
                 self._watches = {**self._watches, name: w}
@@ -194,19 +212,20 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
     def _want(self, name: str) -> None:
         """Keep an on-demand topic watched for WANTED_S from now (the graph thread subscribes it:
         never the caller, who may be the executor's callback or a key press)."""
-        if name in ON_DEMAND:
+        if name == self._name("odometry"):
             self._wanted[name] = time.monotonic() + WANTED_S
             if name not in self._watches:
                 self._poke.set()
 
     def _is_wanted(self, name: str) -> bool:
-        if name == "/odom" and not {"/robot_pose", "/robot_status"} <= self.catalog.topics.keys():
+        profile = self.catalog.profile
+        if profile and (profile.name("pose") == name or not profile.has("status")):
             return True  # the robot's pose or speed has no other source
         return time.monotonic() < self._wanted.get(name, 0.0)
 
     def _drop_unwanted(self) -> None:
         with self._watch_lock:
-            for name in ON_DEMAND:
+            for name in [self._name("odometry")]:
                 w = self._watches.get(name)
                 if w is not None and not self._is_wanted(name):
                     self._watches = {n: v for n, v in self._watches.items() if n != name}
@@ -228,16 +247,18 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
 
     # -- live state --------------------------------------------------------------------------
     def _on_message(self, name: str, msg: Any) -> None:
-        if name == "/robot_status":
+        if name == self._name("status"):
             self.events.status(msg.state, msg.fault)
             if msg.state in MOVING or getattr(msg, "speed", 0.0) > MOVING_SPEED:
-                self._want("/odom")  # its velocity is worth its cost while the robot moves
+                self._want(
+                    self._name("odometry")
+                )  # its velocity is worth its cost while the robot moves
 
-    def _on_map(self, _name: str, msg: Any) -> None:
+    def _on_map(self, name: str, msg: Any) -> None:
         try:
             self._map = grid_from_message(to_dict(msg))
         except (KeyError, TypeError, ValueError) as exc:
-            self.events.add("map", "warning", f"/map could not be read: {exc}")
+            self.events.add("map", "warning", f"{name} could not be read: {exc}")
 
     def _fresh(self, now: float) -> dict[str, dict[str, Any]]:
         """The latest message of each state topic that is not stale: older than three of its
@@ -258,9 +279,12 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
     def state(self) -> RobotState:
         now = time.monotonic()
         messages = self._fresh(now)
-        messages = without_finished_plan(messages)
+        profile = self.catalog.profile
+        messages = without_finished_plan(messages, profile)
         seq = self.events.seq
-        state = from_messages(now - self.t0, messages, e_stopped=self.inflight.held, event_seq=seq)
+        state = from_messages(
+            now - self.t0, messages, e_stopped=self.inflight.held, event_seq=seq, profile=profile
+        )
         return state.with_lost(self._lost_for(now))
 
     def messages(self, names) -> dict[str, dict[str, Any]]:
@@ -287,7 +311,8 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         return self.events.since(seq)
 
     def topic_stats(self) -> list[TopicStat]:
-        watches = {**self._watches, **({"/map": self._map_watch} if self._map_watch else {})}
+        map_watch = {self._name("map", "/map"): self._map_watch} if self._map_watch else {}
+        watches = {**self._watches, **map_watch}
         return live_topic_stats(self.catalog.topics, watches, time.monotonic())
 
     def map_geometry(self):
@@ -295,7 +320,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
 
     def wait_until_idle(self, timeout_s: float) -> str | None:
         def state() -> str | None:
-            status = self._watches.get("/robot_status")
+            status = self._watches.get(self._name("status"))
             return (status.latest() or {}).get("state") if status else None
 
         return live_robot.wait_until_idle(
@@ -315,18 +340,20 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         if self._cmd_vel is None:
             type_ = self._cmd_vel_type()
             cls = interface_class(type_)
-            self._cmd_vel = (self.proc.node.create_publisher(cls, "/cmd_vel", 10), cls, type_)
+            name = self._name("velocity_command", "/cmd_vel")
+            self._cmd_vel = (self.proc.node.create_publisher(cls, name, 10), cls, type_)
         return self._cmd_vel
 
     def _cmd_vel_type(self) -> str:
-        spec = self.catalog.topics.get("/cmd_vel")
+        name = self._name("velocity_command", "/cmd_vel")
+        spec = self.catalog.topics.get(name)
         if spec is not None:
             return spec.type
         # a process that did not wait for discovery (astiop estop): the base's subscription
-        infos = self.proc.node.get_subscriptions_info_by_topic("/cmd_vel")
+        infos = self.proc.node.get_subscriptions_info_by_topic(name)
         if infos:
             return infos[0].topic_type
-        raise BackendError("the robot has no /cmd_vel")
+        raise BackendError(f"the robot has no {name}")
 
     def _send_twist(self, twist: dict) -> None:
         pub, cls, type_ = self._publisher()
@@ -349,7 +376,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
             self._holding.set()
         with job.sending():
             self._send_twist(twist)  # now, not at the next tick
-        self._want("/odom")  # the velocity it makes, after it is sent
+        self._want(self._name("odometry"))  # the velocity it makes, after it is sent
 
     def _drop_hold(self) -> None:
         with self._lock:
@@ -374,7 +401,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
                         self._send_twist(twist)
             except Exception as exc:  # noqa: BLE001
                 if job is None or not job.ended_by_estop:  # else: its own zero Twists follow
-                    self.events.add("teleop", "error", f"/cmd_vel: {exc}")
+                    self.events.add("teleop", "error", f"velocity command: {exc}")
             finally:
                 if lapsed and job is not None:
                     job.done()
@@ -390,15 +417,63 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         failures = self.inflight.stop_all()
         self._estop.begin()
         try:
-            if "/cmd_vel" in self.catalog.topics:
+            if self._name("velocity_command"):
                 self._send_twist(zero_twist())  # matched already in a running console
             self._estop.start(self._zero_burst, "estop-zero")
         except Exception as exc:  # noqa: BLE001 - /stop and the cancels go out regardless
             failures.append(f"{exc}: no zero Twist was sent")
-        stop_type = stop_service_type(self.catalog)  # a young process may not have seen it yet
-        self._estop.start(lambda: self._call_stop(stop_type), "estop-stop")
+        read = bool(self._lists["node"])  # a new process's E-STOP does not wait for the graph
+        stop = self._name("stop") if read else self._fixed.namespace + "/stop"
+        if stop:
+            stop_type = stop_service_type(self.catalog)  # a young process may not have seen it
+            call = self._trigger if read else self._call_if_served
+            self._estop.start(lambda: call(stop, stop_type, "E-STOP"), "estop-stop")
+        # a robot without a stop service (a TurtleBot3 under Nav2): every goal on it cancelled,
+        # another client's too, not only this process's own; before the graph is read, both
+        actions = (
+            navigation_actions(self.catalog, self._fixed.namespace)
+            if read
+            else [self._fixed.namespace + NAVIGATE]
+        )
+        for action in actions if not read or not stop else []:
+            self._estop.start(lambda a=action: self._cancel_every_goal(a), "estop-cancel")
+        if read and not stop:
+            failures.append(
+                f"the robot has no stop service ({self._fixed.namespace}/stop): "
+                "its navigation goals were cancelled instead"
+            )
         self._estop.said(failures)
         return failures
+
+    def _call_if_served(self, name: str, type_: str, what: str) -> None:
+        """An E-STOP's service in a process that did not read the graph: called once served; a
+        robot seen without it for ABSENT_S (its velocity's subscriber found) has none: said,
+        not a failure (a TurtleBot3 has no /stop; its goals are cancelled instead)."""
+        client = self.proc.client(interface_class(type_), name)
+        deadline, seen = time.monotonic() + self.timeout_s, None
+        velocity = self._name("velocity_command", "/cmd_vel")
+        while not client.wait_for_service(timeout_sec=0.2):
+            now = time.monotonic()
+            if self.proc.node.get_subscriptions_info_by_topic(velocity):
+                seen = seen or now
+                if now - seen > ABSENT_S:
+                    self.events.add("estop", "info", f"{what}: the robot serves no {name}")
+                    return
+            if now > deadline:
+                self.events.add(
+                    "estop", "error", f"{what}: no {name} answered within {self.timeout_s:g} s"
+                )
+                return
+        self._trigger(name, type_, what)
+
+    def _cancel_every_goal(self, action: str) -> None:
+        """A CancelGoal with a zero goal id and a zero stamp cancels every goal of the action
+        server (ros2/rcl_interfaces action_msgs/srv/CancelGoal.srv, humble and jazzy)."""
+        name, what = f"{action}/_action/cancel_goal", "E-STOP cancel"
+        if self._lists["node"]:
+            self._trigger(name, CANCEL_GOAL, what)
+        else:
+            self._call_if_served(name, CANCEL_GOAL, what)
 
     def _zero_burst(self) -> None:
         """A zero Twist at 10 Hz for a second from when the base listens (in a new process,
@@ -425,9 +500,6 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
                 time.sleep(1.0 / TELEOP_HZ)
         except Exception as exc:  # noqa: BLE001 - said, never raised: /stop goes on
             self.events.add("estop", "error", f"E-STOP zero Twist: {exc}")
-
-    def _call_stop(self, type_: str) -> None:
-        self._trigger("/stop", type_, "E-STOP")
 
     def _trigger(self, name: str, type_: str, what: str) -> None:
         """Call a service with an empty request; a failure is said as an event, never raised."""

@@ -15,7 +15,13 @@ from typing import Any
 from astiop.robot.backend import BackendError, RobotBackend
 from astiop.robot.backends import live_robot
 from astiop.robot.backends.event_log import Contact, EstopWork, EventLog
-from astiop.robot.backends.live_catalog import RELEASE, nothing_listed, stop_service_type
+from astiop.robot.backends.live_catalog import (
+    CANCEL_GOAL,
+    RELEASE,
+    navigation_actions,
+    nothing_listed,
+    stop_service_type,
+)
 from astiop.robot.backends.live_robot import without_finished_plan
 from astiop.robot.backends.ros2cli import process as ros2_process
 from astiop.robot.backends.ros2cli.graph import GraphReader
@@ -45,6 +51,7 @@ from astiop.robot.state import (
 from astiop.ros2.grammar import current_distro
 from astiop.ros2.interfaces import decode_bytes
 from astiop.ros2.printing import echo_text
+from astiop.ros2.profile import ProfileSpec
 from astiop.ros2.render import STAMPED, flow_yaml, sent_argv
 from astiop.ros2.validation import Checked
 
@@ -58,9 +65,9 @@ def _waited_for_service(out: str) -> bool:
     return "waiting for service" in out and "response:" not in out
 
 
-def _zero_burst(type_: str) -> list[str]:
+def _zero_burst(name: str, type_: str) -> list[str]:
     """`ros2 topic pub` of the E-STOP's zero Twists."""
-    return ["topic", "pub", *ESTOP_BURST, "/cmd_vel", type_, flow_yaml(zero_message(type_))]
+    return ["topic", "pub", *ESTOP_BURST, name, type_, flow_yaml(zero_message(type_))]
 
 
 class Ros2Backend(RobotBackend):
@@ -74,6 +81,7 @@ class Ros2Backend(RobotBackend):
         *,
         stream: bool = True,
         discover: bool = True,
+        fixed: ProfileSpec | None = None,
     ):
         """`discover=False` (an E-STOP from a new process): the graph is not read first (a
         `daemon start`, then up to three rounds of five list calls: 10-25 s with the real CLI)."""
@@ -103,12 +111,19 @@ class Ros2Backend(RobotBackend):
         self._estop = EstopWork(self.events)
         self._contact = Contact(self.events, on_return=self._rearm)
         self._closed = threading.Event()
-        self._graph = GraphReader(self._run, timeout_s)
+        self._fixed = fixed or ProfileSpec()  # what the operator fixed: a file, a namespace
+        self._graph = GraphReader(self._run, timeout_s, self._fixed)
         self.discovered = discover
         self.catalog = self._graph.read() if discover else self._graph.describe(nothing_listed())
         self.refreshed_at = time.monotonic()
 
     # -- the live graph -----------------------------------------------------------------
+    def _name(self, role: str, default: str = "") -> str:
+        """The robot's name for `role` (its profile); before the graph is read, `default` under
+        the robot's namespace ("" for a role without a conventional name)."""
+        name = self.catalog.profile.name(role) if self.catalog.profile else None
+        return name or (self._fixed.namespace + default if default else "")
+
     def _run(self, argv: list[str], timeout: float, **kw) -> ros2_process.Run:
         """`ros2 ARGV`; inside an actuating command's job, the E-STOP kills it."""
         job = self.inflight.current_job()
@@ -129,7 +144,7 @@ class Ros2Backend(RobotBackend):
 
     # -- lifecycle ------------------------------------------------------------------------
     def start(self) -> None:
-        cmd_vel = self.catalog.topics.get("/cmd_vel")
+        cmd_vel = self.catalog.topics.get(self._name("velocity_command"))
         if cmd_vel is not None:
             self._teleop = TeleopPublisher(
                 self.executable, cmd_vel.name, cmd_vel.type, on_lapse=self._teleop_lapsed
@@ -140,17 +155,18 @@ class Ros2Backend(RobotBackend):
                     self._armed.arm()
         if not self.stream:
             return
-        # /odom only when /robot_pose is absent (50 Hz of YAML costs more than it tells)
+        # odometry only when it is the pose (50 Hz of YAML costs more than it tells)
         names = self.catalog.state_topics()
-        if "/robot_pose" in names and "/odom" in names:
-            names.remove("/odom")
+        odom = self._name("odometry")
+        if odom in names and self._name("pose") != odom and self._name("status"):
+            names.remove(odom)
         for name in names:
             extra = ("--full-length",) if name in ARRAYS else ()
             spec = self.catalog.topics[name]
             self._streams[name] = TopicStream(
                 self.executable, name, spec.type, self._on_message, self.events.add, extra
             ).start()
-        if "/map" in self.catalog.topics:
+        if self._name("map"):
             threading.Thread(target=self._read_map, name="ros2-map", daemon=True).start()
         threading.Thread(target=self._refresh_loop, name="ros2-graph", daemon=True).start()
 
@@ -168,7 +184,7 @@ class Ros2Backend(RobotBackend):
 
     # -- live state -----------------------------------------------------------------------
     def _on_message(self, name: str, msg: dict[str, Any], received: float) -> None:
-        if name == "/robot_status":
+        if name == self._name("status"):
             self.events.status(str(msg.get("state")), str(msg.get("fault") or ""))
         with self._lock:
             self._latest[name] = msg
@@ -181,9 +197,12 @@ class Ros2Backend(RobotBackend):
         with self._lock:
             messages = dict(self._latest)
         seq = self.events.seq
-        messages = without_finished_plan(messages)
+        profile = self.catalog.profile
+        messages = without_finished_plan(messages, profile)
         now = time.monotonic()
-        state = from_messages(now - self.t0, messages, e_stopped=self.inflight.held, event_seq=seq)
+        state = from_messages(
+            now - self.t0, messages, e_stopped=self.inflight.held, event_seq=seq, profile=profile
+        )
         return state.with_lost(self._lost_for(now))
 
     def _lost_for(self, now: float) -> float | None:
@@ -214,23 +233,24 @@ class Ros2Backend(RobotBackend):
         return self._map
 
     def _read_map(self) -> None:
-        spec = self.catalog.topics["/map"]
-        argv = ["topic", "echo", "/map", spec.type, "--once", "--full-length"]
+        name = self._name("map")
+        spec = self.catalog.topics[name]
+        argv = ["topic", "echo", name, spec.type, "--once", "--full-length"]
         argv += ["--qos-durability", "transient_local", "--qos-reliability", "reliable"]
         run = self._run(argv, 30.0)
         doc = parse_document(run.out.split("\n---", 1)[0].splitlines(keepends=True))
         if doc is None:
-            self.events.add("map", "warning", "no /map received: the map view follows the scan")
+            self.events.add("map", "warning", f"no {name} received: the map view follows the scan")
             return
         try:
             self._map = grid_from_message(doc)
         except (KeyError, TypeError, ValueError) as exc:
-            self.events.add("map", "warning", f"/map could not be read: {exc}")
+            self.events.add("map", "warning", f"{name} could not be read: {exc}")
 
     def wait_until_idle(self, timeout_s: float) -> str | None:
         def state() -> str | None:
             with self._lock:
-                return (self._latest.get("/robot_status") or {}).get("state")
+                return (self._latest.get(self._name("status")) or {}).get("state")
 
         # a goal's client is followed until its last line is read (its outcome), not only
         # until its process exits: the follower drops it from the list then
@@ -255,21 +275,32 @@ class Ros2Backend(RobotBackend):
         if self._teleop is not None:
             self._teleop.halt()
         self._estop.begin()
-        cmd_vel = self.catalog.topics.get("/cmd_vel")
+        cmd_vel = self.catalog.topics.get(self._name("velocity_command"))
         fired = self._armed.fire() if self._armed is not None else None
         if fired is not None:
-            self._estop.start(lambda: self._reap(fired, "zero /cmd_vel"), "estop zero /cmd_vel")
+            self._estop.start(lambda: self._reap(fired, "zero velocity"), "estop zero velocity")
         elif cmd_vel is not None:
-            self._background(lambda: _zero_burst(cmd_vel.type), "zero /cmd_vel", ZERO_PUB_S)
+            burst = _zero_burst(cmd_vel.name, cmd_vel.type)
+            self._background(lambda: burst, "zero velocity", ZERO_PUB_S)
         elif not self.discovered:  # its type asked of the robot first, in the same thread
-            self._background(self._typed_zero_burst, "zero /cmd_vel", ZERO_PUB_S)
+            self._background(self._typed_zero_burst, "zero velocity", ZERO_PUB_S)
         else:
-            failures.append("the robot has no /cmd_vel: no zero Twist was sent")
-        if "/stop" in self.catalog.services or not self.discovered:
+            failures.append("the robot has no velocity command: no zero Twist was sent")
+        stop = self._name("stop") if self.discovered else self._fixed.namespace + "/stop"
+        if stop:
             stop_type = stop_service_type(self.catalog)  # not read yet: the catalog's type
-            self._background(lambda: ["service", "call", "/stop", stop_type, "{}"], "/stop")
-        else:
-            failures.append("the robot has no /stop service: goals were canceled directly")
+            self._background(lambda: ["service", "call", stop, stop_type, "{}"], stop)
+        if not stop:
+            # no stop service (a TurtleBot3 under Nav2): every navigation goal on the robot
+            # cancelled, another client's too (action_msgs/srv/CancelGoal: a zero id and stamp
+            # cancel all, ros2/rcl_interfaces humble and jazzy)
+            for action in navigation_actions(self.catalog, self._fixed.namespace):
+                call = ["service", "call", f"{action}/_action/cancel_goal", CANCEL_GOAL, "{}"]
+                self._background(lambda call=call: call, f"cancel every {action} goal")
+            failures.append(
+                f"the robot has no stop service ({self._fixed.namespace}/stop): "
+                "its navigation goals were cancelled instead"
+            )
         self._estop.said(failures)
         return failures
 
@@ -287,10 +318,11 @@ class Ros2Backend(RobotBackend):
         deadline = time.monotonic() + self.timeout_s
         while True:
             left = deadline - time.monotonic()
-            run = self._run(["topic", "type", "/cmd_vel"], max(left, 0.1))
+            name = self._fixed.namespace + "/cmd_vel"
+            run = self._run(["topic", "type", name], max(left, 0.1))
             types = run.out.split() if run.returncode == 0 else []
             if types:  # a TwistStamped base's, when a Twist is listed too (as describe_graph)
-                return _zero_burst(STAMPED if STAMPED in types else types[0])
+                return _zero_burst(name, STAMPED if STAMPED in types else types[0])
             if run.stopped or time.monotonic() + 0.1 >= deadline:
                 # stderr is no failure by itself (rcl warns there), but it may say why
                 said = f" ({run.err.strip()[-200:]})" if run.err.strip() else ""

@@ -10,15 +10,17 @@ from concurrent.futures import ThreadPoolExecutor
 from astiop.robot.backend import BackendError
 from astiop.robot.backends.live_catalog import VERBS, describe_graph
 from astiop.ros2.catalog import Catalog
+from astiop.ros2.profile import ProfileSpec
 
 _LISTED = re.compile(r"^(?P<name>/\S*)\s+\[(?P<type>[^\]]+)\]\s*$")
 _PARAM_LINE = re.compile(r"^  (?P<name>\S+)(?: \(type: (?P<type>[^)]+)\))?\s*$")
 
 
 class GraphReader:
-    def __init__(self, run: Callable, timeout_s: float):
+    def __init__(self, run: Callable, timeout_s: float, fixed: ProfileSpec | None = None):
         self.run = run  # (argv, timeout) -> ros2_process.Run
         self.timeout_s = timeout_s
+        self.fixed = fixed  # what the operator fixed of the robot's profile
 
     def read(self) -> Catalog:
         """The live graph, described with our catalog where names match. A daemon that was
@@ -70,4 +72,4 @@ class GraphReader:
         return sorted(pairs)
 
     def describe(self, lists: dict[str, list[tuple[str, str]]]) -> Catalog:
-        return describe_graph(lists)
+        return describe_graph(lists, self.fixed)

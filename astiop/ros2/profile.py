@@ -1,0 +1,350 @@
+"""The robot's profile: which of its topics, services and actions play which role, matched on
+its graph by type first, then by conventional names, so astiop speaks of roles ("battery",
+"pose") and the profile supplies the names (`/battery_status` on the ASTIbot, `/battery_state`
+on a TurtleBot3). A profile file (profile_file.py) fixes what matching cannot know."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from astiop.ros2.catalog import Catalog
+
+POSE2D = "geometry_msgs/msg/Pose2D"
+AMCL_POSE = "geometry_msgs/msg/PoseWithCovarianceStamped"
+ODOMETRY = "nav_msgs/msg/Odometry"
+TWIST = "geometry_msgs/msg/Twist"
+TWIST_STAMPED = "geometry_msgs/msg/TwistStamped"
+TRIGGER = "std_srvs/srv/Trigger"
+NAVIGATE_TO_POSE = "nav2_msgs/action/NavigateToPose"
+
+
+@dataclass(frozen=True)
+class Role:
+    """How one role is found: the kinds and types that may play it (in order of preference),
+    names preferred among several candidates, and names that never play it."""
+
+    name: str
+    kinds: tuple[tuple[str, str], ...]  # (topic | service | action, type), best first
+    names: tuple[str, ...] = ()  # conventional names, best first, without the namespace
+    never: tuple[str, ...] = ()  # a name holding one of these words is not a candidate
+    state: bool = False  # the live state is built from it: watched, recorded
+    by_name_only: bool = False  # its type is too common (Trigger): only its names play it
+    description: str = ""
+
+
+ROLES: tuple[Role, ...] = (
+    Role(
+        "pose",
+        (("topic", POSE2D), ("topic", AMCL_POSE), ("topic", ODOMETRY)),
+        ("/robot_pose", "/amcl_pose", "/pose", "/odom"),
+        never=("initial", "goal"),
+        state=True,
+        description="where the robot is in the map",
+    ),
+    Role("odometry", (("topic", ODOMETRY),), ("/odom",), state=True, description="velocity"),
+    Role(
+        "battery",
+        (("topic", "sensor_msgs/msg/BatteryState"),),
+        ("/battery_status", "/battery_state", "/battery"),
+        state=True,
+        description="charge, voltage, current",
+    ),
+    Role(
+        "scan",
+        (("topic", "sensor_msgs/msg/LaserScan"),),
+        ("/scan",),
+        never=("filtered_out",),
+        state=True,
+        description="the lidar",
+    ),
+    Role(
+        "map",
+        (("topic", "nav_msgs/msg/OccupancyGrid"),),
+        ("/map",),
+        never=("costmap", "updates"),
+        description="the occupancy grid the robot navigates on",
+    ),
+    Role(
+        "velocity_command",
+        (("topic", TWIST), ("topic", TWIST_STAMPED)),
+        ("/cmd_vel",),
+        never=("_nav", "smoothed", "teleop", "unstamped"),
+        description="drives the base",
+    ),
+    Role(
+        "navigation",
+        (
+            ("action", NAVIGATE_TO_POSE),
+            ("service", "astiop_msgs/srv/GotoPosition"),
+            ("topic", "geometry_msgs/msg/PoseStamped"),
+        ),
+        ("/navigate_to_pose", "/goto_position", "/goal_pose"),
+        never=("initial", "waypoint", "through"),
+        description="sends the robot to a pose",
+    ),
+    Role(
+        "plan",
+        (("topic", "nav_msgs/msg/Path"),),
+        ("/plan",),
+        never=("local", "received", "unsmoothed", "transformed"),
+        state=True,
+    ),
+    Role("stop", (("service", TRIGGER),), ("/stop",), by_name_only=True, description="stops"),
+    Role("release", (("service", TRIGGER),), ("/release",), by_name_only=True),
+    Role(
+        "dock",
+        (("service", TRIGGER), ("action", "nav2_msgs/action/DockRobot")),
+        ("/dock", "/dock_robot"),
+        by_name_only=True,
+    ),
+    Role(
+        "undock",
+        (("service", TRIGGER), ("action", "nav2_msgs/action/UndockRobot")),
+        ("/undock", "/undock_robot"),
+        by_name_only=True,
+    ),
+    Role(
+        "status",
+        (("topic", "astiop_msgs/msg/RobotStatus"),),
+        ("/robot_status",),
+        state=True,
+        description="state, mode, goal, fault, speed",
+    ),
+    Role(
+        "diagnostics",
+        (("topic", "diagnostic_msgs/msg/DiagnosticArray"),),
+        ("/diagnostics",),
+        never=("agg", "toplevel"),
+        description="health and faults",
+    ),
+    Role("obstacles", (("topic", "astiop_msgs/msg/ObstacleArray"),), ("/obstacles",), state=True),
+    Role(
+        "conveyor",
+        (("topic", "astiop_msgs/msg/ConveyorStatus"),),
+        ("/conveyor/status",),
+        state=True,
+    ),
+    Role("save_location", (("service", "astiop_msgs/srv/SaveLocation"),), ("/save_location",)),
+    Role("list_locations", (("service", "astiop_msgs/srv/ListLocations"),), ("/list_locations",)),
+)
+ROLE_NAMES = tuple(r.name for r in ROLES)
+_BY_NAME = {r.name: r for r in ROLES}
+
+
+@dataclass(frozen=True)
+class Match:
+    role: str
+    kind: str  # topic | service | action; "" when nothing plays the role
+    name: str  # the full name on the robot's graph, namespace included
+    type: str
+    why: str  # "type …", "name …", "the profile file", or why nothing matched
+
+
+@dataclass(frozen=True)
+class Units:
+    # "fraction" as sensor_msgs/BatteryState defines it (0-1), or "percent" (0-100, as a
+    # TurtleBot3 fills it); None: not said (read as a fraction, a reading over 1 as percent)
+    battery_percentage: str | None = None
+
+    def over(self, base: Units) -> Units:
+        return Units(self.battery_percentage or base.battery_percentage)
+
+
+@dataclass(frozen=True)
+class Limits:
+    max_linear_speed: float | None = None  # m/s
+    max_angular_speed: float | None = None  # rad/s
+    radius: float | None = None  # m, the body's footprint
+
+    def over(self, base: Limits) -> Limits:
+        return Limits(
+            *(
+                mine if mine is not None else theirs
+                for mine, theirs in (
+                    (self.max_linear_speed, base.max_linear_speed),
+                    (self.max_angular_speed, base.max_angular_speed),
+                    (self.radius, base.radius),
+                )
+            )
+        )
+
+
+@dataclass(frozen=True)
+class ProfileSpec:
+    """What the operator fixed (a profile file, --namespace): names by role ("" = the robot
+    has none), units, limits; everything else is matched on the graph."""
+
+    make: str = ""  # "" until known: then read from the graph (see `recognise`)
+    namespace: str = ""
+    roles: dict[str, str] = field(default_factory=dict)
+    units: Units = Units()
+    limits: Limits = Limits()
+    source: str = ""  # where it was read: a file's path, "shipped astibot", ""
+
+
+@dataclass(frozen=True)
+class Profile:
+    make: str  # astibot, turtlebot3_burger, ..., or "unknown"
+    namespace: str
+    matches: dict[str, Match]
+    units: Units
+    limits: Limits
+    source: str  # "the graph", or the profile file and the graph
+
+    def name(self, role: str) -> str | None:
+        """The robot's name for `role`, or None when nothing on the robot plays it."""
+        m = self.matches.get(role)
+        return m.name if m is not None and m.name else None
+
+    def has(self, role: str) -> bool:
+        return self.name(role) is not None
+
+    def kind(self, role: str) -> str:
+        m = self.matches.get(role)
+        return m.kind if m is not None else ""
+
+    def missing(self) -> list[str]:
+        return [r for r in ROLE_NAMES if not self.has(r)]
+
+    def state_topics(self) -> list[str]:
+        """The topics the live state is built from, where the robot has them."""
+        return sorted(
+            {m.name for m in self.matches.values() if m.kind == "topic" and _BY_NAME[m.role].state}
+        )
+
+    def as_dict(self) -> dict:
+        return {
+            "make": self.make,
+            "namespace": self.namespace,
+            "source": self.source,
+            "roles": {
+                r: {"kind": m.kind, "name": m.name, "type": m.type, "why": m.why}
+                for r, m in self.matches.items()
+            },
+            "missing": self.missing(),
+            "units": {"battery_percentage": self.units.battery_percentage or "fraction"},
+            "limits": {
+                k: v
+                for k, v in (
+                    ("max_linear_speed", self.limits.max_linear_speed),
+                    ("max_angular_speed", self.limits.max_angular_speed),
+                    ("radius", self.limits.radius),
+                )
+                if v is not None
+            },
+        }
+
+
+def normalise_namespace(ns: str) -> str:
+    """ "/tb3_1", "tb3_1/" -> "/tb3_1"; "" or "/" -> ""; ValueError when not a ROS name."""
+    ns = ns.strip().strip("/")
+    if not ns:
+        return ""
+    for part in ns.split("/"):
+        if not part or not (part[0].isalpha() or part[0] == "_"):
+            raise ValueError(f"not a ROS 2 namespace: /{ns}")
+        if not all(c.isalnum() or c == "_" for c in part):
+            raise ValueError(f"not a ROS 2 namespace: /{ns}")
+    return "/" + ns
+
+
+def _entries(catalog: Catalog, kind: str) -> dict[str, str]:
+    table = {"topic": catalog.topics, "service": catalog.services, "action": catalog.actions}
+    return {name: spec.type for name, spec in table[kind].items()}
+
+
+def _local(name: str, namespace: str) -> str | None:
+    """The name inside the robot's namespace, or None when it lies outside it."""
+    if not namespace:
+        return name
+    if name.startswith(namespace + "/"):
+        return name[len(namespace) :]
+    return None
+
+
+def _match(role: Role, catalog: Catalog, namespace: str, entries: dict) -> Match:
+    for kind, typ in role.kinds:
+        found = []
+        for name, t in entries[kind].items():
+            local = _local(name, namespace)
+            if t != typ or local is None:
+                continue
+            if any(w in local for w in role.never):
+                continue
+            if role.by_name_only and local not in role.names:
+                continue
+            found.append((local, name))
+        if not found:
+            continue
+        named = [(role.names.index(loc), name) for loc, name in found if loc in role.names]
+        if named:
+            name = min(named)[1]
+            why = "by type" if len(found) == 1 else f"by name, among {len(found)} of its type"
+        elif len(found) == 1:
+            name, why = found[0][1], "by type"
+        else:
+            name = sorted(n for _, n in found)[0]
+            why = f"the first of {len(found)} of its type: fix it in a profile file"
+        if role.by_name_only:
+            why = "by name"
+        if kind == "topic" and role.kinds.index((kind, typ)) > 0:
+            why += f", for want of a {role.kinds[0][1].rsplit('/', 1)[-1]}"
+        return Match(role.name, kind, name, typ, why)
+    looked = ", ".join(t.rsplit("/", 1)[-1] for _, t in role.kinds)
+    return Match(role.name, "", "", "", f"no {looked} on the robot's graph")
+
+
+def _fixed(role: str, name: str, catalog: Catalog, entries: dict, source: str) -> Match:
+    """A name the profile file gives: its kind and type as the graph has it, else as the role's
+    first kind (the robot may not have announced it yet)."""
+    if not name:
+        return Match(role, "", "", "", f"none, says {source}")
+    for kind, table in entries.items():
+        if name in table:
+            return Match(role, kind, name, table[name], f"set by {source}")
+    kind, typ = _BY_NAME[role].kinds[0]
+    return Match(role, kind, name, typ, f"set by {source} (not on the graph yet)")
+
+
+def recognise(catalog: Catalog) -> str:
+    """The robot's make from its graph: a node or a type only that make has."""
+    nodes = {n.rsplit("/", 1)[-1] for n in catalog.nodes}
+    types = {s.type for s in catalog.topics.values()}
+    if "astiop_msgs/msg/RobotStatus" in types or "astibot_base" in nodes:
+        return "astibot"
+    if "turtlebot3_node" in nodes:
+        return "turtlebot3_burger"  # a Waffle says so in its profile: the slower limits first
+    return "unknown"
+
+
+def match_profile(catalog: Catalog, spec: ProfileSpec | None = None) -> Profile:
+    """The profile of the robot on `catalog`: what `spec` fixes, over what astiop ships for the
+    robot's make (recognised on the graph unless `spec` names it), over what matching finds."""
+    from astiop.ros2.profile_file import shipped
+
+    spec = spec or ProfileSpec()
+    make = spec.make or recognise(catalog)
+    base = shipped(make)
+    if base is not None:
+        spec = ProfileSpec(
+            make,
+            spec.namespace,
+            {**base.roles, **spec.roles},
+            spec.units.over(base.units),
+            spec.limits.over(base.limits),
+            spec.source or base.source,
+        )
+    entries = {k: _entries(catalog, k) for k in ("topic", "service", "action")}
+    ns = spec.namespace
+    source = spec.source or "the graph"
+    matches = {}
+    for role in ROLES:
+        if role.name in spec.roles:
+            name = spec.roles[role.name]
+            full = ns + name if name and ns and not name.startswith(ns + "/") else name
+            matches[role.name] = _fixed(role.name, full, catalog, entries, source)
+        else:
+            matches[role.name] = _match(role, catalog, ns, entries)
+    return Profile(make, ns, matches, spec.units, spec.limits, source)

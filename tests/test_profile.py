@@ -1,0 +1,184 @@
+"""The robot's profile: roles matched on a graph by type, then by name; a profile file fixes
+what matching cannot know; the shipped profiles; one-line errors for a bad file."""
+
+from __future__ import annotations
+
+import pytest
+
+from astiop.robot.backends.live_catalog import describe_graph, nothing_listed
+from astiop.ros2.catalog import astibot_catalog
+from astiop.ros2.profile import match_profile, normalise_namespace
+from astiop.ros2.profile_file import ProfileError, parse, read_spec, shipped_names, write_profile
+
+# A TurtleBot3 Burger under Nav2 on Jazzy, the parts of its graph that matter here (beside the
+# names that could be taken for a role: Nav2's other velocities, costmaps, plans and poses)
+TB3_TOPICS = [
+    ("/amcl_pose", "geometry_msgs/msg/PoseWithCovarianceStamped"),
+    ("/battery_state", "sensor_msgs/msg/BatteryState"),
+    ("/cmd_vel", "geometry_msgs/msg/TwistStamped"),
+    ("/cmd_vel_nav", "geometry_msgs/msg/TwistStamped"),
+    ("/cmd_vel_smoothed", "geometry_msgs/msg/TwistStamped"),
+    ("/global_costmap/costmap", "nav_msgs/msg/OccupancyGrid"),
+    ("/goal_pose", "geometry_msgs/msg/PoseStamped"),
+    ("/initialpose", "geometry_msgs/msg/PoseWithCovarianceStamped"),
+    ("/local_costmap/costmap", "nav_msgs/msg/OccupancyGrid"),
+    ("/local_plan", "nav_msgs/msg/Path"),
+    ("/map", "nav_msgs/msg/OccupancyGrid"),
+    ("/odom", "nav_msgs/msg/Odometry"),
+    ("/plan", "nav_msgs/msg/Path"),
+    ("/scan", "sensor_msgs/msg/LaserScan"),
+    ("/tf", "tf2_msgs/msg/TFMessage"),
+]
+TB3_ACTIONS = [
+    ("/navigate_through_poses", "nav2_msgs/action/NavigateThroughPoses"),
+    ("/navigate_to_pose", "nav2_msgs/action/NavigateToPose"),
+]
+TB3_NODES = ["/amcl", "/bt_navigator", "/controller_server", "/map_server", "/turtlebot3_node"]
+
+
+def tb3_graph(namespace: str = "", **drop: bool):
+    lists = nothing_listed()
+    lists["topic"] = [(namespace + n, t) for n, t in TB3_TOPICS if not drop.get(n[1:])]
+    lists["action"] = [(namespace + n, t) for n, t in TB3_ACTIONS]
+    lists["service"] = [(namespace + "/amcl/get_parameters", "rcl_interfaces/srv/GetParameters")]
+    lists["node"] = [(namespace + n, "") for n in TB3_NODES]
+    return describe_graph(lists)
+
+
+def test_the_astibot_plays_every_role_under_its_own_names():
+    profile = match_profile(astibot_catalog())
+    # /map is published beside the catalog (the backends watch it on its own)
+    assert profile.make == "astibot" and profile.missing() == ["map"]
+    assert profile.name("pose") == "/robot_pose" and profile.name("battery") == "/battery_status"
+    assert (
+        profile.name("navigation") == "/goto_position" and profile.kind("navigation") == "service"
+    )
+    assert profile.name("stop") == "/stop" and profile.units.battery_percentage == "fraction"
+    assert profile.limits.max_linear_speed == 1.4  # the base's top; the settings say 0.8
+
+
+def test_a_turtlebot3_under_nav2_is_matched_by_type_then_name():
+    profile = match_profile(tb3_graph())
+    assert profile.make == "turtlebot3_burger"
+    expect = {
+        "pose": "/amcl_pose",  # not /initialpose, nor the odometry origin
+        "odometry": "/odom",
+        "battery": "/battery_state",
+        "scan": "/scan",
+        "map": "/map",  # not a costmap
+        "velocity_command": "/cmd_vel",  # not Nav2's own /cmd_vel_nav
+        "navigation": "/navigate_to_pose",
+        "plan": "/plan",
+    }
+    assert {r: profile.name(r) for r in expect} == expect
+    assert profile.kind("navigation") == "action"
+    assert profile.matches["velocity_command"].type == "geometry_msgs/msg/TwistStamped"
+    assert {"stop", "dock", "undock", "status", "save_location"} <= set(profile.missing())
+    assert profile.units.battery_percentage == "percent" and profile.limits.max_linear_speed == 0.22
+    assert "/odom" not in profile.state_topics() or profile.name("odometry") == "/odom"
+
+
+def test_the_pose_falls_back_to_odometry_and_says_so():
+    profile = match_profile(tb3_graph(amcl_pose=True))
+    assert profile.name("pose") == "/odom"
+    assert "for want of a Pose2D" in profile.matches["pose"].why
+
+
+def test_a_namespace_holds_the_robot_and_nothing_outside_it():
+    profile = match_profile(tb3_graph("/tb3_1"), read_spec("auto", "tb3_1/"))
+    assert profile.namespace == "/tb3_1"
+    assert profile.name("battery") == "/tb3_1/battery_state"
+    assert profile.name("velocity_command") == "/tb3_1/cmd_vel"
+    other = match_profile(tb3_graph("/tb3_2"), read_spec("auto", "/tb3_1"))
+    assert other.name("battery") is None and "battery" in other.missing()
+
+
+def test_a_profile_file_fixes_names_units_and_limits(tmp_path):
+    f = tmp_path / "bot.toml"
+    f.write_text(
+        '[robot]\nmake = "mybot"\n[roles]\nbattery = "/power/state"\ndock = ""\n'
+        '[units]\nbattery_percentage = "percent"\n[limits]\nmax_linear_speed = 0.5\n'
+    )
+    profile = match_profile(tb3_graph(), read_spec(str(f)))
+    assert profile.make == "mybot" and profile.source == str(f)
+    assert profile.name("battery") == "/power/state"
+    assert "not on the graph yet" in profile.matches["battery"].why
+    assert profile.name("dock") is None and "none, says" in profile.matches["dock"].why
+    assert profile.name("scan") == "/scan"  # the rest is still matched
+    assert profile.limits.max_linear_speed == 0.5 and profile.units.battery_percentage == "percent"
+
+
+def test_a_written_profile_reads_back_as_the_same_profile(tmp_path):
+    first = match_profile(tb3_graph("/tb3_1"), read_spec("auto", "/tb3_1"))
+    f = tmp_path / "tb3.toml"
+    f.write_text(write_profile(first))
+    again = match_profile(tb3_graph("/tb3_1"), read_spec(str(f)))
+    assert {r: again.name(r) for r in first.matches} == {r: first.name(r) for r in first.matches}
+    assert again.units == first.units and again.limits == first.limits
+
+
+@pytest.mark.parametrize(
+    ("text", "says"),
+    [
+        ("[robot\n", "not TOML"),
+        ("[wheels]\n", "unknown section [wheels]"),
+        ('[roles]\nbatery = "/b"\n', "unknown key roles.batery"),
+        ('[roles]\nbattery = "b"\n', "a name starts with /"),
+        ('[units]\nbattery_percentage = "volts"\n', "fraction or percent"),
+        ("[limits]\nmax_linear_speed = -1\n", "must be above 0"),
+        ('[limits]\nradius = "big"\n', "is a number"),
+        ('[robot]\nnamespace = "9bad"\n', "not a ROS 2 namespace"),
+    ],
+)
+def test_a_bad_profile_file_is_said_in_one_line(text, says):
+    with pytest.raises(ProfileError, match=None) as err:
+        parse(text, "bot.toml")
+    assert says in str(err.value) and "\n" not in str(err.value)
+
+
+def test_a_missing_profile_names_the_shipped_ones(tmp_path):
+    with pytest.raises(ProfileError) as err:
+        read_spec(str(tmp_path / "nope.toml"))
+    assert "turtlebot3_burger" in str(err.value)
+    assert {"astibot", "turtlebot3_burger", "turtlebot3_waffle"} <= set(shipped_names())
+
+
+def test_namespaces_are_checked():
+    assert normalise_namespace("tb3_1/") == "/tb3_1" and normalise_namespace("/") == ""
+    with pytest.raises(ValueError):
+        normalise_namespace("/tb 3")
+
+
+def test_the_state_reads_each_role_in_its_own_units():
+    import math
+
+    from astiop.robot.state import from_messages
+
+    profile = match_profile(tb3_graph())
+    amcl = {"pose": {"pose": {"position": {"x": 1.5, "y": -0.5}, "orientation": {"w": 1.0}}}}
+    odom = {
+        "pose": {"pose": {"position": {"x": 0.1, "y": 0.0}, "orientation": {"w": 1.0}}},
+        "twist": {"twist": {"linear": {"x": 0.2}, "angular": {"z": 0.1}}},
+    }
+    battery = {"percentage": 77.775, "voltage": 12.1, "current": -0.5, "power_supply_status": 2}
+    scan = {"angle_min": 0.0, "angle_increment": 0.5, "range_min": 0.12, "range_max": 3.5,
+            "ranges": [0.0, 0.05, 1.25, 4.0, float("nan")]}  # fmt: skip
+    msgs = {"/amcl_pose": amcl, "/odom": odom, "/battery_state": battery, "/scan": scan}
+    st = from_messages(0.0, msgs, profile=profile)
+    assert (st.pose.x, st.pose.y) == (1.5, -0.5), "the map pose, not the odometry origin"
+    assert st.velocity == (0.2, 0.0, 0.1)
+    assert st.battery.percentage == 0.77775  # 0-100 on a TurtleBot3: 77.8 %, not 7777.5 %
+    # no return (0.0, under range_min, over range_max, NaN) is not an obstacle at 0 m
+    assert [math.isinf(r) for r in st.scan.ranges] == [True, True, False, True, True]
+    assert st.status is None and st.state_word == "unknown"
+    without_amcl = from_messages(0.0, {"/odom": odom}, profile=profile)
+    assert without_amcl.pose is None, "a silent map pose is not replaced by odometry's origin"
+
+
+def test_an_unsaid_battery_scale_reads_a_percentage_over_one_as_percent():
+    from astiop.robot.state import battery_fraction
+
+    assert battery_fraction(0.85, None) == 0.85 and battery_fraction(85.0, None) == 0.85
+    assert (
+        battery_fraction(0.85, "percent") == 0.0085 and battery_fraction(0.85, "fraction") == 0.85
+    )
