@@ -327,3 +327,28 @@ def test_param_list_is_asked_of_the_robot_and_printed_as_ros2cli(robot_gateway):
     assert r.output == "/astibot_base:\n  max_angular_speed\n  max_linear_speed\n", r.output
     refused = robot_gateway.run("ros2 interface list")
     assert refused.error and "--ros2-transport cli" in refused.error
+
+
+def test_the_profile_and_the_doctor_read_the_robots_roles(tmp_path):
+    require_ros()
+    import json
+
+    cli = [sys.executable, "-m", "astiop", "--db", str(tmp_path / "p.db"), "--robot", "ros2"]
+    cli += ["--ros2-transport", "rclpy"]
+    with sim_node(speed=4.0):
+        out = subprocess.run([*cli, "robot", "profile", "--json"], capture_output=True, text=True)
+        assert out.returncode == 0, out.stderr
+        profile = json.loads(out.stdout)
+        assert profile["make"] == "astibot" and profile["missing"] == []
+        assert profile["roles"]["map"]["name"] == "/map"
+        assert profile["roles"]["navigation"]["name"] == "/goto_position"
+        doctor = subprocess.run([*cli, "doctor", "--json"], capture_output=True, text=True)
+        checks = {c["check"]: c for c in json.loads(doctor.stdout)["checks"]}
+        assert checks["robot profile"]["detail"].startswith("astibot"), checks
+        assert "pose" in checks["roles found"]["detail"] and "roles missing" not in checks
+        # a namespace the robot is not under: nothing plays a role, and the doctor says so
+        ns = subprocess.run([*cli, "--namespace", "/tb3_1", "doctor", "--json"],
+                            capture_output=True, text=True)  # fmt: skip
+        checks = {c["check"]: c for c in json.loads(ns.stdout)["checks"]}
+        assert ns.returncode == 1 and checks["roles missing"]["status"] == "FAIL", checks
+        assert "no pose and no velocity_command" in checks["roles missing"]["detail"]

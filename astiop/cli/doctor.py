@@ -203,16 +203,38 @@ def _check_robot(settings, add) -> None:
             add("FAIL", name, (out.stderr.strip() or "failed").splitlines()[0][:120])
         elif name == "ros2 graph":
             add("ok" if lines else "FAIL", name, f"{len(lines)} topics")
+            if lines:
+                _check_cli_profile(settings, add)
         else:
             add("ok", name, lines[0][:120] if lines else "running")
+
+
+def _check_cli_profile(settings, add) -> None:
+    from astiop.robot.backend import BackendError
+    from astiop.robot.backends.ros2cli.backend import Ros2Backend
+    from astiop.robot.factory import profile_spec
+
+    try:
+        backend = Ros2Backend(
+            settings.robot.ros2_executable,
+            settings.robot.ros2_timeout_s,
+            stream=False,
+            fixed=profile_spec(settings),
+        )
+    except BackendError as exc:
+        add("FAIL", "robot profile", str(exc))
+        return
+    _check_profile(backend.catalog.profile, add)
+    backend.close()
 
 
 def _check_rclpy(settings, add) -> None:
     from astiop.robot.backend import BackendError
     from astiop.robot.backends.rclpy.backend import RclpyBackend
+    from astiop.robot.factory import profile_spec
 
     try:
-        backend = RclpyBackend(settings.robot.ros2_timeout_s)
+        backend = RclpyBackend(settings.robot.ros2_timeout_s, fixed=profile_spec(settings))
     except BackendError as exc:
         add("FAIL", "robot", f"ros2 via rclpy: {exc}")
         return
@@ -221,7 +243,27 @@ def _check_rclpy(settings, add) -> None:
     nodes = len(backend.robot_nodes)
     detail = f"{nodes} nodes, {len(cat.topics)} topics, {len(cat.services)} services"
     add("ok" if nodes else "FAIL", "ros2 graph", detail + ("" if nodes else ": no robot found"))
+    if nodes:
+        _check_profile(cat.profile, add)
     backend.close()
+
+
+# without these astiop can neither show where the robot is nor drive it
+ESSENTIAL = ("pose", "velocity_command")
+
+
+def _check_profile(profile, add) -> None:
+    """The roles the robot plays, not a count of names: `astiop robot profile` says why."""
+    where = f" under {profile.namespace}" if profile.namespace else ""
+    add("ok", "robot profile", f"{profile.make}{where} ({profile.source})")
+    found = [r for r in profile.matches if profile.has(r)]
+    add("ok" if found else "FAIL", "roles found", ", ".join(found) or "none")
+    missing = profile.missing()
+    lacking = [r for r in ESSENTIAL if r in missing]
+    if lacking:
+        add("FAIL", "roles missing", ", ".join(missing) + f": no {' and no '.join(lacking)}")
+    elif missing:
+        add("warn", "roles missing", ", ".join(missing), needed=False)
 
 
 def _finish(rows: list[dict], as_json: bool) -> None:
