@@ -182,3 +182,68 @@ def test_an_unsaid_battery_scale_reads_a_percentage_over_one_as_percent():
     assert (
         battery_fraction(0.85, "percent") == 0.0085 and battery_fraction(0.85, "fraction") == 0.85
     )
+
+
+def test_the_rules_plan_in_the_robots_own_names():
+    from astiop.agent.intent import classify
+    from astiop.agent.rules import plan_intents
+
+    profile = match_profile(tb3_graph())
+
+    def plan(request: str) -> list[str]:
+        return plan_intents(classify(request, ["bench"]), profile, {"bench": (1.0, 0.5)}.get)
+
+    assert plan("where is the robot?") == ["ros2 topic echo /amcl_pose --once"]
+    assert plan("what is the battery level?") == ["ros2 topic echo /battery_state --once"]
+    assert plan("is anything in front of the robot?") == ["ros2 topic echo /scan --once"]
+    (goal,) = plan("go to x 1.0 y 0.5")
+    assert goal.startswith(
+        "ros2 action send_goal /navigate_to_pose nav2_msgs/action/NavigateToPose"
+    )
+    assert "position: {x: 1.000, y: 0.500}" in goal and "frame_id: map" in goal
+    assert plan("go to bench") == [goal]  # a named place by its coordinates
+    (stop,) = plan("stop the robot")
+    assert stop.startswith("ros2 topic pub --once /cmd_vel geometry_msgs/msg/TwistStamped")
+    assert plan("dock the robot") == []  # it has no dock: nothing rather than a guess
+
+
+def test_a_question_the_robot_has_no_reading_for_is_answered_so():
+    from astiop.agent.intent import classify
+    from astiop.agent.roles import nothing_to_read
+
+    no_battery = match_profile(tb3_graph(battery_state=True))
+    said = nothing_to_read(classify("what is the battery level?", []), no_battery)
+    assert said.startswith("This robot publishes no battery state")
+    # a question it can answer, or one part of it: not this answer
+    assert nothing_to_read(classify("where is the robot?", []), no_battery) is None
+    assert (
+        nothing_to_read(classify("what is the battery level?", []), match_profile(tb3_graph()))
+        is None
+    )
+
+
+def test_the_models_tools_are_the_robots_roles():
+    from astiop.agent.tools import build_tools, render
+
+    cat = tb3_graph()
+    tools = {t.id: t for t in build_tools(cat, ["bench"])}
+    assert tools["battery"].command == "ros2 topic echo /battery_state --once"
+    assert tools["where"].command == "ros2 topic echo /amcl_pose --once"
+    assert "strafe_left" not in tools and "bench" not in tools  # a Nav2 base goes by x, y
+    assert "/cmd_vel_nav" not in str(tools) and "/global_costmap/costmap" not in str(tools)
+    goal = render({"tool": "drive_xy", "x": 1, "y": 0.5}, list(tools.values()))
+    assert goal.startswith("ros2 action send_goal /navigate_to_pose")
+
+
+def test_a_reading_is_said_in_its_roles_units():
+    from astiop.agent.summaries import summarize
+    from astiop.robot.backend import Execution
+
+    battery = {"percentage": 77.775, "voltage": 12.1, "current": -0.5, "power_supply_status": 2}
+    ex = Execution("ros2 topic echo /battery_state --once", True, executed=True, values=battery,
+                   role="battery", units="percent")  # fmt: skip
+    assert "battery 77.8 %" in summarize(ex)
+    scan = {"angle_min": 0.0, "angle_increment": 0.5, "range_min": 0.12, "range_max": 3.5,
+            "ranges": [0.0, 0.05, 1.25, 4.0]}  # fmt: skip
+    ex = Execution("ros2 topic echo /scan --once", True, executed=True, values=scan, role="scan")
+    assert "nearest return 1.25 m" in summarize(ex)

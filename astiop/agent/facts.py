@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from astiop.agent.figures import NUMBER, quantities_in
+from astiop.agent.roles import role_of
 from astiop.agent.summaries import STATUS_WORDS, commanded_twist, directions, summarize
 from astiop.robot.backend import Execution
 
@@ -115,8 +116,8 @@ def facts_of(
 
 def _words(ex: Execution, facts: Facts) -> None:
     v = ex.values if isinstance(ex.values, dict) else {}
-    cmd = ex.command
-    if "/robot_status" in cmd and "state" in v:
+    cmd, role = ex.command, role_of(ex)
+    if role == "status" and "state" in v:
         facts.words.add(str(v["state"]))
         if v.get("fault"):
             facts.words.add("fault")
@@ -127,18 +128,18 @@ def _words(ex: Execution, facts: Facts) -> None:
         facts.words.add("docked" if v.get("docked") else "undocked")
         if v.get("e_stopped"):
             facts.words.add("e_stopped")
-    if "/battery_status" in cmd and "percentage" in v:
+    if role == "battery" and "percentage" in v:
         facts.words.add(STATUS_WORDS.get(v.get("power_supply_status"), "unknown"))
-    if "/conveyor/status" in cmd and "loaded" in v:
+    if role == "conveyor" and "loaded" in v:
         facts.words.add("loaded" if v["loaded"] else "empty")
         facts.words.add("running" if v.get("running") else "stopped")
-    if "/obstacles" in cmd and "count" in v:
+    if role == "obstacles" and "count" in v:
         facts.words.add("obstacles" if v["count"] else "clear")
         facts.kinds |= {str(o.get("kind", "")).lower() for o in v.get("obstacles", [])}
-    if "/diagnostics" in cmd and "status" in v:
+    if role == "diagnostics" and "status" in v:
         levels = [s.get("level", 0) for s in v["status"]]
         facts.words.add("healthy" if all(lv == 0 for lv in levels) else "fault")
-    if "/odom" in cmd and "twist" in v:
+    if role in ("odometry", "pose") and "twist" in v:
         t = v["twist"]["twist"]["linear"]
         facts.words.add("moving" if math.hypot(t["x"], t["y"]) >= 0.05 else "stopped")
     if "success" in v:

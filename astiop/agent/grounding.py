@@ -20,6 +20,7 @@ from astiop.agent.figures import (
     decimals,
     figures,
 )
+from astiop.agent.roles import battery_percent, pose_of, role_of
 from astiop.agent.summaries import (
     stale_age,
     summarize,
@@ -182,29 +183,29 @@ def missing(answer: str, executions: list[Execution]) -> str | None:
             continue
         if stale_age(ex) is not None and not re.search(r"\bago\b|\bold\b", text):
             return "it leaves out how old the robot's reading is"
-        cmd, gap = ex.command, None
-        if "/robot_pose" in cmd and "x" in v:
-            gap = None if said(v["x"], 0.1) and said(v["y"], 0.1) else "position (x, y)"
-        elif "/battery_status" in cmd and "percentage" in v:
-            p = v["percentage"]
-            gap = None if said(p * 100, 1.0) or said(p, 0.01) else "battery percentage"
-        elif "/obstacles" in cmd and "count" in v:
+        role, gap = role_of(ex), None
+        if role == "pose" and (pose := pose_of(v)) is not None:
+            gap = None if said(pose[0], 0.1) and said(pose[1], 0.1) else "position (x, y)"
+        elif role == "battery" and "percentage" in v:
+            p = battery_percent(ex)
+            gap = None if said(p, 1.0) or said(p / 100, 0.01) else "battery percentage"
+        elif role == "obstacles" and "count" in v:
             n = v["count"]
             words = [w for w, k in _COUNT_WORDS.items() if k == n]
             ok = said(n, 0) or any(re.search(rf"\b{w}\b", text) for w in words)
             ok = ok or (n == 0 and bool(re.search(r"\b(?:clear|nothing|none)\b", text)))
             gap = None if ok else "obstacle count"
-        elif "/robot_status" in cmd and "state" in v:
+        elif role == "status" and "state" in v:
             state = str(v["state"])
             ok = state in text or state.replace("_", " ") in text
             gap = None if ok or (state == "e_stopped" and "e-stop" in text) else "state"
-        elif "/conveyor/status" in cmd and "loaded" in v:
+        elif role == "conveyor" and "loaded" in v:
             words = ["loaded"] if v["loaded"] else ["empty", "not loaded", "unloaded", "no load"]
             gap = None if any(w in text for w in words) else "load state"
-        elif "/odom" in cmd and "twist" in v:
+        elif role == "odometry" and "twist" in v:
             t = v["twist"]["twist"]["linear"]
             gap = None if said(math.hypot(t["x"], t["y"]), 0.05) else "speed"
-        elif "/diagnostics" in cmd and "status" in v:
+        elif role == "diagnostics" and "status" in v:
             healthy = all(st.get("level", 0) == 0 for st in v["status"])
             pattern = (
                 r"\b(?:ok|healthy|normal|no faults?|nominal)\b" if healthy else r"fault|error|warn"

@@ -7,9 +7,18 @@ an actuation.
 
 from __future__ import annotations
 
+import math
+from collections.abc import Callable
+from typing import Any
+
 from astiop.agent.grounding import factual_answer
 from astiop.agent.intent import SERVICE_FOR, Intent, classify
+from astiop.agent.roles import name_for
 from astiop.robot.backend import Execution
+from astiop.ros2.profile import NAVIGATE_TO_POSE
+from astiop.ros2.profile import TWIST_STAMPED as STAMPED
+
+Locate = Callable[[str], "tuple[float, float] | None"]
 
 GOTO = "ros2 service call /goto_position astiop_msgs/srv/GotoPosition"
 TRIGGER = "std_srvs/srv/Trigger"
@@ -18,10 +27,17 @@ PUBLISH_HZ = 10
 UNKNOWN = "[rules] I don't know how to do that"
 
 
-def command_for(intent: Intent) -> str | None:
+def command_for(intent: Intent, profile: Any = None, locate: Locate | None = None) -> str | None:
+    """The command for one intent, in the names of the robot's `profile` (the ASTIbot's without
+    one); None when the robot has nothing that does it."""
+    if nav_action(profile) or (profile is not None and not profile.has("stop")):
+        other = _other_robot(intent, profile, locate)
+        if other is not False:
+            return other
     kind = intent.kind
     if kind == "read":
-        return f"ros2 topic echo {intent.topic} --once" if intent.topic else None
+        name = name_for(intent.topic, profile) if intent.topic else None
+        return f"ros2 topic echo {name} --once" if name else None
     if kind == "list":
         return "ros2 service call /list_locations astiop_msgs/srv/ListLocations"
     if kind in SERVICE_FOR:
@@ -49,15 +65,67 @@ def command_for(intent: Intent) -> str | None:
     return None
 
 
+def nav_action(profile: Any) -> str | None:
+    """The robot's NavigateToPose action, where that is how it navigates (Nav2)."""
+    if profile is None or profile.kind("navigation") != "action":
+        return None
+    return profile.name("navigation")
+
+
+def _other_robot(intent: Intent, profile: Any, locate: Locate | None) -> str | None | bool:
+    """What differs on a robot that is not the ASTIbot (a TurtleBot3 under Nav2): goals by
+    NavigateToPose, a stop by a zero velocity, motion on its own velocity topic and type;
+    None: the robot has nothing that does it; False: as on the ASTIbot."""
+    action, kind = nav_action(profile), intent.kind
+    if kind == "navigate" and action:
+        xy = intent.xy or (locate(intent.place) if intent.place and locate else None)
+        if xy is None:
+            return None
+        return nav_goal(action, xy[0], xy[1], intent.theta or 0.0)
+    velocity = profile.name("velocity_command")
+    if kind in SERVICE_FOR and not profile.has(kind):
+        if kind == "stop" and velocity:
+            return _publish(profile, velocity, "--once", 0.0, 0.0, 0.0)
+        return None
+    if kind == "motion" and intent.motion is not None and velocity:
+        m = intent.motion
+        times = max(1, round(m.seconds * PUBLISH_HZ))
+        return _publish(profile, velocity, f"-t {times} -r {PUBLISH_HZ}", m.vx, m.vy, m.wz)
+    return False
+
+
+def nav_goal(action: str, x: float, y: float, theta: float) -> str:
+    """A NavigateToPose goal in the map frame (Nav2's), the heading as a unit quaternion."""
+    half = theta / 2
+    return (
+        f'ros2 action send_goal {action} {NAVIGATE_TO_POSE} "{{pose: {{header: '
+        f"{{frame_id: map}}, pose: {{position: {{x: {x:.3f}, y: {y:.3f}}}, "
+        f'orientation: {{z: {math.sin(half):.4f}, w: {math.cos(half):.4f}}}}}}}}}"'
+    )
+
+
+def _publish(profile: Any, name: str, how: str, vx: float, vy: float, wz: float) -> str:
+    """`ros2 topic pub` of a velocity in the robot's own type (a TwistStamped: its twist)."""
+    twist = (
+        f"{{linear: {{x: {vx:g}, y: {vy:g}, z: 0.0}}, angular: {{x: 0.0, y: 0.0, z: {wz:.3g}}}}}"
+    )
+    typ = profile.matches["velocity_command"].type
+    body = f"{{twist: {twist}}}" if typ == STAMPED else twist
+    return f'ros2 topic pub {how} {name} {typ} "{body}"'
+
+
 def plan(request: str, locations: list[str]) -> list[str]:
     return plan_intents(classify(request, locations))
 
 
-def plan_intents(intents: list[Intent]) -> list[str]:
-    """The commands for a request already classified (an agent turn classifies it once)."""
+def plan_intents(
+    intents: list[Intent], profile: Any = None, locate: Locate | None = None
+) -> list[str]:
+    """The commands for a request already classified (an agent turn classifies it once), in
+    the names of the robot's `profile`; `locate`: a named place's (x, y)."""
     commands: list[str] = []
     for intent in intents:
-        command = command_for(intent)
+        command = command_for(intent, profile, locate)
         if command and command not in commands:
             commands.append(command)
     return commands[:3]

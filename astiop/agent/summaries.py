@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from astiop.agent.roles import battery_percent, no_return, pose_of, role_of
 from astiop.robot.backend import Execution
 from astiop.ros2 import grammar
 
@@ -23,7 +24,7 @@ def summarize(ex: Execution) -> str:
         return f"{ex.command}\n  NOT RUN: {ex.reason}"
     if ex.error:
         return f"{ex.command}\n  FAILED: {ex.error}"
-    body = _summary(ex.command, _values(ex), ex.provenance)
+    body = _summary(ex, _values(ex))
     if body is not None and (age := stale_age(ex)) is not None:
         body += f" (read {age:.0f} s ago)"
     if body is None:
@@ -44,22 +45,24 @@ def _deg(rad: float) -> float:
     return math.degrees(rad)
 
 
-def _summary(command: str, v: Any, provenance: str = "") -> str | None:
+def _summary(ex: Execution, v: Any) -> str | None:
     if not isinstance(v, dict):
         return None
-    if "/battery_status" in command:
-        pct = v["percentage"] * 100
+    command, provenance, role = ex.command, ex.provenance, role_of(ex)
+    if role == "battery" and "percentage" in v:
+        pct = battery_percent(ex)
         state = STATUS_WORDS.get(v.get("power_supply_status"), "unknown")
         return f"battery {pct:.1f} %, {v['voltage']:.2f} V, {v['current']:.2f} A, {state}"
-    if "/robot_pose" in command:
-        return f"position x {v['x']:.2f} m, y {v['y']:.2f} m, heading {_deg(v['theta']):.0f} deg"
-    if "/robot_status" in command:
+    if role == "pose" and (pose := pose_of(v)) is not None:
+        x, y, theta = pose
+        return f"position x {x:.2f} m, y {y:.2f} m, heading {_deg(theta):.0f} deg"
+    if role == "status" and "state" in v:
         docked = "docked, " if v.get("docked") else ""
         return (
             f"state {v['state']}, {docked}mode {v['mode']}, goal {v['active_goal'] or 'none'}, "
             f"fault {v['fault'] or 'none'}, speed {v['speed']:.2f} m/s"
         )
-    if "/obstacles" in command:
+    if role == "obstacles" and "count" in v:
         if not v["count"]:
             return "0 obstacles detected"
         items = "; ".join(
@@ -67,27 +70,25 @@ def _summary(command: str, v: Any, provenance: str = "") -> str | None:
             for o in v["obstacles"][:5]
         )
         return f"{v['count']} obstacle(s) detected: {items}"
-    if "/scan" in command and "ranges" in v:
-        finite = [
-            (r, i) for i, r in enumerate(v["ranges"]) if isinstance(r, float) and math.isfinite(r)
-        ]
-        if not finite:
+    if role == "scan" and "ranges" in v:
+        hits = [(r, i) for i, r in enumerate(v["ranges"]) if not no_return(r, v)]
+        if not hits:
             return "scan: nothing within range"
-        r, i = min(finite)
+        r, i = min(hits)
         bearing = _deg(v["angle_min"] + i * v["angle_increment"])
         return f"scan of {len(v['ranges'])} beams: nearest return {r:.2f} m at {bearing:.0f} deg"
-    if "/diagnostics" in command and "status" in v:
+    if role == "diagnostics" and "status" in v:
         levels = {0: "OK", 1: "WARN", 2: "ERROR", 3: "STALE"}
         return "; ".join(
             f"{s['name']}: {levels.get(s['level'], s['level'])} ({s['message']})"
             for s in v["status"]
         )
-    if "/conveyor/status" in command:
+    if role == "conveyor" and "loaded" in v:
         return (
             f"conveyor {'running' if v['running'] else 'stopped'}, "
             f"{'loaded' if v['loaded'] else 'empty'}, lamp {v['lamp']}"
         )
-    if "/odom" in command and "twist" in v:
+    if role in ("odometry", "pose") and "twist" in v:
         p = v["pose"]["pose"]["position"]
         t = v["twist"]["twist"]["linear"]
         return f"odometry x {p['x']:.2f} m, y {p['y']:.2f} m, speed {math.hypot(t['x'], t['y']):.2f} m/s"

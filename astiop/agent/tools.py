@@ -10,7 +10,9 @@ import math
 import re
 from dataclasses import dataclass
 
+from astiop.agent import rules
 from astiop.agent.intent import SERVICE_FOR, Intent, Motion
+from astiop.agent.roles import KEY_ROLES
 from astiop.agent.rules import command_for
 from astiop.ros2.catalog import RELEASE, Catalog
 from astiop.ros2.render import GOTO_TYPE, goto_command
@@ -28,6 +30,7 @@ class Tool:
     description: str
     command: str | None  # None: rendered from the step's own fields
     kind: str = "read"  # what it does, as the request's intent names it (astiop.agent.intent)
+    action: str = ""  # drive_xy on a Nav2 robot: its NavigateToPose action
 
 
 class ToolError(ValueError):
@@ -46,6 +49,19 @@ TOPIC_TOOLS = {
     "/odom": "speed",
     "/plan": "path",
 }
+# the same short names by role, whatever the robot calls the topic (ros2/profile.py)
+ROLE_TOOLS = {
+    "battery": "battery",
+    "pose": "where",
+    "status": "status",
+    "obstacles": "obstacles",
+    "scan": "lidar",
+    "diagnostics": "diagnostics",
+    "conveyor": "conveyor",
+    "odometry": "speed",
+    "plan": "path",
+}
+UNREADABLE_ROLES = ("velocity_command", "map", "plan")  # commands, or too big to read out
 SERVICE_TOOLS = {
     "/stop": "stop",
     "/dock": "dock",
@@ -68,24 +84,30 @@ MOTION_TOOLS = {
 
 
 def build_tools(catalog: Catalog, locations: list[str]) -> list[Tool]:
+    """The model's choices on this robot: its readings by role, its places, its services, its
+    motions; in the names of its profile (the ASTIbot's own without one)."""
+    profile = catalog.profile
+    role_of = {m.name: r for r, m in profile.matches.items() if m.name} if profile else {}
+    skip = READABLE_EXCLUDED | {profile.name(r) for r in UNREADABLE_ROLES if profile} - {None}
     tools = [
-        Tool(TOPIC_TOOLS.get(t.name, t.name), f"reads {t.name}", f"ros2 topic echo {t.name} --once")
-        for t in catalog.topics.values()
-        if t.name not in READABLE_EXCLUDED
-    ]
-    if "/robot_pose" in catalog.topics:  # both words operators use for it
-        tools.append(Tool("position", "reads /robot_pose", "ros2 topic echo /robot_pose --once"))
-    tools += [
         Tool(
-            name,
-            f"drives to {name}",
-            goto_command(name),
-            "navigate",
+            ROLE_TOOLS.get(role_of.get(t.name, ""), TOPIC_TOOLS.get(t.name, t.name)),
+            f"reads {t.name}",
+            f"ros2 topic echo {t.name} --once",
         )
-        for name in locations
+        for t in catalog.topics.values()
+        if t.name not in skip and (t.name in role_of or not profile or profile.make == "astibot")
     ]
-    if "/goto_position" in catalog.services:
-        tools.append(Tool(COORDINATES, "drives to x, y in metres", None, "navigate"))
+    pose = profile.name("pose") if profile else "/robot_pose"
+    if pose in catalog.topics:  # both words operators use for it
+        tools.append(Tool("position", f"reads {pose}", f"ros2 topic echo {pose} --once"))
+    action = rules.nav_action(profile)
+    tools += [
+        Tool(name, f"drives to {name}", goto_command(name), "navigate")
+        for name in (locations if not action else [])
+    ]
+    if "/goto_position" in catalog.services or action:
+        tools.append(Tool(COORDINATES, "drives to x, y in metres", None, "navigate", action or ""))
     tools += [
         Tool(
             SERVICE_TOOLS.get(s.name, s.name),
@@ -96,10 +118,17 @@ def build_tools(catalog: Catalog, locations: list[str]) -> list[Tool]:
         for s in catalog.services.values()
         if s.type == TRIGGER and s.name not in OPERATOR_ONLY
     ]
-    if "/cmd_vel" in catalog.topics:
+    velocity = profile.name("velocity_command") if profile else "/cmd_vel"
+    if velocity in catalog.topics:
         tools += [
-            Tool(name, f"moves the robot ({name.replace('_', ' ')}) for 2 s", _motion(m), "motion")
+            Tool(
+                name,
+                f"moves the robot ({name.replace('_', ' ')}) for 2 s",
+                _motion(m, profile),
+                "motion",
+            )
             for name, m in MOTION_TOOLS.items()
+            if not m.vy or not action  # a Nav2 base (differential drive) does not strafe
         ]
     if "/save_location" in catalog.services:
         tools.append(Tool(SAVE, "saves the robot's pose under a new name", None, "save"))
@@ -127,14 +156,19 @@ def narrow(tools: list[Tool], intents: list[Intent]) -> list[Tool]:
     reads = [i.topic for i in intents if i.kind == "read"]
     if reads and all(reads):  # every question names what it asks about: only those reads
         echoes = {f"ros2 topic echo {topic} --once" for topic in reads}
+        echoes |= {
+            t.command
+            for t in tools
+            if t.id in {ROLE_TOOLS.get(KEY_ROLES.get(k, "")) for k in reads}
+        }
         on_topic = [t for t in kept if t.kind != "read" or t.command in echoes]
         if any(t.kind == "read" for t in on_topic):
             kept = on_topic
     return kept or tools
 
 
-def _motion(m: Motion) -> str:
-    command = command_for(Intent("motion", motion=m))
+def _motion(m: Motion, profile=None) -> str:
+    command = command_for(Intent("motion", motion=m), profile)
     assert command is not None
     return command
 
@@ -235,6 +269,8 @@ def render(step: dict, tools: list[Tool]) -> str | None:
         raise ToolError(f'"{COORDINATES}" needs numbers "x" and "y"') from None
     if not all(math.isfinite(v) for v in (x, y, theta)):
         raise ToolError(f'"{COORDINATES}" needs finite numbers')
+    if tool.action:
+        return rules.nav_goal(tool.action, x, y, theta)
     return (
         f"ros2 service call /goto_position {GOTO_TYPE} "
         f'"{{x: {x:.3f}, y: {y:.3f}, theta: {theta:.4f}}}"'

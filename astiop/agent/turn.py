@@ -23,6 +23,7 @@ from astiop.agent import (
     mission_turn,
     planner,
     prompts,
+    roles,
     rules,
 )
 from astiop.agent.answer_grammar import answer_grammar
@@ -143,6 +144,9 @@ class Agent:
         actions = [(c, gate.action_of(self._review(c).checked)) for c in commands]
         return gate.check(intents, actions, self.places())
 
+    def _rules_plan(self, intents: list[Intent]) -> list[str]:
+        return rules.plan_intents(intents, self.gateway.profile, self.places().get)
+
     # -- the turn ------------------------------------------------------------------------
     async def turn(self, request: str, on_event: OnEvent | None = None) -> TurnResult:
         emit = on_event or (lambda kind, data: None)
@@ -154,6 +158,9 @@ class Agent:
             fallback = False
             # classified once: the planner narrows the tools by it, the gate holds plans to it
             intents = intent.classify(request, self.locations())
+            if said := roles.nothing_to_read(intents, self.gateway.profile):
+                result.answer = said  # asked only of readings this robot does not publish
+                return await self._finish(request, result, t0)
             if await mission_turn.without_model(self, request, intents, result, emit):
                 return await self._finish(request, result, t0)
             try:
@@ -165,7 +172,7 @@ class Agent:
                     raise
                 # the baseline answers instead, labelled so; the turn still records the error
                 result.error = f"{exc}; answered by the rules fallback"
-                commands, fallback = rules.plan_intents(intents), True
+                commands, fallback = self._rules_plan(intents), True
             refused = await asyncio.to_thread(self._gate_reason, intents, commands)
             steps = None
             if not refused and self.missions is not None:
@@ -254,7 +261,7 @@ class Agent:
         self, request: str, intents: list[Intent], result: TurnResult, emit
     ) -> list[str]:
         if self.endpoint.is_rules:
-            return rules.plan_intents(intents)
+            return self._rules_plan(intents)
         req = planner.plan_request(
             self.mode,
             self.gateway.catalog,

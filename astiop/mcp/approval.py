@@ -10,7 +10,7 @@ import time
 from dataclasses import dataclass
 
 from astiop.robot.gateway import ESTOP_REASON, RobotGateway
-from astiop.robot.safety import ALWAYS_ALLOWED, Review
+from astiop.robot.safety import Review, always_allowed
 from astiop.ros2.catalog import RELEASE
 from astiop.ros2.render import sent_text
 from astiop.store import Store
@@ -41,7 +41,7 @@ class Clearance:
 
 def needs_approval(review: Review) -> bool:
     checked = review.checked
-    return checked.kind == "actuate" and (checked.command.name or "") not in ALWAYS_ALLOWED
+    return checked.kind == "actuate" and not always_allowed(checked)
 
 
 def clear(

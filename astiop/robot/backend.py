@@ -11,7 +11,7 @@ from typing import Any, Union
 
 from astiop.robot.errors import BackendError  # noqa: F401 - its home for every caller
 from astiop.robot.inflight import InFlight
-from astiop.robot.safety import ALWAYS_ALLOWED
+from astiop.robot.safety import always_allowed
 from astiop.robot.state import OccupancyGrid, RobotEvent, RobotState, TopicStat
 from astiop.ros2.catalog import Catalog
 from astiop.ros2.validation import Checked
@@ -39,6 +39,8 @@ class Execution:
     provenance: str = ""
     age_s: float | None = None  # a reading's age by its stamp, on the robot's clock
     period_s: float | None = None  # its topic's publishing period (None: latched or unknown)
+    role: str = ""  # the role its name plays on the robot (ros2/profile.py): "battery", "pose"
+    units: str | None = None  # battery: its profile's percentage scale (fraction | percent)
 
     def record(self) -> dict[str, Any]:
         """The fields a stored command row keeps."""
@@ -84,7 +86,7 @@ class RobotBackend(ABC):
     def actuating(self, checked: Checked):
         """The job an actuating command runs as (the E-STOP ends it); None for a read and for
         the stop itself, which must run while the E-STOP holds."""
-        if checked.kind != "actuate" or checked.command.name in ALWAYS_ALLOWED:
+        if checked.kind != "actuate" or always_allowed(checked):
             return contextlib.nullcontext(None)
         return self.inflight.running(checked.command.display())
 

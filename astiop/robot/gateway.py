@@ -15,7 +15,7 @@ from collections.abc import Callable
 from astiop.robot.backend import BackendError, Execution, MapGeometry, RobotBackend
 from astiop.robot.latch_watch import LatchWatcher
 from astiop.robot.playback import Playback, PlaysBack
-from astiop.robot.safety import ALWAYS_ALLOWED, Review, SafetyPolicy
+from astiop.robot.safety import Review, SafetyPolicy, always_allowed
 from astiop.robot.state import RobotEvent, RobotState, TopicStat
 from astiop.ros2.catalog import Catalog
 from astiop.ros2.profile import Profile, match_profile
@@ -277,6 +277,7 @@ class RobotGateway:
             result.output, result.values = self.backend.execute(checked, timeout or self.timeout_s)
             result.executed = True
             result.provenance = self._provenance(checked)
+            self._name_role(checked.command.name, result)
             if checked.command.verb == "topic" and checked.command.sub == "echo":
                 self._date_reading(checked.command.name, result)
         except BackendError as exc:
@@ -295,6 +296,14 @@ class RobotGateway:
             spec = self.catalog.services.get(cmd.name)
             return "accepted" if spec is not None and spec.starts_job else "reported"
         return "commanded" if checked.kind == "actuate" else "reported"
+
+    def _name_role(self, name: str | None, result: Execution) -> None:
+        """The role the command's name plays on the robot, and a battery's units: what it read
+        is then said as a battery, a pose, whatever the robot calls it."""
+        profile = self.profile
+        result.role = next((r for r, m in profile.matches.items() if name and m.name == name), "")
+        if result.role == "battery":
+            result.units = profile.units.battery_percentage
 
     def _date_reading(self, topic: str, result: Execution) -> None:
         """A reading's period and its age by its header stamp, when the robot's clock is known
@@ -325,10 +334,11 @@ class RobotGateway:
 
     def _drive(self, vx: float, vy: float, wz: float) -> Execution:
         twist = f"{{linear: {{x: {vx:g}, y: {vy:g}}}, angular: {{z: {wz:g}}}}}"
-        spec = self.catalog.topics.get("/cmd_vel")
+        name = self.profile.name("velocity_command") or "/cmd_vel"
+        spec = self.catalog.topics.get(name)
         type_ = spec.type if spec else "geometry_msgs/msg/Twist"
         values = f"{{twist: {twist}}}" if type_ == STAMPED else twist
-        text = f'ros2 topic pub --once /cmd_vel {type_} "{values}"'
+        text = f'ros2 topic pub --once {name} {type_} "{values}"'
         review = self.review(text)
         result = Execution(text, review.checked.valid, review.reason, "actuate")
         if "teleop" not in self.backend.capabilities:
@@ -351,7 +361,7 @@ class RobotGateway:
 
     def _held_by_estop(self, checked: Checked) -> bool:
         """Latched, and not a command the E-STOP always lets through (/stop)."""
-        return checked.command.name not in ALWAYS_ALLOWED and self.e_stopped
+        return not always_allowed(checked) and self.e_stopped
 
     def _adopt_speed_limits(self, checked: Checked, result: Execution) -> None:
         """A `param set` of the robot's own speed limit that went through becomes safety's

@@ -9,10 +9,21 @@ from dataclasses import dataclass, replace
 from astiop.ros2.validation import Checked
 from astiop.warehouse import GEOFENCE_MARGIN, fence_text, inside_fence
 
-# Services that only ever make the robot safer: never held by the e-stop, never confirmed.
-ALWAYS_ALLOWED = {"/stop"}
+# Services that only ever make the robot safer: never held by the e-stop, never confirmed
+# (under any namespace: /tb3_1/stop).
+ALWAYS_ALLOWED = {"stop"}
+# A velocity command is clamped by its type, whatever the topic (a namespace's /tb3_1/cmd_vel)
+VELOCITY_TYPES = {"geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped"}
 # |q| may differ from 1 by this much (a heading printed to a few digits still passes)
 UNIT_QUATERNION_TOLERANCE = 1e-3
+
+
+def always_allowed(checked: Checked) -> bool:
+    """A call of the robot's stop service (under any namespace): only ever makes it safer."""
+    cmd = checked.command
+    if cmd is None or cmd.key != ("service", "call"):
+        return False
+    return (cmd.name or "").rsplit("/", 1)[-1] in ALWAYS_ALLOWED
 
 
 @dataclass(frozen=True)
@@ -45,7 +56,8 @@ class SafetyPolicy:
             return Review(checked.valid, checked.reason, checked, False)
         cmd = checked.command
         name = cmd.name or ""
-        if name in ALWAYS_ALLOWED:
+        base = name.rsplit("/", 1)[-1]
+        if always_allowed(checked):
             return Review(True, "", checked, False)
         if e_stopped:
             return Review(
@@ -56,12 +68,13 @@ class SafetyPolicy:
             )
         msg = checked.message or {}
         notes: list[str] = list(checked.notes)
-        if cmd.key == ("topic", "pub") and name == "/cmd_vel" and "twist" in msg:
+        velocity = cmd.key == ("topic", "pub") and checked.type in VELOCITY_TYPES
+        if velocity and "twist" in msg:
             twist, notes = self._clamp_twist(msg["twist"], notes)  # TwistStamped: same clamp
             msg = {**msg, "twist": twist}
-        elif cmd.key == ("topic", "pub") and name == "/cmd_vel":
+        elif velocity:
             msg, notes = self._clamp_twist(msg, notes)
-        elif cmd.key == ("service", "call") and name == "/goto_position":
+        elif cmd.key == ("service", "call") and base == "goto_position":
             where = self.locate(msg["name"]) if msg.get("name") and self.locate else None
             x, y = where if where else (msg.get("x", 0.0), msg.get("y", 0.0))
             if (where or not msg.get("name")) and not self.inside_geofence(x, y):
