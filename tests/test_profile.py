@@ -247,3 +247,18 @@ def test_a_reading_is_said_in_its_roles_units():
             "ranges": [0.0, 0.05, 1.25, 4.0]}  # fmt: skip
     ex = Execution("ros2 topic echo /scan --once", True, executed=True, values=scan, role="scan")
     assert "nearest return 1.25 m" in summarize(ex)
+
+
+def test_a_misspelt_reading_is_never_offered_a_name_that_moves_the_robot():
+    from astiop.ros2.validation import validate
+
+    cat = tb3_graph()
+    r = validate("ros2 topic echo /robot_pose --once", cat)
+    assert not r.valid and "/goal_pose" not in r.reason, r.reason
+    ns = tb3_graph("/tb3_1")
+    ns.profile = match_profile(ns, read_spec("auto", "/tb3_1"))
+    pub = validate(
+        'ros2 topic pub --once /tb3_1/cmd_vel geometry_msgs/msg/TwistStamped "{twist: {linear: {x: 0.1}}}"',
+        ns,
+    )
+    assert pub.valid and pub.kind == "actuate", pub.reason  # its velocity, under its namespace

@@ -221,6 +221,24 @@ def role_names(profile: Any) -> dict[str, str]:
     return {r: profile.name(r) or "" for r in ASTIBOT_NAMES}
 
 
+GOAL_STATUS = "action_msgs/msg/GoalStatusArray"
+ACTIVE_GOAL = (1, 2, 3)  # action_msgs/msg/GoalStatus: ACCEPTED, EXECUTING, CANCELING
+
+
+def goal_status_topic(profile: Any) -> str | None:
+    """A robot that reports no status of its own but navigates by an action (Nav2): its action
+    server's goal status topic tells whether a goal runs (rcl_action: <action>/_action/status)."""
+    if profile is None or profile.has("status") or profile.kind("navigation") != "action":
+        return None
+    return f"{profile.name('navigation')}/_action/status"
+
+
+def _from_goal_status(msg: dict[str, Any], velocity: tuple | None) -> Status:
+    running = any(int(_f(g.get("status"), 0)) in ACTIVE_GOAL for g in msg.get("status_list") or [])
+    speed = math.hypot(velocity[0], velocity[1]) if velocity else 0.0
+    return Status("navigating" if running else "idle", "", "", "", speed, False, False)
+
+
 def _pose(msg: dict[str, Any]) -> Pose2D:
     """A Pose2D, or the pose of a PoseWithCovarianceStamped or an Odometry."""
     if "x" in msg:
@@ -289,6 +307,8 @@ def from_messages(
             bool(s.get("e_stopped", False)),
             bool(s.get("docked", False)),
         )
+    if status is None and (goals := messages.get(goal_status_topic(profile) or "")) is not None:
+        status = _from_goal_status(goals, velocity)
     if (sc := messages.get(n["scan"])) is not None:
         stamp = sc.get("header", {}).get("stamp", {})
         scan = Scan(

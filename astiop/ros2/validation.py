@@ -27,8 +27,10 @@ class Checked:
     notes: tuple[str, ...] = field(default_factory=tuple)
 
 
-def _suggest(name: str, known) -> str:
-    close = difflib.get_close_matches(name, list(known), n=1, cutoff=0.5)
+def _suggest(name: str, known, avoid: set[str] | frozenset = frozenset()) -> str:
+    """A close name the robot has; `avoid`: names never offered (one that moves the robot for
+    one that reads it: /goal_pose for /robot_pose)."""
+    close = difflib.get_close_matches(name, [k for k in known if k not in avoid], n=1, cutoff=0.5)
     return f"; did you mean {close[0]}?" if close else ""
 
 
@@ -48,12 +50,29 @@ def validate(text: str, catalog: Catalog, distro: str | None = None) -> Checked:
         return Checked(text, cmd, False, str(exc))
 
 
+def moving_topics(catalog: Catalog) -> set[str]:
+    """The topics that move the robot: what it listens to, its velocity command, a goal topic,
+    and by convention any goal, initial pose or velocity command (Nav2's /goal_pose,
+    /initialpose, /cmd_vel_nav)."""
+    words = ("goal", "initialpose", "cmd_vel")
+    names = {
+        t.name for t in catalog.topics.values() if t.actuating or any(w in t.name for w in words)
+    }
+    profile = catalog.profile
+    if profile is not None:
+        names.add(profile.name("velocity_command") or "")
+        if profile.kind("navigation") == "topic":
+            names.add(profile.name("navigation") or "")
+    return names
+
+
 def _topic(cmd: Ros2Command, catalog: Catalog):
     spec = catalog.topics.get(cmd.name)
     if spec is None:
+        avoid = moving_topics(catalog) if cmd.sub != "pub" else frozenset()
         raise InterfaceError(
             f"there is no topic {cmd.name} on this robot"
-            + _suggest(cmd.name, catalog.topics)
+            + _suggest(cmd.name, catalog.topics, avoid)
             + " (ros2 topic list shows them)"
         )
     return spec
@@ -73,10 +92,11 @@ def _validate(cmd: Ros2Command, catalog: Catalog) -> Checked:
         return Checked(text, cmd, True, type=spec.type)
     if key == ("topic", "pub"):
         spec = _topic(cmd, catalog)
-        if not spec.subscriber:
+        velocity = catalog.profile.name("velocity_command") if catalog.profile else "/cmd_vel"
+        if not spec.subscriber and spec.name != velocity:
             raise InterfaceError(
                 f"nothing on the robot listens to {spec.name}; the only topic "
-                "you may publish to is /cmd_vel"
+                f"you may publish to is {velocity or '/cmd_vel'}"
             )
         _check_type(cmd.args["type"], spec.type, spec.name)
         if "once" not in cmd.flags and "times" not in cmd.options:

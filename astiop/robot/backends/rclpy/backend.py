@@ -26,11 +26,13 @@ from astiop.robot.backends.rclpy.verbs import RclpyVerbs
 from astiop.robot.backends.rclpy.watch import TopicWatch, watch
 from astiop.robot.inflight import InFlight, Job
 from astiop.robot.state import (
+    GOAL_STATUS,
     OccupancyGrid,
     RobotEvent,
     RobotState,
     TopicStat,
     from_messages,
+    goal_status_topic,
     grid_from_message,
     live_topic_stats,
 )
@@ -207,6 +209,15 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
             w = watch(self.proc, name, spec.type, on_message)
             if w is not None:  # a new dict: the sampler may be iterating the old one
                 self._watches = {**self._watches, name: w}
+        goals = goal_status_topic(self.catalog.profile)
+        if (
+            goals
+            and goals not in self._watches
+            and self.proc.node.get_publishers_info_by_topic(goals)
+        ):
+            w = watch(self.proc, goals, GOAL_STATUS)
+            if w is not None:
+                self._watches = {**self._watches, goals: w}
 
     # -- topics watched on demand -------------------------------------------------------------
     def _want(self, name: str) -> None:
