@@ -10,6 +10,8 @@ import threading
 import time
 
 from astiop.agent import goals
+from astiop.agent.intent import Intent
+from astiop.agent.rules import command_for, nav_action
 from astiop.bounded import MAX_COMMAND_CHARS, has_controls, one_line, preview
 from astiop.mcp.approval import Policy, clear
 from astiop.mcp.audit import CALL, AuditTrail, Call
@@ -17,7 +19,7 @@ from astiop.mcp.mission_tools import MissionTools
 from astiop.robot.backend import Execution
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.safety import Review
-from astiop.ros2.render import GOTO_TYPE, STAMPED, goto_command
+from astiop.ros2.render import STAMPED, goto_command
 from astiop.store import Store
 
 __all__ = ["CALL", "TOOL_CLASSES", "Call", "Refused", "RobotTools"]
@@ -82,8 +84,11 @@ class RobotTools(MissionTools):
     def robot_state(self) -> dict:
         gw = self.gateway
         state = gw.state()
-        topics = ["/robot_pose", "/odom", "/battery_status", "/robot_status"]
-        times = gw.message_times(topics)
+        profile = gw.profile
+        pose, odom, battery, status = (
+            profile.name(r) or "" for r in ("pose", "odometry", "battery", "status")
+        )
+        times = gw.message_times([n for n in (pose, odom, battery, status) if n])
 
         def age(*names: str) -> float | None:
             for name in names:
@@ -95,22 +100,22 @@ class RobotTools(MissionTools):
         p = state.pose
         out["pose"] = None if p is None else {
             "x_m": round(p.x, 3), "y_m": round(p.y, 3),
-            "theta_deg": round(math.degrees(p.theta), 1), "age_s": age("/robot_pose", "/odom"),
+            "theta_deg": round(math.degrees(p.theta), 1), "age_s": age(pose, odom),
         }  # fmt: skip
         b = state.battery
         out["battery"] = None if b is None else {
             "percent": round(b.percentage * 100, 1), "voltage_v": round(b.voltage, 2),
-            "charging": b.charging, "age_s": age("/battery_status"),
+            "charging": b.charging, "age_s": age(battery),
         }  # fmt: skip
         s = state.status
         out["status"] = None if s is None else {
             "state": state.state_word, "mode": s.mode, "active_goal": s.active_goal,
-            "docked": s.docked, "speed_m_s": round(s.speed, 3), "age_s": age("/robot_status"),
+            "docked": s.docked, "speed_m_s": round(s.speed, 3), "age_s": age(status),
         }  # fmt: skip
         out["faults"] = {
             "fault": (s.fault if s else None) or None,
             "e_stop_engaged": state.e_stopped,
-            "age_s": age("/robot_status"),
+            "age_s": age(status),
         }
         out["last_goal"] = dict(self.last_goal) or None
         out["note"] = "measured: as the robot reported it; age_s is how old that report is"
@@ -156,31 +161,47 @@ class RobotTools(MissionTools):
         if loc is None:
             known = ", ".join(x.name for x in self.store.list_locations()) or "none"
             raise Refused(f"no location named {preview(name)} (known: {known})")
-        return self._actuate(goto_command(loc.name), goal=(loc.name, (loc.x, loc.y)))
+        profile = self.gateway.profile
+        if nav_action(profile):  # Nav2: the place's pose as a goal
+            text = command_for(Intent("navigate", xy=(loc.x, loc.y), theta=loc.theta), profile)
+        else:
+            text = goto_command(loc.name)
+        return self._actuate(text, goal=(loc.name, (loc.x, loc.y)))
 
     def go_to_pose(self, x: float, y: float, theta_deg: float) -> str:
         x, y = finite("x", x), finite("y", y)
         theta = math.radians(finite("theta_deg", theta_deg) % 360.0)
-        text = (
-            f"ros2 service call /goto_position {GOTO_TYPE} "
-            f'"{{x: {x:.3f}, y: {y:.3f}, theta: {theta:.4f}}}"'
-        )
+        text = command_for(Intent("navigate", xy=(x, y), theta=theta), self.gateway.profile)
+        if text is None:
+            raise Refused("this robot has no way to be sent to a pose (no navigation role)")
         return self._actuate(text, goal=(f"({x:.2f}, {y:.2f})", (x, y)))
 
     def dock(self) -> str:
-        return self._actuate(f"ros2 service call /dock {TRIGGER}", goal=("dock", None))
+        return self._actuate(self._trigger("dock"), goal=("dock", None))
 
     def undock(self) -> str:
-        return self._actuate(f"ros2 service call /undock {TRIGGER}", goal=("undock", None))
+        return self._actuate(self._trigger("undock"), goal=("undock", None))
+
+    def _trigger(self, role: str) -> str:
+        name = self.gateway.profile.name(role)
+        if name is None:
+            raise Refused(f"this robot has no {role} service (`astiop robot profile`)")
+        return f"ros2 service call {name} {TRIGGER}"
 
     def ros2_command(self, command: str) -> str:
         return self._actuate(self._command_text(command))
 
     def stop(self) -> str:
-        ex = self.gateway.run(f"ros2 service call /stop {TRIGGER}", confirm=lambda _c: True)
+        profile = self.gateway.profile
+        text = command_for(Intent("stop"), profile)
+        if text is None:
+            raise Refused("this robot has neither a stop service nor a velocity command")
+        ex = self.gateway.run(text, confirm=lambda _c: True)
         self._record(ex)
         if not ex.executed or ex.error:
             raise Refused(f"stop failed: {ex.reason or ex.error}")
+        if not profile.has("stop"):
+            return "zero velocity sent: this robot has no stop service (commanded)\n" + ex.output
         return "stop sent: motion stopped and any goal canceled (commanded)\n" + ex.output
 
     def estop(self) -> str:
@@ -195,13 +216,14 @@ class RobotTools(MissionTools):
         if not 0 < seconds <= MAX_MOVE_S:
             raise Refused(f"seconds must be more than 0 and at most {MAX_MOVE_S:g}")
         gw = self.gateway
-        type_ = gw.catalog.topics["/cmd_vel"].type if "/cmd_vel" in gw.catalog.topics else ""
+        name = gw.profile.name("velocity_command") or "/cmd_vel"
+        type_ = gw.catalog.topics[name].type if name in gw.catalog.topics else ""
         twist = f"{{linear: {{x: {vx:g}, y: {vy:g}}}, angular: {{z: {wz:g}}}}}"
         values = f"{{twist: {twist}}}" if type_ == STAMPED else twist
         # reviewed and approved as what it is: this velocity at 10 Hz for `seconds`
         times = max(1, round(seconds / DRIVE_PERIOD_S))
         type_ = type_ or "geometry_msgs/msg/Twist"
-        text = f'ros2 topic pub -t {times} -r {1 / DRIVE_PERIOD_S:g} /cmd_vel {type_} "{values}"'
+        text = f'ros2 topic pub -t {times} -r {1 / DRIVE_PERIOD_S:g} {name} {type_} "{values}"'
         with self._one_actuation():
             review = self._clearance(text)
             msg = review.checked.message or {}
