@@ -27,6 +27,7 @@ from astiop.robot.sampler import StateSampler
 from astiop.robot.state import RobotState, TopicStat
 from astiop.ros2.render import goto_command, sent_text
 from astiop.ros2.validation import Checked
+from astiop.screens import mission_commands
 from astiop.screens.approvals import ApprovalDesk
 from astiop.screens.bench import BenchScreen
 from astiop.screens.chat import ChatScreen
@@ -195,6 +196,7 @@ class AstiopApp(App):
                 f"Screen: {mode.title()}", f"Show the {mode} screen (f{key})",
                 partial(self.switch_mode, mode),
             )  # fmt: skip
+        yield from mission_commands.palette(self)
         yield SystemCommand(
             "Release the E-STOP",
             "Let the robot move again, after a y/n (ctrl+r)",
@@ -346,7 +348,7 @@ class AstiopApp(App):
             f"Run this command? It moves the robot.\n\n{sent_text(checked)}", timeout_s
         )
 
-    def confirm_mission_from_thread(self, steps) -> bool:
+    def confirm_mission_from_thread(self, steps, forever: bool = False) -> bool:
         """A mission is approved whole, every step shown, before its first step runs (as each
         command is, unless the operator turned confirmation off)."""
         from astiop.missions.steps import describe
@@ -354,9 +356,21 @@ class AstiopApp(App):
         if not self.services.settings.robot.confirm_actuation:
             return True
 
-        listed = describe(steps).replace("; ", "\n")
+        listed = describe(steps, forever).replace("; ", "\n")
         return self._ask_from_thread(
             f"Start this mission of {len(steps)} steps? It moves the robot.\n\n{listed}", None
+        )
+
+    def replace_mission_from_thread(self, running: str, steps, forever: bool = False) -> bool:
+        """A new mission while one runs: asked always (confirmation off too), every step of the
+        new one shown; yes ends the running one as replaced, then starts the new one."""
+        from astiop.missions.steps import describe
+
+        listed = describe(steps, forever).replace("; ", "\n")
+        return self._ask_from_thread(
+            f"{running[:1].upper()}{running[1:]}. Replace it?\n\nThe new mission of "
+            f"{len(steps)} steps (it moves the robot):\n{listed}",
+            None,
         )
 
     def _ask_from_thread(self, question: str, timeout_s: float | None) -> bool:

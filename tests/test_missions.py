@@ -250,7 +250,7 @@ def test_the_cli_runs_a_mission_in_order_and_shows_it(tmp_path, monkeypatch):
     for args, said in (
         (("mission", "show", "7"), "no mission 7"),
         (("mission", "cancel", "1"), "mission 1 is succeeded: nothing to cancel"),
-        (("mission", "resume", "1", "--yes"), "not interrupted"),
+        (("mission", "resume", "1", "--yes"), "not paused or interrupted"),
     ):
         bad = run_cli(*args)
         assert bad.returncode != 0 and said in bad.stderr and len(bad.stderr.splitlines()) == 1

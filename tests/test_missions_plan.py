@@ -6,7 +6,7 @@ import time
 
 import pytest
 
-from astiop.agent.mission_plan import steps_for
+from astiop.agent.mission_plan import steps_for, until_stopped
 from astiop.bench import multistep, runner
 from astiop.bench.report import load_report
 from astiop.bench.suites import RobotCase
@@ -75,6 +75,36 @@ def test_plain_requests_become_steps_in_their_order(request_text, plan):
 )
 def test_requests_that_are_not_plain_missions(request_text):
     assert steps_for(request_text, PLACES) is None
+
+
+@pytest.mark.parametrize(
+    "request_text,plan",
+    [
+        (
+            "patrol between shipping and the assembly station until I stop it",
+            "1. go to shipping; 2. go to assembly_station; repeated until stopped",
+        ),
+        (
+            "go to shipping, then inspection zone a, forever",
+            "1. go to shipping; 2. go to inspection_zone_a; repeated until stopped",
+        ),
+        (
+            "patrol between cps storage and shipping continuously",
+            "1. go to cps_storage; 2. go to shipping; repeated until stopped",
+        ),
+        (
+            "patrol between shipping and inspection zone b until told to stop",
+            "1. go to shipping; 2. go to inspection_zone_b; repeated until stopped",
+        ),
+        (
+            "go to shipping, then dock",  # no repeat: once, as before
+            "1. go to shipping; 2. dock",
+        ),
+    ],
+)
+def test_until_i_stop_it_repeats_with_no_count(request_text, plan):
+    text, forever = until_stopped(request_text)
+    assert describe(steps_for(text, PLACES), forever) == plan
 
 
 def case(**outcome) -> RobotCase:

@@ -1,6 +1,7 @@
 """A request of several steps read as a mission, without a model where the words are plain:
 "go to shipping, then inspection zone a, then dock", "patrol between the assembly station and
-shipping twice", "if the battery is under 30 %, dock first, then go to cps storage".
+shipping twice", "if the battery is under 30 %, dock first, then go to cps storage", "patrol
+between shipping and the assembly station until I stop it" (`until_stopped`).
 
 A model's plan of several goals becomes a mission too, held to the request: only the steps the
 request names, in its order (`from_actions`)."""
@@ -40,6 +41,24 @@ _FIRST = re.compile(r"\s+(?:first|now|next|afterwards|at the end|again)\b", re.I
 _UNKNOWN_PLACE = re.compile(r"\b(?:to|at|visit)\s+(?:the\s+)?([a-z][a-z0-9 _-]{1,40})$", re.I)
 _READ_WHAT = {"/battery_status": "battery", "/obstacles": "obstacles"}
 STEP_CAP = 40  # a repeat that would make more steps than this is not read as a mission
+
+
+_UNTIL_STOPPED = re.compile(
+    r",?\s*\b(?:until\s+(?:i|you|we|someone)\s+(?:stop|cancel|halt)(?:\s+(?:it|you|them|this|that))?"
+    r"|until\s+(?:i\s+)?(?:tell|told|ask|asked)\s+(?:you\s+|it\s+)?to\s+stop"
+    r"|until\s+(?:stopped|canceled|cancelled)|forever|continuously|indefinitely|endlessly"
+    r"|non-?stop)\b",
+    re.I,
+)
+
+
+def until_stopped(request: str) -> tuple[str, bool]:
+    """ "patrol between A and B until I stop it": (the request without the repeat, True). A
+    mission repeated so runs round after round until it is canceled."""
+    m = _UNTIL_STOPPED.search(request)
+    if m is None:
+        return request, False
+    return (request[: m.start()] + request[m.end() :]).strip(" ,."), True
 
 
 _MAYBE = re.compile(

@@ -7,6 +7,7 @@ from __future__ import annotations
 import asyncio
 import re
 from collections.abc import Callable
+from functools import partial
 from typing import Any
 
 from astiop.agent import gate, mission_plan
@@ -19,7 +20,11 @@ from astiop.robot.gateway import RobotGateway
 from astiop.robot.safety import Review
 from astiop.store import Store
 
-ConfirmMission = Callable[[list[Step]], bool]
+# (steps, repeated until stopped) -> approved
+ConfirmMission = Callable[[list[Step], bool], bool]
+# (the mission in the way, said; the new one's steps; repeated until stopped) -> replace it.
+# True: replace without asking (astiop chat --replace); None or False: refuse.
+ReplaceMission = Callable[[str, list[Step], bool], bool] | bool | None
 GOAL_KINDS = ("navigate", "dock", "undock")
 
 
@@ -49,7 +54,7 @@ def confirmer(
     if confirm is None:
         return None
 
-    def each(steps: list[Step]) -> bool:
+    def each(steps: list[Step], _forever: bool = False) -> bool:
         commands = dict.fromkeys(c for c in (s.command() for s in steps) if c)
         return all(confirm(review(c).checked) for c in commands if review(c).needs_confirmation)
 
@@ -77,27 +82,59 @@ def start(
     review: Callable[[str], Review],
     confirm: ConfirmMission | None,
     result: TurnResult,
+    *,
+    forever: bool = False,
+    replace: ReplaceMission = None,
 ) -> str:
-    """Start the mission; the turn's answer (started, or why not)."""
+    """Start the mission; the turn's answer (started, or why not). A mission already running
+    on the robot is replaced only if the operator says so (asked, or --replace)."""
     total = len(steps)
-    plan = describe(steps)
+    plan = describe(steps, forever)
     why = check_steps(steps, review)
     if why is not None:
         result.refused = why
         return f"I did not start this mission: {why}. Nothing was sent to the robot. ({plan})"
-    if confirm is None:
-        result.refused = "needs the operator's confirmation"
-        return f"This mission moves the robot and needs the operator's confirmation: {plan}"
-    if not confirm(steps):
-        result.refused = "not confirmed by the operator"
-        return f"Mission not started: not confirmed by the operator. ({plan})"
+    live = runner.live_mission()
+    approved = False
+    if live is not None:
+        said = view.live_text(runner.store, live["id"])
+        if replace is None or replace is False:
+            result.refused = f"{said}: one mission per robot at a time"
+            return (
+                f"Mission not started: {said}. Replace it (astiop chat --replace) or cancel it "
+                f"first (astiop mission cancel {live['id']}). Nothing was sent. ({plan})"
+            )
+        if callable(replace):
+            if not replace(said, steps, forever):
+                result.refused = f"mission {live['id']} not replaced, by the operator"
+                return (
+                    f"Mission not started: mission {live['id']} goes on, not replaced. "
+                    f"Nothing was stored or sent. ({plan})"
+                )
+            approved = True  # the question showed every step of the new mission
+    if not approved:
+        if confirm is None:
+            result.refused = "needs the operator's confirmation"
+            return f"This mission moves the robot and needs the operator's confirmation: {plan}"
+        if not confirm(steps, forever):
+            result.refused = "not confirmed by the operator"
+            return f"Mission not started: not confirmed by the operator. ({plan})"
     gateway.start()  # the robot's live state: each step's end is read from it
     try:
-        result.mission_id = runner.start(steps, request, source="chat")
+        result.mission_id = runner.start(
+            steps,
+            request,
+            source="chat",
+            forever=forever,
+            replace=live["id"] if live is not None else None,
+        )
     except MissionError as exc:
         result.refused = str(exc)
         return f"Mission not started: {exc}"
-    return f"mission {result.mission_id} started: {total} step{'s' * (total != 1)} — {plan}"
+    started = f"mission {result.mission_id} started: {total} step{'s' * (total != 1)} — {plan}"
+    if live is not None:
+        started += f" (it replaced mission {live['id']})"
+    return started
 
 
 _ABOUT = re.compile(
@@ -135,9 +172,10 @@ async def without_model(agent: Any, request: str, intents: list[Intent], result,
             result.answer, result.grounding = said, "mission record"
             emit("answer_token", said)
             return True
-    if not mission_plan.may_be_mission(request, intents):
+    text, forever = mission_plan.until_stopped(request)
+    if not (forever or mission_plan.may_be_mission(request, intents)):
         return False
-    steps = await asyncio.to_thread(mission_plan.steps_for, request, agent.places())
+    steps = await asyncio.to_thread(mission_plan.steps_for, text, agent.places())
     if steps:
         await begin(agent, request, steps, result, emit)
     return bool(steps)
@@ -146,8 +184,10 @@ async def without_model(agent: Any, request: str, intents: list[Intent], result,
 async def begin(agent: Any, request: str, steps: list[Step], result: TurnResult, emit) -> None:
     """The agent's mission started (or refused, and why), as the turn's answer."""
     confirm = confirmer(agent.confirm_mission, agent.confirm, agent._review)
+    forever = mission_plan.until_stopped(request)[1]
+    run = partial(start, forever=forever, replace=agent.replace_mission)
     result.answer = await asyncio.to_thread(
-        start, agent.gateway, agent.missions, request, steps, agent._review, confirm, result
+        run, agent.gateway, agent.missions, request, steps, agent._review, confirm, result
     )
     result.grounding = "mission"
     emit("answer_token", result.answer)

@@ -66,6 +66,7 @@ class Agent:
         narrow_tools: bool = True,
         missions: MissionRunner | None = None,
         confirm_mission: mission_turn.ConfirmMission | None = None,
+        replace_mission: mission_turn.ReplaceMission = None,
     ):
         if interpretation not in ("grounded", "raw"):
             raise ValueError(f"interpretation must be 'grounded' or 'raw', not '{interpretation}'")
@@ -90,6 +91,7 @@ class Agent:
         self._schema_ok = True
         self._missions = missions
         self.confirm_mission = confirm_mission
+        self.replace_mission = replace_mission  # a new mission while one runs: ask, or not
 
     @property
     def missions(self) -> MissionRunner | None:

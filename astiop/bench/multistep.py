@@ -151,7 +151,7 @@ def mission_agent(store: Store, config, endpoint, mode, gateway, case: RobotCase
         mode=mode,
         max_tokens=min(config.max_tokens, 160),
         confirm=lambda _c: True,
-        confirm_mission=lambda _s: True,
+        confirm_mission=lambda _s, _f=False: True,
         fallback=False,
         interpretation=config.interpretation,
         missions=runner,

@@ -25,6 +25,11 @@ def chat(
         "--interpretation",
         help="grounded (answers checked against the results) or raw (the model's text).",
     ),
+    replace: bool = typer.Option(
+        False,
+        "--replace",
+        help="A mission while another runs on the robot replaces it (default: refused).",
+    ),
     as_json: bool = typer.Option(False, "--json"),
 ) -> None:
     """Run one agent turn against the robot (the simulator by default) and print the answer."""
@@ -63,12 +68,15 @@ def chat(
 
     confirm = (lambda _c: True) if yes else (ask if interactive() else None)
 
-    def ask_mission(steps) -> bool:
+    def ask_mission(steps, forever: bool = False) -> bool:
         from astiop.missions.steps import describe
 
-        return typer.confirm(f"run this mission (it moves the robot)? {describe(steps)}", err=True)
+        plan = describe(steps, forever)
+        return typer.confirm(f"run this mission (it moves the robot)? {plan}", err=True)
 
-    confirm_mission = (lambda _s: True) if yes else (ask_mission if interactive() else None)
+    confirm_mission = (
+        (lambda _s, _f=False: True) if yes else (ask_mission if interactive() else None)
+    )
 
     def on_step(report) -> None:
         if not as_json:
@@ -76,7 +84,11 @@ def chat(
 
     from astiop.missions.runner import MissionRunner
 
-    runner = MissionRunner(gateway, st.store, on_step=on_step)
+    def on_note(text: str) -> None:
+        if not as_json:
+            typer.echo(text, err=True)
+
+    runner = MissionRunner(gateway, st.store, on_step=on_step, on_note=on_note)
     runner.queue_only = not wait  # --no-wait: a process of its own drives the mission
     agent = Agent(
         gateway,
@@ -89,6 +101,7 @@ def chat(
         interpretation=interpretation,
         missions=runner,
         confirm_mission=confirm_mission,
+        replace_mission=replace,
     )
 
     def on_event(kind: str, data) -> None:

@@ -1,4 +1,5 @@
-"""`astiop mission`: list, show, cancel and resume the robot's missions (multi-step work)."""
+"""`astiop mission`: list, show, pause, resume and cancel the robot's missions (multi-step
+work)."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import typer
 
 from astiop.cli.common import Ending, fail, print_json, state
 
-app = typer.Typer(help="List, show, cancel and resume missions.", no_args_is_help=True)
+app = typer.Typer(help="List, show, pause, resume and cancel missions.", no_args_is_help=True)
 
 
 def _one(ctx: typer.Context, mission_id: int) -> dict:
@@ -63,12 +64,32 @@ def show(
 def cancel(
     ctx: typer.Context, mission_id: int, as_json: bool = typer.Option(False, "--json")
 ) -> None:
-    """Cancel a running mission (its process stops the robot) or drop an interrupted one."""
+    """Cancel a running or paused mission (its process stops the robot) or drop an
+    interrupted one."""
     m = _one(ctx, mission_id)
     before = state(ctx).store.request_mission_cancel(mission_id)
-    if before not in ("running", "interrupted"):
+    if before not in ("running", "paused", "interrupted", "queued"):
         fail(f"mission {mission_id} is {m['status']}: nothing to cancel")
-    said = "cancel asked of its process" if before == "running" else "dropped"
+    said = "cancel asked of its process" if before in ("running", "paused") else "dropped"
+    if as_json:
+        print_json({"id": mission_id, "was": before, "now": said})
+    else:
+        typer.echo(f"mission {mission_id}: {said}")
+
+
+@app.command("pause")
+def pause(
+    ctx: typer.Context, mission_id: int, as_json: bool = typer.Option(False, "--json")
+) -> None:
+    """Hold a running mission at the end of its current step (that step ends as the robot
+    reports it; the next starts only on `astiop mission resume`)."""
+    m = _one(ctx, mission_id)
+    if m["status"] == "paused" or m["pause_requested"]:
+        fail(f"mission {mission_id} is paused already (astiop mission resume {mission_id})")
+    before = state(ctx).store.request_mission_pause(mission_id)
+    if before != "running":
+        fail(f"mission {mission_id} is {m['status']}: only a running mission pauses")
+    said = f"pauses at the end of step {m['step']} of {m['steps_total']}"
     if as_json:
         print_json({"id": mission_id, "was": before, "now": said})
     else:
@@ -85,7 +106,9 @@ def resume(
     yes: bool = typer.Option(False, "--yes", "-y", help="Do not ask before moving the robot."),
     as_json: bool = typer.Option(False, "--json"),
 ) -> None:
-    """Go on with an interrupted mission in this process, and wait for it to end."""
+    """Go on with a mission. A paused one: its own process goes on with the next step (no
+    --from). An interrupted one (its process ended): this process drives it from the step it
+    was on, or --from, and waits for it to end."""
     from astiop.cli.agent import follow_mission
     from astiop.cli.common import interactive
     from astiop.missions import view
@@ -95,8 +118,11 @@ def resume(
 
     st = state(ctx)
     m = _one(ctx, mission_id)
+    if m["status"] == "paused" or m["pause_requested"]:
+        _unpause(st, m, from_step, as_json)
+        return
     if m["status"] not in ("interrupted", "queued"):
-        fail(f"mission {mission_id} is {m['status']}, not interrupted: nothing to resume")
+        fail(f"mission {mission_id} is {m['status']}, not paused or interrupted: nothing to resume")
     start = from_step or m["step"]
     if not 1 <= start <= m["steps_total"]:
         fail(f"--from must be a step of mission {mission_id}: 1 to {m['steps_total']}")
@@ -115,7 +141,11 @@ def resume(
         if not as_json:
             typer.echo(report.line(), err=True)
 
-    runner = MissionRunner(gateway, st.store, on_step=on_step)
+    def on_note(text: str) -> None:
+        if not as_json:
+            typer.echo(text, err=True)
+
+    runner = MissionRunner(gateway, st.store, on_step=on_step, on_note=on_note)
     gateway.start()
     try:
         runner.resume(mission_id, start)
@@ -132,6 +162,20 @@ def resume(
     final = st.store.mission(mission_id) or {}
     if final.get("status") != "succeeded":
         raise typer.Exit(1)
+
+
+def _unpause(st, m: dict, from_step: int | None, as_json: bool) -> None:
+    """A paused mission goes on in the process that drives it (asked through the store)."""
+    if from_step is not None:
+        fail("--from resumes an interrupted mission only; a paused one goes on where it holds")
+    before = st.store.request_mission_pause(m["id"], pause=False)
+    if before not in ("running", "paused"):
+        fail(f"mission {m['id']} is {before}: nothing to resume")
+    said = "resume asked of its process" if before == "paused" else "the pause was withdrawn"
+    if as_json:
+        print_json({"id": m["id"], "was": before, "now": said})
+    else:
+        typer.echo(f"mission {m['id']}: {said}")
 
 
 def drive_detached(st, mission_id: int) -> Path:

@@ -75,7 +75,9 @@ class MissionTools:
             self._runner = MissionRunner(self.gateway, self.store)
         return self._runner
 
-    def start_mission(self, steps: list[dict]) -> str:
+    def start_mission(
+        self, steps: list[dict], replace: bool = False, until_stopped: bool = False
+    ) -> str:
         from astiop.mcp.tools import Refused
 
         known = {loc.name for loc in self.store.list_locations()}
@@ -89,19 +91,37 @@ class MissionTools:
             if review is not None and not (review.checked.valid and review.allowed):
                 why = review.reason or review.checked.reason
                 raise Refused(f"step {n} ({step.label()}): {why}; nothing was sent")
-        plan = describe(parsed)
-        self._approve_mission(plan)
+        plan = describe(parsed, until_stopped)
+        runner = self._missions()
+        live = runner.live_mission()
+        if live is not None and not replace:
+            raise Refused(
+                f"{view.live_text(self.store, live['id'])}: one mission per robot. Call "
+                "start_mission with replace: true to replace it, or cancel_mission first; "
+                "nothing was sent"
+            )
+        replaces = ""
+        if live is not None and (m := view.as_json(self.store, live["id"])) is not None:
+            replaces = f"It replaces mission {m['id']} ({m['status']}: {view.where(m)})."
+        self._approve_mission(plan, replaces)
         self.gateway.start()
         try:
-            mission_id = self._missions().start(parsed, plan, source="mcp")
+            mission_id = runner.start(
+                parsed,
+                plan,
+                source="mcp",
+                forever=until_stopped,
+                replace=live["id"] if live is not None else None,
+            )
         except MissionError as exc:
             raise Refused(str(exc)) from None
+        said = f" It replaced mission {live['id']}." if live is not None else ""
         return (
-            f"mission {mission_id} started: {len(parsed)} steps — {plan}. Each step starts when "
-            "the one before has ended; mission_status reports them as the robot did them."
+            f"mission {mission_id} started: {len(parsed)} step{'s' * (len(parsed) != 1)} — {plan}. Each step starts when "
+            f"the one before has ended; mission_status reports them as the robot did them.{said}"
         )
 
-    def _approve_mission(self, plan: str) -> None:
+    def _approve_mission(self, plan: str, replaces: str = "") -> None:
         from astiop.mcp.tools import Refused
 
         if self.gateway.e_stopped:
@@ -112,9 +132,10 @@ class MissionTools:
             raise Refused(NO_CONSOLE)
         call = CALL.get()
         detail = f"MCP client '{call.client}' asks for a mission of every step below:\n{plan}"
-        request = self.store.request_approval(
-            call.client, f"mission: {plan}", detail, self.policy.timeout_s
-        )
+        if replaces:
+            detail += f"\n{replaces}"
+        what = f"mission: {plan}" + (f" ({replaces.rstrip('.')})" if replaces else "")
+        request = self.store.request_approval(call.client, what, detail, self.policy.timeout_s)
         status = wait_for_decision(self.store, request, self.policy.timeout_s)
         if status == "denied":
             raise Refused("denied by the operator")
@@ -145,7 +166,7 @@ class MissionTools:
         before = self.store.request_mission_cancel(mission_id)
         if before is None:
             raise Refused(f"no mission {mission_id}")
-        if before not in ("running", "interrupted"):
+        if before not in ("running", "paused", "interrupted", "queued"):
             raise Refused(f"mission {mission_id} is {before}: nothing to cancel")
         runner = self._missions()
         if runner.mission_id == mission_id and runner.running:

@@ -53,7 +53,9 @@ DESCRIPTIONS = {
     "ended as the robot reported it: {kind: goto, place | x, y}, {kind: dock|undock|load|unload}, "
     "{kind: wait, seconds}, {kind: read, what: battery|obstacles}; any step may hold "
     "'if': {what: battery|obstacles, op: '<'|'>', value}. One approval shows every step. "
-    "A failed step ends the mission.",
+    "A failed step ends the mission. One mission per robot: replace: true replaces the "
+    "running one (the approval says so); until_stopped: true repeats the steps until "
+    "cancel_mission.",
     "mission_status": "A mission (default: the latest): each step's status, detail and the "
     "robot's pose at its end, as stored.",
     "cancel_mission": "Cancel the running mission (default) and stop the robot; drops an "

@@ -1,7 +1,9 @@
 """A mission run in a thread of its own, through the gateway, one step after the other: each
 step starts only once the one before has ended as the robot reported it, and each end is stored
-with the robot's pose. A failed step ends the mission with its reason; so do the E-STOP and a
-cancel (from this process or, through the store, any other)."""
+with the robot's pose. A failed step ends the mission with its reason; so do the E-STOP, a
+cancel and a replacing mission (from this process or, through the store, any other). A pause
+holds the robot between two steps; a mission repeated until stopped starts over after its last
+step, round after round, until canceled (a failed step still ends it: never repeated)."""
 
 from __future__ import annotations
 
@@ -11,21 +13,28 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from astiop.missions import follow
+from astiop.missions import follow, view
 from astiop.missions.follow import StepEnd
 from astiop.missions.steps import Step
 from astiop.robot.gateway import RobotGateway
 from astiop.store import Store, StoreError
+from astiop.store.missions import LIVE
 
 log = logging.getLogger(__name__)
 YES = lambda _c: True  # noqa: E731  (the operator approved the whole mission at its start)
 STEP_TIMEOUT_S = 900.0
+REPLACE_WAIT_S = 30.0  # for the replaced mission's process to end it (its step's goal too)
+MIN_ROUND_S = 1.0  # a repeat until stopped never spins faster than this
 # a step that ended so ends the mission, with this status
 ENDS_MISSION = {"e-stopped": "stopped", "canceled": "canceled"}
 
 
 class MissionError(Exception):
     """A mission that cannot start or resume (one is running, nothing to resume, no steps)."""
+
+    def __init__(self, text: str, running: int | None = None):
+        super().__init__(text)
+        self.running = running  # the mission in the way, when another one runs on this robot
 
 
 @dataclass(frozen=True)
@@ -36,11 +45,14 @@ class StepReport:
     label: str
     status: str
     detail: str
+    round: int | None = None  # a mission repeated until stopped: which round
 
     def line(self) -> str:
         mark = {"succeeded": "✓", "skipped": "–"}.get(self.status, "✗")
+        where = f"round {self.round} step" if self.round else "step"
         return (
-            f"{mark} step {self.seq + 1}/{self.total} {self.label}: {self.status} — {self.detail}"
+            f"{mark} {where} {self.seq + 1}/{self.total} {self.label}: {self.status} — "
+            f"{self.detail}"
         )
 
 
@@ -52,8 +64,14 @@ def robot_key(gateway: RobotGateway) -> str:
     return gateway.label
 
 
+def _as_replaced(end: StepEnd, by: int) -> StepEnd:
+    """The step a replacing mission cut short: 'replaced by mission M', never 'canceled'."""
+    said = end.detail.replace("canceled by the operator", f"replaced by mission {by}", 1)
+    return StepEnd("replaced", said)
+
+
 class MissionRunner:
-    """Starts, follows and cancels the missions of one robot (one at a time)."""
+    """Starts, follows, pauses and cancels the missions of one robot (one at a time)."""
 
     def __init__(
         self,
@@ -62,12 +80,14 @@ class MissionRunner:
         places: dict[str, tuple[float, float]] | None = None,
         on_step: OnStep | None = None,
         step_timeout_s: float = STEP_TIMEOUT_S,
+        on_note: Callable[[str], None] | None = None,
     ):
         self.gateway = gateway
         self.store = store
         self.robot = robot_key(gateway)
         self._places = places
         self.on_step = on_step
+        self.on_note = on_note  # paused, going on: said where a caller follows the mission
         self.step_timeout_s = step_timeout_s
         self._cancel = threading.Event()
         self._thread: threading.Thread | None = None
@@ -75,21 +95,70 @@ class MissionRunner:
         self.queue_only = False  # start() stores the mission for another process to drive
 
     # -- starting -------------------------------------------------------------------
-    def start(self, steps: list[Step], request: str = "", source: str = "chat") -> int:
+    def start(
+        self,
+        steps: list[Step],
+        request: str = "",
+        source: str = "chat",
+        *,
+        forever: bool = False,
+        replace: int | None = None,
+    ) -> int:
+        """A new mission; `replace`: the running mission the operator agreed it replaces (it
+        ends as 'replaced by mission M' before the first step of this one starts)."""
         if not steps:
             raise MissionError("a mission needs at least one step")
-        self._refuse_if_running()
+        other = self.live_mission()
+        if other is not None and other["id"] != replace:
+            raise MissionError(self._in_the_way(other["id"]), other["id"])
         mission_id = self.store.create_mission(
             self.robot,
             request,
             source,
             [(s.to_json(), s.label()) for s in steps],
-            queued=self.queue_only,
+            queued=self.queue_only or other is not None,
+            forever=forever,
         )
         self.mission_id = mission_id
+        if other is not None:
+            self._replace(other["id"], mission_id)
+            if not self.queue_only and not self.store.claim_mission(mission_id, 0):
+                raise MissionError(f"mission {mission_id} was dropped meanwhile")
         if not self.queue_only:
-            self._launch(mission_id, steps, 0)
+            self._launch(mission_id, steps, 0, forever, 1)
         return mission_id
+
+    def live_mission(self) -> dict | None:
+        """The mission running (or paused, or queued) on this robot, if any."""
+        if self.running and self.mission_id is not None:
+            return self.store.mission(self.mission_id)
+        return self.store.running_mission(self.robot)
+
+    def _in_the_way(self, other: int) -> str:
+        return view.live_text(self.store, other)
+
+    def _replace(self, old: int, new: int) -> None:
+        """End mission `old` as replaced by `new`, the way a cancel ends it, and wait for its
+        end; MissionError (and `new` failed, nothing sent) if it does not end in time."""
+        before = self.store.request_mission_replace(old, new)
+        if before not in ("running", "paused"):
+            return  # ended meanwhile, or queued and replaced at once
+        mine = self.running and self.mission_id == old
+        if mine:
+            self._cancel.set()
+        deadline = time.monotonic() + REPLACE_WAIT_S
+        while time.monotonic() < deadline:
+            if mine and self._thread is not None:
+                self._thread.join(0.2)
+            else:
+                time.sleep(0.2)
+            self.store.mark_missions_interrupted()
+            row = self.store.mission(old)
+            if row is None or row["status"] not in LIVE:
+                return
+        why = f"mission {old} did not end within {REPLACE_WAIT_S:g} s; nothing was sent"
+        self.store.finish_mission(new, "failed", why)
+        raise MissionError(why, old)
 
     def resume(self, mission_id: int, from_step: int | None = None) -> int:
         """Go on with an interrupted mission from the step it was on (or `from_step`)."""
@@ -104,28 +173,22 @@ class MissionRunner:
         start = row["step"] if from_step is None else from_step - 1
         if not 0 <= start < len(steps):
             raise MissionError(f"mission {mission_id} has steps 1 to {len(steps)}")
-        self._refuse_if_running(this=mission_id)
+        other = self.live_mission()
+        if other is not None and other["id"] != mission_id:
+            raise MissionError(self._in_the_way(other["id"]), other["id"])
         if not self.store.claim_mission(mission_id, start):
             raise MissionError(f"mission {mission_id} was resumed or dropped meanwhile")
-        self._launch(mission_id, steps, start)
+        self._launch(mission_id, steps, start, bool(row["forever"]), row["round"] or 1)
         return start
 
-    def _refuse_if_running(self, this: int | None = None) -> None:
-        if self.running:
-            raise MissionError(f"mission {self.mission_id} is running on this robot")
-        other = self.store.running_mission(self.robot)
-        if other is not None and other["id"] != this:
-            raise MissionError(
-                f"mission {other['id']} is running on this robot (cancel it first: "
-                f"astiop mission cancel {other['id']})"
-            )
-
-    def _launch(self, mission_id: int, steps: list[Step], start: int) -> None:
+    def _launch(
+        self, mission_id: int, steps: list[Step], start: int, forever: bool, round_: int
+    ) -> None:
         self.mission_id = mission_id
-        self._cancel.clear()
+        self._cancel = threading.Event()  # each mission its own: an old watcher cannot reach it
         self._thread = threading.Thread(
             target=self._run,
-            args=(mission_id, steps, start),
+            args=(mission_id, steps, start, forever, round_),
             name=f"mission-{mission_id}",
             daemon=True,
         )
@@ -146,35 +209,51 @@ class MissionRunner:
         return not self.running
 
     # -- the run --------------------------------------------------------------------
-    def _run(self, mission_id: int, steps: list[Step], start: int) -> None:
+    def _run(
+        self, mission_id: int, steps: list[Step], seq: int, forever: bool, round_: int
+    ) -> None:
         total = len(steps)
         status, reason = "succeeded", f"all {total} steps done"
         try:
-            watcher = threading.Thread(target=self._watch_store, args=(mission_id,), daemon=True)
+            watcher = threading.Thread(
+                target=self._watch_store, args=(mission_id, self._cancel), daemon=True
+            )
             watcher.start()
-            for seq in range(start, total):
+            round_t0 = time.monotonic()
+            while True:
                 step = steps[seq]
                 self.store.step_started(mission_id, seq)
                 end = self._step(step)
+                by = self.store.mission_requests(mission_id)["replaced_by"]
+                if end.status == "canceled" and by:
+                    end = _as_replaced(end, by)
                 pose, docked = self._where()
                 self.store.step_ended(mission_id, seq, end.status, end.detail, pose, docked)
                 if self.on_step:
                     self.on_step(
-                        StepReport(mission_id, seq, total, step.label(), end.status, end.detail)
-                    )
-                if end.status in ("succeeded", "skipped"):
-                    continue
-                at = f"at step {seq + 1} of {total}"
-                if end.status == "e-stopped":
-                    reason = f"stopped by the E-STOP {at} ({step.label()})"
-                elif end.status == "canceled":
-                    reason = f"canceled by the operator {at} ({step.label()})"
-                else:
-                    reason = (
-                        f"step {seq + 1} of {total} ({step.label()}) {end.status}: {end.detail}"
-                    )
-                status = ENDS_MISSION.get(end.status, "failed")
-                break
+                        StepReport(
+                            mission_id, seq, total, step.label(), end.status, end.detail,
+                            round_ if forever else None,
+                        )
+                    )  # fmt: skip
+                if end.status not in ("succeeded", "skipped"):
+                    shown = round_ if forever else 0
+                    status, reason = self._ended(end, seq, total, step, shown, by)
+                    break
+                seq += 1
+                if seq == total:
+                    if not forever:
+                        break
+                    # a round of skipped steps must not spin: at least MIN_ROUND_S each
+                    rest = MIN_ROUND_S - (time.monotonic() - round_t0)
+                    if rest > 0:
+                        self._cancel.wait(rest)
+                    seq, round_, round_t0 = 0, round_ + 1, time.monotonic()
+                    self.store.new_round(mission_id, round_)
+                held = self._hold_if_paused(mission_id, seq, total, steps[seq].label())
+                if held is not None:
+                    status, reason = held
+                    break
         except StoreError as exc:
             status, reason = "failed", f"the store failed: {exc}"
             log.error("mission %s: %s", mission_id, exc)
@@ -188,12 +267,56 @@ class MissionRunner:
         except StoreError as exc:
             log.error("mission %s could not be recorded as %s: %s", mission_id, status, exc)
 
-    def _watch_store(self, mission_id: int) -> None:
+    def _ended(
+        self, end: StepEnd, seq: int, total: int, step: Step, round_: int, by: int | None
+    ) -> tuple[str, str]:
+        """How a step that did not succeed ends the mission: (status, reason)."""
+        at = f"at step {seq + 1} of {total}" + (f" in round {round_}" if round_ else "")
+        done = f"; {round_ - 1} round{'s' * (round_ != 2)} done" if round_ else ""
+        if end.status == "e-stopped":
+            return "stopped", f"stopped by the E-STOP {at} ({step.label()}){done}"
+        if end.status == "canceled":
+            return "canceled", f"canceled by the operator {at} ({step.label()}){done}"
+        if end.status == "replaced" and by:
+            return "replaced", f"replaced by mission {by} {at} ({step.label()}){done}"
+        status = ENDS_MISSION.get(end.status, "failed")
+        where = f"step {seq + 1} of {total}" + (f" in round {round_}" if round_ else "")
+        return status, f"{where} ({step.label()}) {end.status}: {end.detail}{done}"
+
+    def _hold_if_paused(
+        self, mission_id: int, seq: int, total: int, label: str
+    ) -> tuple[str, str] | None:
+        """A pause asked (through the store, from any process) holds the robot here, between
+        the step that ended and the next, until resumed; (status, reason) if the mission ends
+        while held (cancel, replacement, E-STOP), None when it goes on."""
+        if not self.store.mission_requests(mission_id)["pause"]:
+            return None
+        before = f"before step {seq + 1} of {total} ({label})"
+        self.store.mission_held(mission_id, True, seq, f"paused by the operator {before}")
+        self._note(f"mission {mission_id} paused {before}")
+        while True:
+            if self._cancel.wait(0.25):
+                by = self.store.mission_requests(mission_id)["replaced_by"]
+                if by:
+                    return "replaced", f"replaced by mission {by} while paused {before}"
+                return "canceled", f"canceled by the operator while paused {before}"
+            if self.gateway.e_stopped:
+                return "stopped", f"stopped by the E-STOP while paused {before}"
+            if not self.store.mission_requests(mission_id)["pause"]:
+                self.store.mission_held(mission_id, False, seq, "")
+                self._note(f"mission {mission_id} goes on with step {seq + 1} of {total}")
+                return None
+
+    def _note(self, text: str) -> None:
+        if self.on_note is not None:
+            self.on_note(text)
+
+    def _watch_store(self, mission_id: int, cancel: threading.Event) -> None:
         """Another process (astiop mission cancel, the MCP server) asks through the store."""
-        while not self._cancel.wait(0.5):
+        while not cancel.wait(0.5):
             try:
                 if self.store.mission_cancel_requested(mission_id):
-                    self._cancel.set()
+                    cancel.set()
             except StoreError:
                 pass
             if self.gateway.e_stopped:

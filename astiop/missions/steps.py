@@ -106,6 +106,8 @@ class Step:
         return Step(**{**d, "when": when, "xy": xy})
 
 
-def describe(steps: list[Step]) -> str:
-    """'1. go to shipping; 2. dock' — the whole mission on one line (approval, answers)."""
-    return "; ".join(f"{i}. {s.label()}" for i, s in enumerate(steps, 1))
+def describe(steps: list[Step], forever: bool = False) -> str:
+    """'1. go to shipping; 2. dock' — the whole mission on one line (approval, answers); one
+    repeated until stopped says so, with no count."""
+    text = "; ".join(f"{i}. {s.label()}" for i, s in enumerate(steps, 1))
+    return f"{text}; repeated until stopped" if forever else text

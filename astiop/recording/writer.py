@@ -2,7 +2,8 @@
 
 The robot's state topics are written as ROS 2 messages: `ros2msg` schemas built from astiop's
 interface definitions (the distro's), CDR-encoded by `mcap-ros2-support`. The agent's turns and
-the robot's events go on JSON channels with a JSON schema. Log time is the robot's clock: when
+the robot's events go on JSON channels with a JSON schema, and so do the missions (their start,
+each step's end, their end: /astiop/mission). Log time is the robot's clock: when
 the message was published (sim time on the simulator) or received (on the robot).
 
 A chunk is closed and flushed at least every FLUSH_S, so a recording killed at any moment keeps
@@ -26,6 +27,7 @@ from mcap.stream_reader import StreamReader
 from mcap.writer import Writer
 
 from astiop.bounded import one_line
+from astiop.recording import missions
 from astiop.ros2.definitions import definitions
 from astiop.ros2.interfaces import normalize_type, used_types
 
@@ -89,6 +91,7 @@ JSON_SCHEMAS = {
             "message": {"type": "string"},
         },
     },
+    missions.TOPIC: missions.SCHEMA,
 }
 
 
@@ -134,6 +137,7 @@ class SessionRecorder:
         # The agent's turns: those after _turns_after, and those seen running (a turn ends when
         # it ends, not in the order the turns started), so each is written once, when it ends.
         self._turns_after, self._turns_running = self._interaction_marks()
+        self._missions = missions.MissionLog(store)
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._flushed = time.monotonic()
@@ -201,6 +205,7 @@ class SessionRecorder:
         messages = self.gateway.messages(names)
         events = self.gateway.events_since(self._event_seq)
         turns = self._interactions()
+        mission_records = self._missions.poll()
         with self._lock:
             if self._finished:
                 return
@@ -212,6 +217,8 @@ class SessionRecorder:
                 self._event_seq = max(self._event_seq, ev.seq)
             for turn in turns:
                 self._interaction(turn, int(robot_now * 1e9))
+            for record in mission_records:
+                self._json(missions.TOPIC, record, int(robot_now * 1e9))
             if time.monotonic() - self._flushed >= self.flush_s:
                 self._writer.flush()  # closes the open chunk: a kill from here on loses nothing
                 self._file.flush()

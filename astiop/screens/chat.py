@@ -118,6 +118,7 @@ class ChatScreen(ConsoleScreen):
             max_tokens=services.settings.llm.max_tokens,
             confirm=self.app.confirm_from_thread,
             confirm_mission=self.app.confirm_mission_from_thread,
+            replace_mission=self.app.replace_mission_from_thread,
             session="console",
         )
         self.query_one(Input).focus()

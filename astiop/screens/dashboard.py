@@ -18,6 +18,7 @@ from textual.widgets import DataTable, Footer, Header, Static
 from astiop.agent.models.probe import probe
 from astiop.bounded import escape_controls
 from astiop.robot.state import RobotState, TopicStat
+from astiop.screens import mission_commands
 from astiop.screens.base import ConsoleScreen
 from astiop.screens.messages import RobotStateSampled, TurnFinished
 from astiop.screens.panel_text import show_text
@@ -91,7 +92,10 @@ def robot_text(st: RobotState) -> Text:
 
 
 class DashboardScreen(ConsoleScreen):
-    BINDINGS = [Binding("escape", "cancel_mission", "Cancel mission", show=False)]
+    BINDINGS = [
+        Binding("escape", "cancel_mission", "Cancel mission", show=False),
+        Binding("p", "pause_mission", "Pause/resume mission", show=False),
+    ]
 
     def compose(self) -> ComposeResult:
         yield Header(show_clock=False)
@@ -140,18 +144,18 @@ class DashboardScreen(ConsoleScreen):
         m = view.as_json(store, row["id"]) if row else None
         self.app.call_from_thread(self.query_one(MissionPanel).show, m)
 
-    @work(thread=True, group="mission-cancel", exit_on_error=False)
     def action_cancel_mission(self) -> None:
-        """Escape: the running mission is canceled by the process driving it (this one or
+        """Escape: the live mission is canceled by the process driving it (this one or
         another), which stops the robot."""
-        row = self.services.store.latest_mission()
-        if row is None or row["status"] != "running":
-            return
-        self.services.store.request_mission_cancel(row["id"])
-        self.app.call_from_thread(
-            self.notify, f"mission {row['id']}: cancel asked", title="mission"
-        )
-        self.app.call_from_thread(self.read_mission)
+        if self.query_one(MissionPanel).live:
+            mission_commands.control(self.app, "cancel")
+            self.set_timer(0.3, self.read_mission)
+
+    def action_pause_mission(self) -> None:
+        """p: hold the live mission at the end of its step, or let a held one go on."""
+        if self.query_one(MissionPanel).live:
+            mission_commands.control(self.app, "toggle")
+            self.set_timer(0.3, self.read_mission)
 
     def on_screen_resume(self) -> None:
         # on first show too; locations may have changed on the Locations screen, and events

@@ -1,5 +1,10 @@
-"""Missions and their steps: every SQL statement about them. A mission is `running` while a live
-process drives it; one whose process is gone is `interrupted` at its step on the next open."""
+"""Missions and their steps: every SQL statement about them. A mission is `running` (or `paused`
+between two steps) while a live process drives it; one whose process is gone is `interrupted`
+at its step on the next open. Other processes ask (cancel, pause, resume, replace) through the
+mission's row; the driving process reads the asks between and during steps.
+
+A mission repeated until stopped reuses its step rows: each round starts them all `pending`
+again and counts itself in `missions.round`, so the rows always say the current round."""
 
 from __future__ import annotations
 
@@ -8,7 +13,8 @@ import time
 from typing import Any
 
 # a mission in one of these is over; `interrupted` may still be resumed or dropped
-ENDED = ("succeeded", "failed", "canceled", "stopped", "dropped")
+ENDED = ("succeeded", "failed", "canceled", "stopped", "dropped", "replaced")
+LIVE = ("running", "paused", "queued")  # one of these per robot at a time
 QUEUED_S = 60.0  # a queued mission no process claimed within this is interrupted
 
 
@@ -20,6 +26,7 @@ class MissionTables:
         source: str,
         steps: list[tuple[str, str]],
         queued: bool = False,
+        forever: bool = False,
     ) -> int:
         """A new mission, running in this process, or queued for another to claim (astiop
         chat --no-wait hands it to a process of its own); steps are (spec JSON, label)."""
@@ -27,9 +34,9 @@ class MissionTables:
         status, pid = ("queued", None) if queued else ("running", os.getpid())
         with self._tx():
             cur = self.db.conn.execute(
-                "INSERT INTO missions (robot, request, source, status, pid, created_at) "
-                "VALUES (?, ?, ?, ?, ?, ?)",
-                [robot, request, source, status, pid, now],
+                "INSERT INTO missions (robot, request, source, status, pid, created_at, forever) "
+                "VALUES (?, ?, ?, ?, ?, ?, ?)",
+                [robot, request, source, status, pid, now, int(forever)],
             )
             mission_id = int(cur.lastrowid)
             self.db.conn.executemany(
@@ -43,7 +50,7 @@ class MissionTables:
         self.mark_missions_interrupted()
         rows = list(
             self.db.query(
-                "SELECT * FROM missions WHERE robot = ? AND status IN ('running', 'queued') "
+                "SELECT * FROM missions WHERE robot = ? AND status IN ('running', 'paused', 'queued') "
                 "ORDER BY id DESC LIMIT 1",
                 [robot],
             )
@@ -61,6 +68,21 @@ class MissionTables:
     def missions(self, limit: int = 20) -> list[dict[str, Any]]:
         return list(self.db.query("SELECT * FROM missions ORDER BY id DESC LIMIT ?", [limit]))
 
+    def missions_to_record(
+        self, since: float, watching: list[int]
+    ) -> list[tuple[dict[str, Any], list[dict[str, Any]]]]:
+        """For a session's recording: the live missions, those that ended since `since`, and
+        those it watches (seen live, maybe interrupted since), each with its steps."""
+        marks = ",".join("?" * len(watching)) or "NULL"
+        rows = list(
+            self.db.query(
+                "SELECT * FROM missions WHERE status IN ('running', 'paused', 'queued') "
+                f"OR finished_at >= ? OR id IN ({marks}) ORDER BY id",
+                [since, *watching],
+            )
+        )
+        return [(row, self.mission_steps(row["id"])) for row in rows]
+
     def mission_steps(self, mission_id: int) -> list[dict[str, Any]]:
         return list(
             self.db.query(
@@ -72,8 +94,10 @@ class MissionTables:
         with self._tx():
             self.db.conn.execute(
                 "UPDATE mission_steps SET status = 'running', started_at = ?, ended_at = NULL, "
-                "detail = NULL WHERE mission_id = ? AND seq = ?",
-                [time.time(), mission_id, seq],
+                "detail = NULL, x = NULL, y = NULL, theta = NULL, docked = NULL, "
+                "round = (SELECT round FROM missions WHERE id = ?) "
+                "WHERE mission_id = ? AND seq = ?",
+                [time.time(), mission_id, mission_id, seq],
             )
             self.db.conn.execute("UPDATE missions SET step = ? WHERE id = ?", [seq, mission_id])
 
@@ -101,6 +125,70 @@ class MissionTables:
                 [status, reason, time.time(), mission_id],
             )
 
+    def new_round(self, mission_id: int, round_: int) -> None:
+        """A mission repeated until stopped begins its next round; each step row is taken over
+        by this round when its step starts again (until then it holds the round before's end,
+        which the views show as pending)."""
+        with self._tx():
+            self.db.conn.execute(
+                "UPDATE missions SET round = ?, step = 0 WHERE id = ?", [round_, mission_id]
+            )
+
+    def mission_held(self, mission_id: int, paused: bool, next_step: int, reason: str) -> None:
+        """Paused before `next_step` (the step it goes on with), or running again."""
+        with self._tx():
+            self.db.conn.execute(
+                "UPDATE missions SET status = ?, step = ?, reason = ? "
+                "WHERE id = ? AND status IN ('running', 'paused')",
+                ["paused" if paused else "running", next_step, reason or None, mission_id],
+            )
+
+    def mission_requests(self, mission_id: int) -> dict[str, Any]:
+        """What the operator asked of a mission: cancel, pause, and which mission replaces it."""
+        row = self.db.conn.execute(
+            "SELECT cancel_requested, pause_requested, replaced_by FROM missions WHERE id = ?",
+            [mission_id],
+        ).fetchone()
+        if row is None:
+            return {"cancel": False, "pause": False, "replaced_by": None}
+        return {"cancel": bool(row[0]), "pause": bool(row[1]), "replaced_by": row[2]}
+
+    def request_mission_pause(self, mission_id: int, pause: bool = True) -> str | None:
+        """Ask the driving process to hold at the end of the current step (or to go on); the
+        mission's status before, or None when there is no such mission."""
+        self.mark_missions_interrupted()
+        row = self.mission(mission_id)
+        if row is None:
+            return None
+        if row["status"] in ("running", "paused"):
+            with self._tx():
+                self.db.conn.execute(
+                    "UPDATE missions SET pause_requested = ? WHERE id = ?",
+                    [int(pause), mission_id],
+                )
+        return row["status"]
+
+    def request_mission_replace(self, mission_id: int, by: int) -> str | None:
+        """Mission `by` replaces this one: its driving process ends it as replaced (a queued
+        one, driven by nobody yet, is replaced at once). Its status before, or None."""
+        self.mark_missions_interrupted()
+        row = self.mission(mission_id)
+        if row is None:
+            return None
+        with self._tx():
+            if row["status"] in ("running", "paused"):
+                self.db.conn.execute(
+                    "UPDATE missions SET cancel_requested = 1, replaced_by = ? WHERE id = ?",
+                    [by, mission_id],
+                )
+            elif row["status"] == "queued":
+                self.db.conn.execute(
+                    "UPDATE missions SET status = 'replaced', replaced_by = ?, finished_at = ?, "
+                    "reason = ? WHERE id = ?",
+                    [by, time.time(), f"replaced by mission {by} before it started", mission_id],
+                )
+        return row["status"]
+
     def request_mission_cancel(self, mission_id: int) -> str | None:
         """Ask the process driving a mission to cancel it; an interrupted one is dropped at
         once. The mission's status before, or None when there is no such mission."""
@@ -109,7 +197,7 @@ class MissionTables:
         if row is None:
             return None
         with self._tx():
-            if row["status"] == "running":
+            if row["status"] in ("running", "paused"):
                 self.db.conn.execute(
                     "UPDATE missions SET cancel_requested = 1 WHERE id = ?", [mission_id]
                 )
@@ -132,7 +220,7 @@ class MissionTables:
         with self._tx():
             cur = self.db.conn.execute(
                 "UPDATE missions SET status = 'running', pid = ?, cancel_requested = 0, "
-                "reason = NULL, finished_at = NULL, step = ? "
+                "pause_requested = 0, reason = NULL, finished_at = NULL, step = ? "
                 "WHERE id = ? AND status IN ('interrupted', 'queued')",
                 [os.getpid(), from_step, mission_id],
             )
@@ -150,18 +238,19 @@ class MissionTables:
         from astiop.store import _alive  # the store's own liveness check
 
         rows = self.db.conn.execute(
-            "SELECT id, pid, step FROM missions WHERE status = 'running' OR "
-            "(status = 'queued' AND created_at < ?)",
+            "SELECT id, pid, step, status FROM missions WHERE status IN ('running', 'paused') "
+            "OR (status = 'queued' AND created_at < ?)",
             [time.time() - QUEUED_S],
         ).fetchall()
-        dead = [(i, step) for i, pid, step in rows if pid is None or not _alive(pid)]
+        dead = [(i, step, st) for i, pid, step, st in rows if pid is None or not _alive(pid)]
         if not dead or self.readonly:
             return
         with self._tx():
-            for mission_id, step in dead:
+            for mission_id, step, status in dead:
+                when = "while paused before" if status == "paused" else "during"
                 self.db.conn.execute(
                     "UPDATE missions SET status = 'interrupted', reason = ? WHERE id = ?",
-                    [f"the astiop process ended during step {step + 1}", mission_id],
+                    [f"the astiop process ended {when} step {step + 1}", mission_id],
                 )
                 self.db.conn.execute(
                     "UPDATE mission_steps SET status = 'interrupted' "

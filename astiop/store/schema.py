@@ -204,6 +204,22 @@ def _migrate_v7(conn: sqlite3.Connection) -> None:
     )
 
 
+def _migrate_v8(conn: sqlite3.Connection) -> None:
+    # Missions: a pause asked through the store, the mission that replaced this one, and a
+    # repeat until stopped (the step rows are reused each round; a row's `round` says which
+    # round its values are from).
+    _run(
+        conn,
+        """
+        ALTER TABLE missions ADD COLUMN pause_requested INTEGER NOT NULL DEFAULT 0;
+        ALTER TABLE missions ADD COLUMN replaced_by INTEGER;
+        ALTER TABLE missions ADD COLUMN forever INTEGER NOT NULL DEFAULT 0;
+        ALTER TABLE missions ADD COLUMN round INTEGER NOT NULL DEFAULT 1;
+        ALTER TABLE mission_steps ADD COLUMN round INTEGER NOT NULL DEFAULT 1;
+        """,
+    )
+
+
 # Ordered; the database's PRAGMA user_version counts how many have run. Each runs inside one
 # transaction (Store._run_migrations): on a plain connection, with execute only.
 MIGRATIONS = [
@@ -214,6 +230,7 @@ MIGRATIONS = [
     _migrate_v5,
     _migrate_v6,
     _migrate_v7,
+    _migrate_v8,
 ]
 SCHEMA_VERSION = len(MIGRATIONS)
 _OUR_TABLES = {

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import threading
 import time
+from dataclasses import replace
 from typing import Any
 
 from astiop.recording.reader import Recording
@@ -124,6 +125,22 @@ class ReplayBackend(RobotBackend):
                     str(ev.get("message", "")),
                 )
             )
+        self._mission_events(recording)
+
+    def _mission_events(self, recording: Recording) -> None:
+        """The recorded missions' progress (start, each step's end, end) among the events, in
+        the order it happened."""
+        ch = recording.channels.get("/astiop/mission")
+        for i, t_ns in enumerate(ch.times if ch else ()):
+            rec = ch.message(i)
+            bad = rec.get("status") not in (None, "succeeded", "skipped", "replaced")
+            seq = len(self._events) + 1
+            text = str(rec.get("text", ""))
+            self._events.append(
+                RobotEvent(seq, t_ns / 1e9, "mission", "warning" if bad else "info", text)
+            )
+        self._events.sort(key=lambda ev: ev.t)
+        self._events = [replace(ev, seq=n) for n, ev in enumerate(self._events, 1)]
 
     # -- lifecycle, e-stop: there is no robot to stop ---------------------------------------
     def start(self) -> None:
