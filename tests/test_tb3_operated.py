@@ -1,0 +1,194 @@
+"""A robot astiop did not write, operated as the ASTIbot is: a TurtleBot3 under Nav2 on Jazzy
+(`astiop sim node --robot turtlebot3`: upstream's names and types), over real DDS through rclpy,
+with no profile file. Its roles are found on its graph; questions are answered with what it
+published (its map pose from /amcl_pose, its 0-100 battery, its scan); a goal by coordinates
+goes out as a NavigateToPose and arrives; teleop drives it in its own velocity type; the E-STOP
+stops it with no /stop service by cancelling every Nav2 goal on it, another client's too; and the
+same under a namespace. And a robot with its battery missing answers the battery question so."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import math
+import subprocess
+import sys
+import time
+
+import pytest
+
+from astiop.config import load_settings
+from astiop.robot.factory import make_robot_gateway
+from astiop.store import Store
+from tests.ros import require_ros, ros_client, until
+
+pytestmark = [pytest.mark.slow, pytest.mark.ros]
+YES = lambda _c: True  # noqa: E731
+
+
+def settings(tmp_path, **robot):
+    robot = {"backend": "ros2", "ros2_transport": "rclpy", **robot}
+    return load_settings(
+        {"llm": {"model": "rules"}, "robot": robot}, env={}, path=tmp_path / "none.toml"
+    )
+
+
+def gateway_on(tmp_path, **robot):
+    store = Store(tmp_path / "tb3.db")
+    gateway = make_robot_gateway(settings(tmp_path, **robot), store)
+    gateway.start()
+    assert until(lambda: gateway.state().pose and gateway.state().battery, 30), gateway.profile
+    return gateway, store
+
+
+def ask(gateway, text: str):
+    from astiop.agent.models.specs import open_endpoint
+    from astiop.agent.turn import Agent
+
+    agent = Agent(gateway, open_endpoint("rules"), gateway.store, confirm=YES)
+
+    async def turn():
+        result = await agent.turn(text, lambda *_: None)
+        follow = await agent.follow_up(result, 90) if result.started else ""
+        return result, follow
+
+    return asyncio.run(turn())
+
+
+def test_a_turtlebot3_is_read_answered_driven_and_sent_by_its_own_names(tmp_path):
+    require_ros()
+    from tests.ros import tb3_node
+
+    with tb3_node(speed=8.0):
+        gateway, store = gateway_on(tmp_path)
+        try:
+            profile = gateway.profile
+            roles = {r: profile.name(r) for r in ("pose", "battery", "scan", "map")}
+            assert roles == {"pose": "/amcl_pose", "battery": "/battery_state",
+                             "scan": "/scan", "map": "/map"}  # fmt: skip
+            assert profile.name("velocity_command") == "/cmd_vel"
+            assert profile.matches["velocity_command"].type == "geometry_msgs/msg/TwistStamped"
+            assert profile.name("navigation") == "/navigate_to_pose"
+            assert profile.make == "turtlebot3_burger" and not profile.has("stop")
+            # the Dashboard's figures: the map pose (not odometry's origin), the battery, the map
+            st = gateway.state()
+            assert math.dist((st.pose.x, st.pose.y), (4.0, 4.0)) < 0.05, st.pose
+            assert 0.0 < st.battery.percentage <= 1.0 and gateway.map_geometry() is not None
+            assert until(lambda: gateway.state().state_word == "idle", 10)
+
+            result, _ = ask(gateway, "where is the robot?")
+            echo = gateway.run("ros2 topic echo /amcl_pose --once").values["pose"]["pose"]
+            assert f"x {echo['position']['x']:.2f} m" in result.answer, result.answer
+            result, _ = ask(gateway, "what is the battery level?")
+            pct = gateway.run("ros2 topic echo /battery_state --once").values["percentage"]
+            assert 1.0 < pct <= 100.0  # the TurtleBot3's 0-100
+            assert f"battery {pct:.1f} %" in result.answer, result.answer
+            result, _ = ask(gateway, "is anything in front of the robot?")
+            assert "nearest return 0.00" not in result.answer, result.answer
+            assert "scan" in result.answer, result.answer
+
+            # teleop: its own velocity type, and it moves
+            for _ in range(10):
+                gateway.drive(0.15, 0.0, 0.0)
+                time.sleep(0.1)
+            assert until(lambda: (gateway.state().speed or 0.0) > 0.05, 5), gateway.state()
+            assert until(lambda: (gateway.state().speed or 1.0) < 0.01, 10)
+
+            # a goal by coordinates: a NavigateToPose goal, followed to its arrival
+            start = gateway.state().pose
+            target = (start.x + 1.2, start.y + 0.3)
+            result, follow = ask(gateway, f"go to x {target[0]:.2f} y {target[1]:.2f}")
+            assert result.commands[0].command.startswith(
+                "ros2 action send_goal /navigate_to_pose nav2_msgs/action/NavigateToPose"
+            ), result.commands
+            assert result.started.startswith("goal accepted"), result.answer
+            assert "succeeded" in follow or follow.startswith("arrived"), follow
+            with ros_client("tb3_check") as client:
+                from std_srvs.srv import Empty
+
+                client.call(Empty, "/request_nomotion_update", Empty.Request())
+            assert until(
+                lambda: math.dist((gateway.state().pose.x, gateway.state().pose.y), target) < 0.3,
+                5,
+            ), gateway.state().pose
+        finally:
+            gateway.close()
+            store.close()
+
+
+def test_the_estop_cancels_every_nav2_goal_on_a_robot_with_no_stop_service(tmp_path):
+    require_ros()
+    from action_msgs.msg import GoalStatus
+    from nav2_msgs.action import NavigateToPose
+    from nav_msgs.msg import Odometry
+    from rclpy.action import ActionClient
+
+    from tests.ros import tb3_node
+
+    with tb3_node(speed=4.0), ros_client("someone_else") as client:
+        odom = client.collect(Odometry, "/odom")
+        action = ActionClient(client.node, NavigateToPose, "/navigate_to_pose")
+        assert action.wait_for_server(timeout_sec=15)
+        goal = NavigateToPose.Goal()
+        goal.pose.header.frame_id = "map"
+        goal.pose.pose.position.x, goal.pose.pose.position.y = 12.0, 4.0
+        goal.pose.pose.orientation.w = 1.0
+        handle = client.result(action.send_goal_async(goal))
+        assert handle.accepted
+        assert until(lambda: odom and abs(odom[-1][1].twist.twist.linear.x) > 0.05, 15)
+        db = str(tmp_path / "estop.db")
+        cli = [sys.executable, "-m", "astiop", "--db", db, "--robot", "ros2"]
+        t0 = time.monotonic()
+        out = subprocess.run([*cli, "--ros2-transport", "rclpy", "estop"],
+                             capture_output=True, text=True, timeout=60)  # fmt: skip
+        took = time.monotonic() - t0
+        assert out.returncode == 0, out.stdout + out.stderr
+        result = client.result(handle.get_result_async(), 20)
+        assert result.status == GoalStatus.STATUS_CANCELED, result.status  # not SUCCEEDED
+        assert until(lambda: abs(odom[-1][1].twist.twist.linear.x) < 0.01, 5)
+        stopped = time.monotonic()
+        time.sleep(1.5)
+        assert all(abs(m.twist.twist.linear.x) < 0.01 for t, m in odom if t > stopped)
+        assert took < 8.0, f"astiop estop took {took:.1f} s on a robot with no /stop"
+
+
+def test_a_turtlebot3_under_a_namespace_is_found_and_stopped_there(tmp_path):
+    require_ros()
+    from tests.ros import tb3_node
+
+    with tb3_node(speed=8.0, namespace="/tb3_1"):
+        db = str(tmp_path / "ns.db")
+        cli = [sys.executable, "-m", "astiop", "--db", db, "--robot", "ros2"]
+        cli += ["--ros2-transport", "rclpy", "--namespace", "/tb3_1"]
+        out = subprocess.run([*cli, "robot", "profile", "--json"], capture_output=True, text=True)
+        assert out.returncode == 0, out.stderr
+        profile = json.loads(out.stdout)
+        assert profile["namespace"] == "/tb3_1"
+        assert profile["roles"]["battery"]["name"] == "/tb3_1/battery_state"
+        assert profile["roles"]["velocity_command"]["name"] == "/tb3_1/cmd_vel"
+        assert profile["roles"]["navigation"]["name"] == "/tb3_1/navigate_to_pose"
+        out = subprocess.run([*cli, "estop"], capture_output=True, text=True, timeout=60)
+        assert out.returncode == 0, out.stdout + out.stderr
+        assert "no /cmd_vel" not in out.stderr
+
+
+def test_a_robot_with_no_battery_reading_says_so_when_asked(monkeypatch, tmp_path):
+    """The emulated ASTIbot without /battery_status, on the CLI transport: not "the robot is
+    charging" read off its status instead."""
+    from tests.emulator import emulated_robot, on_path
+    from tests.test_ros2_emulated import make_gateway
+
+    with emulated_robot(missing=("/battery_status",)) as folder:
+        on_path(monkeypatch, folder)
+        store = Store(tmp_path / "nobattery.db")
+        gateway = make_gateway(store)
+        try:
+            assert gateway.profile.name("battery") is None
+            result, _ = ask(gateway, "what is the battery level?")
+            assert result.answer.startswith("This robot publishes no battery state"), result.answer
+            assert "charging" not in result.answer and not result.commands
+            result, _ = ask(gateway, "where is the robot?")
+            assert "x " in result.answer, result.answer  # what it does publish is still read
+        finally:
+            gateway.close()
+            store.close()
