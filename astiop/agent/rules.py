@@ -7,7 +7,6 @@ an actuation.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from typing import Any
 
@@ -15,8 +14,7 @@ from astiop.agent.grounding import factual_answer
 from astiop.agent.intent import SERVICE_FOR, Intent, classify
 from astiop.agent.roles import name_for
 from astiop.robot.backend import Execution
-from astiop.ros2.profile import NAVIGATE_TO_POSE
-from astiop.ros2.profile import TWIST_STAMPED as STAMPED
+from astiop.ros2.render import nav_goal_command, velocity_pub_command
 
 Locate = Callable[[str], "tuple[float, float] | None"]
 
@@ -81,7 +79,7 @@ def _other_robot(intent: Intent, profile: Any, locate: Locate | None) -> str | N
         xy = intent.xy or (locate(intent.place) if intent.place and locate else None)
         if xy is None:
             return None
-        return nav_goal(action, xy[0], xy[1], intent.theta or 0.0)
+        return nav_goal_command(action, xy[0], xy[1], intent.theta or 0.0)
     velocity = profile.name("velocity_command")
     if kind in SERVICE_FOR and not profile.has(kind):
         if kind == "stop" and velocity:
@@ -94,24 +92,10 @@ def _other_robot(intent: Intent, profile: Any, locate: Locate | None) -> str | N
     return False
 
 
-def nav_goal(action: str, x: float, y: float, theta: float) -> str:
-    """A NavigateToPose goal in the map frame (Nav2's), the heading as a unit quaternion."""
-    half = theta / 2
-    return (
-        f'ros2 action send_goal {action} {NAVIGATE_TO_POSE} "{{pose: {{header: '
-        f"{{frame_id: map}}, pose: {{position: {{x: {x:.3f}, y: {y:.3f}}}, "
-        f'orientation: {{z: {math.sin(half):.4f}, w: {math.cos(half):.4f}}}}}}}}}"'
-    )
-
-
 def _publish(profile: Any, name: str, how: str, vx: float, vy: float, wz: float) -> str:
-    """`ros2 topic pub` of a velocity in the robot's own type (a TwistStamped: its twist)."""
-    twist = (
-        f"{{linear: {{x: {vx:g}, y: {vy:g}, z: 0.0}}, angular: {{x: 0.0, y: 0.0, z: {wz:.3g}}}}}"
-    )
+    """A velocity in the robot's own type."""
     typ = profile.matches["velocity_command"].type
-    body = f"{{twist: {twist}}}" if typ == STAMPED else twist
-    return f'ros2 topic pub {how} {name} {typ} "{body}"'
+    return velocity_pub_command(name, typ, how, vx, vy, wz)
 
 
 def plan(request: str, locations: list[str]) -> list[str]:

@@ -15,7 +15,7 @@ from astiop.agent.intent import SERVICE_FOR, Intent, Motion
 from astiop.agent.roles import KEY_ROLES
 from astiop.agent.rules import command_for
 from astiop.ros2.catalog import RELEASE, Catalog
-from astiop.ros2.render import GOTO_TYPE, goto_command
+from astiop.ros2.render import GOTO_TYPE, goto_command, nav_goal_command
 
 READABLE_EXCLUDED = {"/cmd_vel", "/tf", "/tf_static", "/plan"}
 # The operator's own: never in the model's prompt or tools (releasing a held robot is a person's
@@ -270,7 +270,7 @@ def render(step: dict, tools: list[Tool]) -> str | None:
     if not all(math.isfinite(v) for v in (x, y, theta)):
         raise ToolError(f'"{COORDINATES}" needs finite numbers')
     if tool.action:
-        return rules.nav_goal(tool.action, x, y, theta)
+        return nav_goal_command(tool.action, x, y, theta)
     return (
         f"ros2 service call /goto_position {GOTO_TYPE} "
         f'"{{x: {x:.3f}, y: {y:.3f}, theta: {theta:.4f}}}"'

@@ -8,10 +8,10 @@ import threading
 import time
 from dataclasses import dataclass
 
-from astiop.missions.steps import READS, Step
+from astiop.missions.steps import Step, read_name
 from astiop.robot.backend import Execution
 from astiop.robot.gateway import RobotGateway
-from astiop.robot.state import LOST
+from astiop.robot.state import LOST, battery_fraction
 
 MOVING = ("navigating", "docking", "undocking", "blocked")
 ARRIVED_M = 0.3
@@ -47,7 +47,7 @@ def reading(what: str, ex: Execution) -> float | None:
     if not ex.executed or ex.error or v is None:
         return None
     if what == "battery" and isinstance(v.get("percentage"), (int, float)):
-        return round(float(v["percentage"]) * 100.0, 1)
+        return round(battery_fraction(v["percentage"], ex.units) * 100.0, 1)
     if what == "obstacles":
         if isinstance(v.get("count"), int):
             return float(v["count"])
@@ -61,7 +61,7 @@ def reading_text(what: str, value: float) -> str:
 
 
 def read(gateway: RobotGateway, what: str) -> tuple[float | None, str]:
-    ex = gateway.run(f"ros2 topic echo {READS[what]} --once", source="mission")
+    ex = gateway.run(f"ros2 topic echo {read_name(what, gateway.profile)} --once", source="mission")
     value = reading(what, ex)
     if value is None:
         return None, f"no {what} reading: {refusal(ex)}"
@@ -111,16 +111,25 @@ def _cancel_goal(gateway: RobotGateway, step: Step) -> StepEnd:
     navigation yields to /cmd_vel); if the robot still reports the goal after 2 s, /stop, which
     holds the robot until it is released, and the answer says so."""
     said = f"canceled by the operator during '{step.label()}'"
-    spec = gateway.catalog.topics.get("/cmd_vel")
+    profile = gateway.profile
+    if profile.kind("navigation") == "action" and not profile.has("status"):
+        gateway.cancel_goals()  # Nav2 drives on through a zero velocity: its goal is cancelled
+        return StepEnd("canceled", said)
+    velocity = profile.name("velocity_command")
+    spec = gateway.catalog.topics.get(velocity or "")
     if spec is not None:
-        gateway.run(f'ros2 topic pub --once /cmd_vel {spec.type} "{{}}"', YES, source="mission")
+        zero = f'ros2 topic pub --once {velocity} {spec.type} "{{}}"'
+        gateway.run(zero, YES, source="mission")
         deadline = time.monotonic() + 2.0
         while time.monotonic() < deadline:
             status = gateway.state().status
             if status is not None and not status.active_goal:
                 return StepEnd("canceled", said)
             time.sleep(0.1)
-    gateway.run("ros2 service call /stop std_srvs/srv/Trigger", YES, source="mission")
+    stop = profile.name("stop")
+    if stop is None:
+        return StepEnd("canceled", f"{said}; the robot has no stop service: its goal may go on")
+    gateway.run(f"ros2 service call {stop} std_srvs/srv/Trigger", YES, source="mission")
     return StepEnd(
         "canceled", f"{said}; the goal went on after a zero velocity, so /stop was called: the "
         "robot holds until the E-STOP is released (ctrl+r)"

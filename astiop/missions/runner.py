@@ -355,7 +355,10 @@ class MissionRunner:
                     "skipped",
                     f"the robot reports it is {'' if status.docked else 'not '}docked already",
                 )
-        ex = self.gateway.run(step.command() or "", YES, source="mission")
+        command = step.command(self.gateway.profile, self.places().get)
+        if command is None:
+            return StepEnd("failed", f"this robot cannot {step.label()} (`astiop robot profile`)")
+        ex = self.gateway.run(command, YES, source="mission")
         if not follow.accepted(ex):
             if ex.reason and "E-STOP" in ex.reason:
                 return StepEnd("e-stopped", ex.reason)

@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import json
 from dataclasses import asdict, dataclass
+from typing import Any
+
+from astiop.ros2.render import nav_goal_command
 
 GOTO = "ros2 service call /goto_position astiop_msgs/srv/GotoPosition"
 TRIGGER = "std_srvs/srv/Trigger"
@@ -17,6 +20,13 @@ KINDS = frozenset({"goto", "wait", "read", *SERVICES})
 # what a step may read, and the topic it reads it from
 READS = {"battery": "/battery_status", "obstacles": "/obstacles"}
 STOP = f"ros2 service call /stop {TRIGGER}"
+
+
+def read_name(what: str, profile: Any = None) -> str:
+    """The topic a read step reads on this robot (its battery role's name on any robot)."""
+    if profile is not None and what == "battery":
+        return profile.name("battery") or READS[what]
+    return READS[what]
 
 
 @dataclass(frozen=True)
@@ -65,8 +75,18 @@ class Step:
     def moves(self) -> bool:
         return self.kind in ("goto", "dock", "undock")
 
-    def command(self) -> str | None:
-        """The ros2 command that starts the step (None: a wait, or a read's own echo)."""
+    def command(self, profile: Any = None, locate: Any = None) -> str | None:
+        """The ros2 command that starts the step (None: a wait, or a read's own echo), in the
+        names of the robot's `profile` (the ASTIbot's without one): on a Nav2 robot a goto is a
+        NavigateToPose goal (a place by its coordinates, `locate(place)`); a dock or undock the
+        robot lacks is None."""
+        if profile is not None and self.kind in ("dock", "undock"):
+            name = profile.name(self.kind)
+            return f"ros2 service call {name} {TRIGGER}" if name else None
+        action = profile.name("navigation") if profile is not None else None
+        if self.kind == "goto" and action and profile.kind("navigation") == "action":
+            xy = self.xy or (locate(self.place) if locate and self.place else None)
+            return nav_goal_command(action, *xy, self.theta or 0.0) if xy else None
         if self.kind in SERVICES:
             return f"ros2 service call {SERVICES[self.kind]} {TRIGGER}"
         if self.kind == "goto" and self.xy is not None:
@@ -75,7 +95,7 @@ class Step:
         if self.kind == "goto":
             return f"{GOTO} \"{{name: '{self.place}'}}\""
         if self.kind == "read":
-            return f"ros2 topic echo {READS[self.what or '']} --once"
+            return f"ros2 topic echo {read_name(self.what or '', profile)} --once"
         return None
 
     def target(self) -> str:

@@ -106,6 +106,11 @@ class RobotBackend(ABC):
         time.sleep(min(timeout_s, 1.0))
         return []
 
+    def cancel_goals(self) -> None:
+        """Cancel the goals this process sent and that still run (the live transports follow
+        theirs; the simulator's goal yields to a zero velocity): nothing by default."""
+        return None
+
     @property
     @abstractmethod
     def e_stopped(self) -> bool: ...

@@ -323,6 +323,11 @@ class RobotGateway:
         if -1.0 <= age <= MAX_STAMP_AGE_S:
             result.age_s = max(age, 0.0)
 
+    def cancel_goals(self) -> None:
+        """Cancel the goals this process sent and that run (a mission's cancel on a Nav2 robot,
+        whose navigation drives on through a zero velocity)."""
+        self.backend.cancel_goals()
+
     def drive(self, vx: float, vy: float, wz: float) -> Execution:
         """Teleop: the key press is the operator's consent; safety still clamps and holds.
         Each change of velocity is recorded (source teleop), not each repeat of a held key."""

@@ -6,6 +6,7 @@ names are the full names the catalog knows.
 
 from __future__ import annotations
 
+import math
 import shlex
 
 import yaml
@@ -18,6 +19,28 @@ GOTO_TYPE = "astiop_msgs/srv/GotoPosition"
 def goto_command(name: str) -> str:
     """The command that sends the robot to a named location (console, agent, `record --goto`)."""
     return f"ros2 service call /goto_position {GOTO_TYPE} \"{{name: '{name}'}}\""
+
+
+NAVIGATE_TO_POSE = "nav2_msgs/action/NavigateToPose"
+
+
+def nav_goal_command(action: str, x: float, y: float, theta: float) -> str:
+    """A NavigateToPose goal in the map frame (Nav2's), the heading as a unit quaternion."""
+    half = theta / 2
+    return (
+        f'ros2 action send_goal {action} {NAVIGATE_TO_POSE} "{{pose: {{header: '
+        f"{{frame_id: map}}, pose: {{position: {{x: {x:.3f}, y: {y:.3f}}}, "
+        f'orientation: {{z: {math.sin(half):.4f}, w: {math.cos(half):.4f}}}}}}}}}"'
+    )
+
+
+def velocity_pub_command(name: str, type_: str, how: str, vx: float, vy: float, wz: float) -> str:
+    """`ros2 topic pub HOW NAME TYPE` of a velocity (a TwistStamped: its twist)."""
+    twist = (
+        f"{{linear: {{x: {vx:g}, y: {vy:g}, z: 0.0}}, angular: {{x: 0.0, y: 0.0, z: {wz:.3g}}}}}"
+    )
+    body = f"{{twist: {twist}}}" if type_ == "geometry_msgs/msg/TwistStamped" else twist
+    return f'ros2 topic pub {how} {name} {type_} "{body}"'
 
 
 def flow_yaml(message: dict) -> str:

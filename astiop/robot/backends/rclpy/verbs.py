@@ -275,7 +275,7 @@ class RclpyVerbs(ServesVerbs):
         response = self.proc.ask(client, request, timeout, f"service {name}", again=read)
         lines.append(f"response:\n{response!r}\n")
         if name == "/stop":
-            self._cancel_goals()
+            self.cancel_goals()
         return "\n".join(lines) + "\n", to_dict(response)
 
     # -- the action ----------------------------------------------------------------------------
@@ -326,7 +326,7 @@ class RclpyVerbs(ServesVerbs):
         self.events.add("goal", severity, f"goal finished: {status}" + (f" ({why})" if why else ""))
         client.destroy()
 
-    def _cancel_goals(self) -> None:
+    def cancel_goals(self) -> None:
         for handle in list(self._goals):
             handle.cancel_goal_async()
 

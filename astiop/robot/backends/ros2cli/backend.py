@@ -440,7 +440,7 @@ class Ros2Backend(RobotBackend):
         if cmd.key == ("service", "call"):
             values = parse_response(run.out)
             if cmd.name == "/stop":
-                self._cancel_goals()
+                self.cancel_goals()
             return run.out, values
         return run.out, None
 
@@ -516,7 +516,7 @@ class Ros2Backend(RobotBackend):
             return out, {"accepted": False, "status": "REJECTED" if "rejected" in out else None}
         return out, {"accepted": True, "goal_id": m[1], "status": "ACCEPTED"}
 
-    def _cancel_goals(self) -> None:
+    def cancel_goals(self) -> None:
         for proc in list(self._goal_procs):
             _stop_in_background(proc)
 
