@@ -26,15 +26,23 @@ def fill(text: str, **values: str) -> str:
 
 
 def command_prompt(catalog: Catalog, locations: list[str]) -> str:
+    """The robot's topics and services for command mode; on a robot that is not the ASTIbot,
+    those that play a role only, each said by its role (a Nav2 graph has a hundred others)."""
+    profile = catalog.profile
+    roles = {m.name: r for r, m in profile.matches.items() if m.name} if profile else {}
+    own = profile is None or profile.make == "astibot"
     topics = "\n".join(
-        f"- {t.name}: {t.description}"
+        f"- {t.name}: {roles[t.name].replace('_', ' ')} ({t.type})"
+        if not own
+        else f"- {t.name}: {t.description}"
         for t in catalog.topics.values()
-        if t.name not in READABLE_EXCLUDED
+        if t.name not in READABLE_EXCLUDED and (own or t.name in roles)
     )
     services = "\n".join(
-        f"- {s.name} {s.type}: {s.description}"
+        f"- {s.name} {s.type}: "
+        + (s.description if own else roles.get(s.name, "").replace("_", " "))
         for s in catalog.services.values()
-        if s.name not in OPERATOR_ONLY
+        if s.name not in OPERATOR_ONLY and (own or s.name in roles)
     )
     return fill(
         template("agent_command"),

@@ -229,7 +229,12 @@ class SessionRecorder:
         last = self._last.get(topic)
         if last is not None and stamp <= last:
             return  # nothing new on this topic
-        if topic == "/scan" and last is not None and stamp - last < self.scan_period * 1e9:
+        scan = self.gateway.catalog.profile.name("scan") if self.gateway.catalog.profile else None
+        if (
+            topic == (scan or "/scan")
+            and last is not None
+            and stamp - last < self.scan_period * 1e9
+        ):
             return
         self._last[topic] = stamp  # a message that cannot be encoded is passed over, once
         try:
