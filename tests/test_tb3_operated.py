@@ -111,6 +111,17 @@ def test_a_turtlebot3_is_read_answered_driven_and_sent_by_its_own_names(tmp_path
                 lambda: math.dist((gateway.state().pose.x, gateway.state().pose.y), target) < 0.3,
                 5,
             ), gateway.state().pose
+
+            # "save this spot": no /save_location on it, so astiop keeps its read pose
+            result, _ = ask(gateway, "save this spot as bench")
+            assert result.answer.startswith("Saved 'bench' at x"), result.answer
+            bench = store.get_location("bench")
+            assert math.dist((bench.x, bench.y), target) < 0.3
+            result, follow = ask(gateway, f"go to x {start.x:.2f} y {start.y:.2f}")
+            assert "succeeded" in follow or follow.startswith("arrived"), follow
+            result, follow = ask(gateway, "go to bench")
+            assert f"x: {bench.x:.3f}" in result.commands[0].command, result.commands
+            assert "succeeded" in follow or follow.startswith("arrived"), follow
         finally:
             gateway.close()
             store.close()

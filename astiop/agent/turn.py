@@ -20,6 +20,7 @@ from astiop.agent import (
     goals,
     grounding,
     intent,
+    local_save,
     mission_turn,
     planner,
     prompts,
@@ -162,6 +163,13 @@ class Agent:
             intents = intent.classify(request, self.locations())
             if said := roles.nothing_to_read(intents, self.gateway.profile):
                 result.answer = said  # asked only of readings this robot does not publish
+                return await self._finish(request, result, t0)
+            place = local_save.asked(intents, self.gateway.profile)
+            if place and self.store is not None:  # no save service: kept in astiop's store
+                ex, result.answer = await asyncio.to_thread(
+                    local_save.save_here, self.gateway, self.store, place
+                )
+                result.commands += [ex] if ex is not None else []
                 return await self._finish(request, result, t0)
             if await mission_turn.without_model(self, request, intents, result, emit):
                 return await self._finish(request, result, t0)
