@@ -20,6 +20,7 @@ from astiop.robot.backends.live_catalog import (
     stop_service_type,
 )
 from astiop.robot.backends.live_robot import MOVING, without_finished_plan
+from astiop.robot.backends.rclpy.empty_calls import EmptyCalls
 from astiop.robot.backends.rclpy.graph import read_lists, read_params
 from astiop.robot.backends.rclpy.node import ros_process
 from astiop.robot.backends.rclpy.verbs import RclpyVerbs
@@ -51,7 +52,6 @@ SILENT_S = 3.0  # a state topic's last message older than this is no longer the 
 TELEOP_HZ = 10.0
 LAPSE_S = 0.5
 ESTOP_BURST_S = 1.0
-ABSENT_S = 2.0  # a robot seen this long without its stop service has none
 # Watched only while wanted: /odom at 50 Hz was most of the console's rclpy cost, and what the
 # state takes from it, /robot_status (speed) and /robot_pose (pose) carry too. Wanted while this
 # process drives, while the robot moves (its status says so), and while a reader (a recording)
@@ -93,6 +93,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         self.t0 = time.monotonic()
         self.events = EventLog(self.t0)
         self._estop = EstopWork(self.events)
+        self._calls = EmptyCalls(self.proc, self.events, timeout_s)
         self._contact = Contact(self.events)
         self._lists = self._discover(DISCOVERY_S if discover else 0.0)
         self._params: list[tuple[str, str]] = []  # read by start(), or when a command needs them
@@ -437,8 +438,13 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         stop = self._name("stop") if read else self._fixed.namespace + "/stop"
         if stop:
             stop_type = stop_service_type(self.catalog)  # a young process may not have seen it
-            call = self._trigger if read else self._call_if_served
-            self._estop.start(lambda: call(stop, stop_type, "E-STOP"), "estop-stop")
+            if read:
+                self._estop.start(lambda: self._calls.call(stop, stop_type, "E-STOP"), "estop-stop")
+            else:
+                self._estop.start(
+                    lambda: self._calls.call_if_served(stop, stop_type, "E-STOP", self._base_seen),
+                    "estop-stop",
+                )
         # a robot without a stop service (a TurtleBot3 under Nav2): every goal on it cancelled,
         # another client's too, not only this process's own; before the graph is read, both
         actions = (
@@ -456,35 +462,19 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         self._estop.said(failures)
         return failures
 
-    def _call_if_served(self, name: str, type_: str, what: str) -> None:
-        """An E-STOP's service in a process that did not read the graph: called once served; a
-        robot seen without it for ABSENT_S (its velocity's subscriber found) has none: said,
-        not a failure (a TurtleBot3 has no /stop; its goals are cancelled instead)."""
-        client = self.proc.client(interface_class(type_), name)
-        deadline, seen = time.monotonic() + self.timeout_s, None
-        velocity = self._name("velocity_command", "/cmd_vel")
-        while not client.wait_for_service(timeout_sec=0.2):
-            now = time.monotonic()
-            if self.proc.node.get_subscriptions_info_by_topic(velocity):
-                seen = seen or now
-                if now - seen > ABSENT_S:
-                    self.events.add("estop", "info", f"{what}: the robot serves no {name}")
-                    return
-            if now > deadline:
-                self.events.add(
-                    "estop", "error", f"{what}: no {name} answered within {self.timeout_s:g} s"
-                )
-                return
-        self._trigger(name, type_, what)
-
     def _cancel_every_goal(self, action: str) -> None:
         """A CancelGoal with a zero goal id and a zero stamp cancels every goal of the action
         server (ros2/rcl_interfaces action_msgs/srv/CancelGoal.srv, humble and jazzy)."""
         name, what = f"{action}/_action/cancel_goal", "E-STOP cancel"
         if self._lists["node"]:
-            self._trigger(name, CANCEL_GOAL, what)
+            self._calls.call(name, CANCEL_GOAL, what)
         else:
-            self._call_if_served(name, CANCEL_GOAL, what)
+            self._calls.call_if_served(name, CANCEL_GOAL, what, self._base_seen)
+
+    def _base_seen(self) -> bool:
+        """The robot's base is on the graph: its velocity command has a subscriber."""
+        velocity = self._name("velocity_command", "/cmd_vel")
+        return bool(self.proc.node.get_subscriptions_info_by_topic(velocity))
 
     def _zero_burst(self) -> None:
         """A zero Twist at 10 Hz for a second from when the base listens (in a new process,
@@ -497,13 +487,16 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
                     break
                 except BackendError:  # not discovered yet
                     if time.monotonic() > deadline:
+                        velocity = self._name("velocity_command", "/cmd_vel")
                         raise BackendError(
-                            f"no /cmd_vel on the robot's graph in {self.timeout_s:g} s"
+                            f"no {velocity} on the robot's graph in {self.timeout_s:g} s"
                         ) from None
                     time.sleep(0.01)
             while pub.get_subscription_count() < 1:
                 if time.monotonic() > deadline:
-                    raise BackendError(f"nothing subscribed to /cmd_vel in {self.timeout_s:g} s")
+                    raise BackendError(
+                        f"nothing subscribed to {pub.topic_name} in {self.timeout_s:g} s"
+                    )
                 time.sleep(0.01)
             end = time.monotonic() + ESTOP_BURST_S
             while time.monotonic() < end and self.inflight.held and not self._closed.is_set():
@@ -511,20 +504,6 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
                 time.sleep(1.0 / TELEOP_HZ)
         except Exception as exc:  # noqa: BLE001 - said, never raised: /stop goes on
             self.events.add("estop", "error", f"E-STOP zero Twist: {exc}")
-
-    def _trigger(self, name: str, type_: str, what: str) -> None:
-        """Call a service with an empty request; a failure is said as an event, never raised."""
-        try:
-            client = self.proc.client(interface_class(type_), name)
-            if not client.wait_for_service(timeout_sec=self.timeout_s):
-                self.events.add(
-                    "estop", "error", f"{what}: no {name} answered within {self.timeout_s:g} s"
-                )
-                return
-            request = client.srv_type.Request()
-            self.proc.wait(client.call_async(request), self.timeout_s, f"{what} {name}")
-        except Exception as exc:  # noqa: BLE001 - said, never raised: the stop goes on
-            self.events.add("estop", "error", f"{what} {name}: {exc}")
 
     def settle_estop(self, timeout_s: float) -> list[str]:
         # /stop waits for its server, then for the answer: each may take the timeout (the
@@ -537,5 +516,5 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         if spec is None or not robot:
             return []
         seq = self.events.seq  # a robot that latches its own stop lets go too
-        self._trigger(RELEASE, spec.type, "release")
+        self._calls.call(RELEASE, spec.type, "release")
         return [e.message for e in self.events.since(seq) if e.kind == "estop"]
