@@ -48,9 +48,9 @@ def until(predicate: Callable[[], object], timeout: float, step: float = 0.05):
 class SimNode:
     """`astiop sim node` in a process of its own; stderr is kept for the failure report."""
 
-    def __init__(self, *, seed: int = 0, speed: float = 4.0):
+    def __init__(self, *, seed: int = 0, speed: float = 4.0, robot_args: tuple[str, ...] = ()):
         argv = [sys.executable, "-m", "astiop", "sim", "node", "--seed", str(seed)]
-        argv += ["--speed", str(speed)]
+        argv += ["--speed", str(speed), *robot_args]
         self.proc = subprocess.Popen(
             argv, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True
         )
@@ -89,6 +89,16 @@ def whole_robot(gateway, timeout: float = 60.0) -> None:
     loaded machine discovery takes seconds, and a command meanwhile is refused as unknown."""
     assert gateway.serves("/undock", timeout), sorted(gateway.catalog.services)
     assert until(lambda: gateway.state().status is not None, timeout), "no /robot_status"
+
+
+@contextlib.contextmanager
+def tb3_node(*, model: str = "burger", distro: str = "jazzy", namespace: str = "", **kw):
+    """`astiop sim node --robot turtlebot3`: a TurtleBot3 under Nav2, upstream's names."""
+    args = ("--robot", "turtlebot3", "--model", model, "--distro", distro)
+    if namespace:
+        args += ("--namespace", namespace)
+    with sim_node(robot_args=args, **kw) as node:
+        yield node
 
 
 @contextlib.contextmanager

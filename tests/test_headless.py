@@ -12,7 +12,13 @@ UI = ("astiop.app", "astiop.screens", "astiop.widgets", "astiop.cli.console")
 
 # Modules that import rclpy (the [ros] extra): imported only where it is installed, and skipped
 # with the reason elsewhere. `available` says whether rclpy imports, so it must not need it.
-ROS = ("astiop.robot.backends.rclpy.", "astiop.sim_robots.ros2_node.node")
+ROS = (
+    "astiop.robot.backends.rclpy.",
+    "astiop.sim_robots.ros2_node.node",
+    "astiop.sim_robots.ros2_common",
+    "astiop.sim_robots.turtlebot3.node",
+    "astiop.sim_robots.turtlebot3.navigator",
+)
 ROS_FREE = ("astiop.robot.backends.rclpy.available",)
 
 # In the child, the [ros] extra's modules refuse to import, as where it is not installed: the
@@ -55,6 +61,7 @@ def test_core_does_not_import_textual_nor_need_ros():
     modules = [n for n in headless_modules() if not needs_ros(n)]
     assert "astiop.sim.simulator" in modules and "astiop.store" in modules
     assert "astiop.robot.factory" in modules and "astiop.sim_robots.ros2_node.run" in modules
+    assert "astiop.sim_robots.turtlebot3.run" in modules
     bad = textual_imported_by(modules, prelude=WITHOUT_ROS)
     assert bad == "", f"textual imported by the core: {bad}"
 

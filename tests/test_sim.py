@@ -297,3 +297,26 @@ def test_grid_astar_fallback_finds_a_clear_path():
     for method in ("grid", "visibility"):
         with pytest.raises(PlanningError):
             planner.plan((2.5, 3.0), (37.6, 21.0), ring, method=method)
+
+
+def test_a_differential_base_never_moves_sideways_and_reaches_its_goal():
+    from astiop.sim.body import Body
+    from astiop.sim.controller import ControllerGains
+    from astiop.sim.kinematics import MecanumParams
+
+    wheels = MecanumParams(lx=0.0, ly=0.08, wheel_radius=0.033, max_wheel_rpm=63.66)
+    body = Body(0.14, 0.14, 1.0, wheels, differential=True)
+    gains = ControllerGains(v_max=0.3, w_max=1.0, a_max=0.5, goal_tolerance=0.25)
+    sim = Simulator(seed=0, start=(4.0, 4.0, 0.0), body=body, gains=gains)
+    sim.goto(5.0, 6.0, math.pi / 2)  # behind and to the left: it must turn first
+    top = 0.0
+    while sim.goal is not None and sim.t < 120:
+        sim.step(0.1)
+        s = sim.snapshot()
+        assert s.vy == 0.0
+        top = max(top, s.vx)
+    assert sim.last_result.status == "succeeded" and sim.last_result.error_m <= 0.25
+    assert 0.2 < top <= 0.221  # the wheels' top speed, under the controller's 0.3
+    sim.set_cmd_vel(0.1, 0.5, 0.0)  # a sideways command: only its forward part moves the base
+    sim.step(0.3)
+    assert sim.snapshot().vy == 0.0 and sim.snapshot().vx > 0.05

@@ -224,7 +224,7 @@ def _check_cli_profile(settings, add) -> None:
     except BackendError as exc:
         add("FAIL", "robot profile", str(exc))
         return
-    _check_profile(backend.catalog.profile, add)
+    _check_profile(_settled(backend, settings), add)
     backend.close()
 
 
@@ -244,8 +244,16 @@ def _check_rclpy(settings, add) -> None:
     detail = f"{nodes} nodes, {len(cat.topics)} topics, {len(cat.services)} services"
     add("ok" if nodes else "FAIL", "ros2 graph", detail + ("" if nodes else ": no robot found"))
     if nodes:
-        _check_profile(cat.profile, add)
+        _check_profile(_settled(backend, settings), add)
     backend.close()
+
+
+def _settled(backend, settings):
+    """The robot's profile once its graph has been read whole (`RobotGateway.settled_profile`)."""
+    from astiop.robot.gateway import RobotGateway
+    from astiop.robot.safety import SafetyPolicy
+
+    return RobotGateway(backend, SafetyPolicy()).settled_profile(settings.robot.ros2_timeout_s)
 
 
 # without these astiop can neither show where the robot is nor drive it

@@ -35,7 +35,7 @@ def profile(
     except BackendError as exc:
         fail(str(exc))
     try:
-        found = gateway.profile
+        found = gateway.settled_profile(st.settings.robot.ros2_timeout_s)
     finally:
         gateway.close()
     if write is not None:

@@ -118,18 +118,62 @@ def goto(
         raise typer.Exit(1)
 
 
+ROBOTS = ("astibot", "turtlebot3")
+
+
 @app.command("node")
 def node(
     seed: int = typer.Option(0, min=0, max=2**32 - 1, help="Seed of the simulator."),
     speed: float = typer.Option(
         1.0, "--speed", min=0.1, max=20.0, help="Real-time factor of the robot (tests: > 1)."
     ),
+    robot: str = typer.Option(
+        "astibot", "--robot", help="astibot, or turtlebot3 (a TurtleBot3 under Nav2)."
+    ),
+    model: str = typer.Option("burger", "--model", help="TurtleBot3 model: burger or waffle."),
+    namespace: str = typer.Option(
+        "", "--namespace", help="TurtleBot3: serve every name under this namespace (/tb3_1)."
+    ),
+    distro: str = typer.Option(
+        "jazzy",
+        "--distro",
+        help="TurtleBot3: whose names and types, jazzy (/cmd_vel TwistStamped) or humble (Twist).",
+    ),
 ) -> None:
-    """Run the simulated ASTIbot as real ROS 2 nodes on this machine's ROS domain, until Ctrl-C
-    or SIGTERM. It respects the ROS environment (ROS_DOMAIN_ID, ROS_AUTOMATIC_DISCOVERY_RANGE)."""
-    from astiop.sim_robots.ros2_node.run import NodeSetupError, serve
+    """Run a simulated robot as real ROS 2 nodes on this machine's ROS domain, until Ctrl-C or
+    SIGTERM: the ASTIbot, or a TurtleBot3 under Nav2. It respects the ROS environment
+    (ROS_DOMAIN_ID, ROS_AUTOMATIC_DISCOVERY_RANGE)."""
+    from astiop.sim_robots.serving import NodeSetupError
 
+    say = lambda line: typer.echo(line, err=True)  # noqa: E731
+    if robot not in ROBOTS:
+        fail(f"--robot must be {' or '.join(ROBOTS)}, not '{robot}'")
     try:
-        serve(seed, speed, lambda line: typer.echo(line, err=True))
+        if robot == "astibot":
+            given = [f"--{n}" for n, v in (("namespace", namespace), ("model", model != "burger"),
+                     ("distro", distro != "jazzy")) if v]  # fmt: skip
+            if given:
+                fail(f"{', '.join(given)}: only for --robot turtlebot3")
+            from astiop.sim_robots.ros2_node.run import serve
+
+            serve(seed, speed, say)
+            return
+        from astiop.sim_robots.turtlebot3.graph import DISTROS, MODELS
+
+        if model not in MODELS:
+            fail(f"--model must be {' or '.join(MODELS)}, not '{model}'")
+        if distro not in DISTROS:
+            fail(f"--distro must be {' or '.join(DISTROS)}, not '{distro}'")
+        if namespace and not _valid_namespace(namespace):
+            fail(f"--namespace '{namespace}' is not a ROS name like /tb3_1")
+        from astiop.sim_robots.turtlebot3.run import serve as serve_tb3
+
+        serve_tb3(seed=seed, speed=speed, distro=distro, model=model, namespace=namespace, say=say)
     except NodeSetupError as exc:
         fail(str(exc))
+
+
+def _valid_namespace(text: str) -> bool:
+    import re
+
+    return re.fullmatch(r"/?[A-Za-z][A-Za-z0-9_]*(/[A-Za-z][A-Za-z0-9_]*)*", text) is not None

@@ -65,6 +65,21 @@ class RobotGateway:
     def catalog(self) -> Catalog:
         return self.backend.catalog
 
+    def settled_profile(self, timeout_s: float) -> Profile:
+        """The profile once the robot's graph has been read whole: read again until two reads
+        SETTLED_S apart match the same names (a new process discovers a robot in rounds, and a
+        role matched on half a graph is a wrong answer), or `timeout_s`."""
+        deadline = time.monotonic() + timeout_s
+        names = {r: m.name for r, m in self.profile.matches.items()}
+        while time.monotonic() < deadline:
+            time.sleep(min(SETTLED_S, max(0.0, deadline - time.monotonic())))
+            self.backend.refresh()
+            now = {r: m.name for r, m in self.profile.matches.items()}
+            if now == names and any(now.values()):
+                break
+            names = now
+        return self.profile
+
     @property
     def profile(self) -> Profile:
         """Which of the robot's names play which role (ros2/profile.py)."""

@@ -54,3 +54,36 @@ class Battery:
             self.voltage = ocv - amps * R_INTERNAL
             self.charging = False
         self.soc = min(1.0, max(0.0, self.soc + net * dt / 3600.0 / CAPACITY_AH))
+
+
+@dataclass
+class LipoBattery:
+    """A small 3S Li-ion/LiPo pack (a TurtleBot3's 11.1 V, 1.8 Ah): the same readings as
+    `Battery`, for another robot in the same warehouse."""
+
+    soc: float = 0.9
+    capacity_ah: float = 1.8
+    base_load_w: float = 5.0  # the SBC, the OpenCR board and the lidar
+    current: float = 0.0
+    voltage: float = 0.0
+    charging: bool = False
+
+    def __post_init__(self) -> None:
+        self.soc = min(max(self.soc, 0.0), 1.0)
+        self.voltage = lipo_voltage(self.soc)
+
+    def update(self, dt: float, motor_power_w: float, on_charger: bool) -> None:
+        if on_charger and self.soc < 0.999:
+            self.current = 0.5 * self.capacity_ah  # 0.5 C
+            self.voltage = min(12.6, lipo_voltage(self.soc) + 0.3)
+            self.charging = True
+        else:
+            self.current = -(self.base_load_w + motor_power_w) / max(self.voltage, 1.0)
+            self.voltage = lipo_voltage(self.soc) + self.current * 0.05  # pack resistance 50 mΩ
+            self.charging = False
+        self.soc = min(1.0, max(0.0, self.soc + self.current * dt / 3600.0 / self.capacity_ah))
+
+
+def lipo_voltage(soc: float) -> float:
+    """Resting voltage of three cells in series: 3.3 V a cell empty to 4.2 V full."""
+    return 3.0 * (3.3 + 0.9 * soc)

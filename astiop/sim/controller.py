@@ -54,3 +54,22 @@ def goto_pose_command(
 def arrived(pose, goal, gains: ControllerGains) -> bool:
     ex, ey, eth = tracking_error(pose, goal)
     return math.hypot(ex, ey) <= gains.goal_tolerance and abs(eth) <= gains.heading_tolerance
+
+
+def diff_drive_command(
+    pose, target_xy, goal_theta: float, remaining: float, final: bool, gains: ControllerGains
+) -> tuple[float, float, float]:
+    """(v, 0, ω) toward `target_xy` for a base that cannot move sideways: turn toward the point,
+    drive while roughly facing it; within the goal tolerance of the last point, turn in place to
+    the goal's heading (a stateful goal checker: the position once reached is kept)."""
+    ex, ey, eth = tracking_error(pose, (target_xy[0], target_xy[1], goal_theta))
+    dist = math.hypot(ex, ey)
+    if final and dist <= gains.goal_tolerance:
+        return 0.0, 0.0, max(-gains.w_max, min(gains.w_max, gains.k_heading * eth))
+    bearing = math.atan2(ey, ex)
+    speed = min(gains.v_max, math.sqrt(2.0 * gains.a_max * max(remaining, 0.0)))
+    if final:
+        speed = min(speed, gains.k_position * dist)
+    v = 0.0 if abs(bearing) > math.pi / 4 else speed * math.cos(bearing)
+    wz = max(-gains.w_max, min(gains.w_max, 2.0 * gains.k_heading * bearing))
+    return v, 0.0, wz

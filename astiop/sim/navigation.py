@@ -9,13 +9,20 @@ import math
 
 import numpy as np
 
-from astiop.sim.controller import ControllerGains, arrived, goto_pose_command, tracking_error
+from astiop.sim.body import ASTIBOT_BODY
+from astiop.sim.controller import (
+    ControllerGains,
+    arrived,
+    diff_drive_command,
+    goto_pose_command,
+    tracking_error,
+)
 from astiop.sim.geometry import path_length, segments_hit_boxes, wrap_angle
 from astiop.sim.goal import Goal, GoalResult, Leg
 from astiop.sim.path_planner import PlanningError
 
-ROBOT_LENGTH, ROBOT_WIDTH = 1.0, 0.735
-INFLATION = math.hypot(ROBOT_LENGTH, ROBOT_WIDTH) / 2 + 0.1  # circumscribed radius + margin
+ROBOT_LENGTH, ROBOT_WIDTH = ASTIBOT_BODY.length, ASTIBOT_BODY.width
+INFLATION = ASTIBOT_BODY.inflation  # circumscribed radius + margin
 BLOCKED_GIVE_UP_S = 60.0
 
 
@@ -33,7 +40,8 @@ class NavigationMixin:
             raise GoalError(
                 f"goal ({x:.2f}, {y:.2f}) is outside the map (x {x0:g}..{x1:g}, y {y0:g}..{y1:g} m)"
             )
-        hit = self.world.footprint_collides(x, y, theta, ROBOT_LENGTH, ROBOT_WIDTH, margin=0.05)
+        base = self.chassis
+        hit = self.world.footprint_collides(x, y, theta, base.length, base.width, margin=0.05)
         if hit:
             raise GoalError(
                 f"the robot does not fit at ({x:.2f}, {y:.2f}): it would overlap a "
@@ -143,9 +151,8 @@ class NavigationMixin:
             else ControllerGains(v_max=leg.v_max, w_max=0.3)
         )
         remaining = path_length([pose[:2]] + leg.path[leg.waypoint :])
-        return goto_pose_command(
-            pose, leg.path[leg.waypoint], leg.target[2], remaining, final, gains
-        )
+        command = diff_drive_command if self.chassis.differential else goto_pose_command
+        return command(pose, leg.path[leg.waypoint], leg.target[2], remaining, final, gains)
 
     def _check_path(self) -> None:
         g = self.goal
@@ -159,7 +166,7 @@ class NavigationMixin:
         if not g.known_boxes:
             return
         pts = np.array(g.remaining_path(x, y))
-        boxes = np.array(g.known_boxes) + np.array([-1, -1, 1, 1]) * INFLATION
+        boxes = np.array(g.known_boxes) + np.array([-1, -1, 1, 1]) * self.chassis.inflation
         cut = segments_hit_boxes(pts[:-1], pts[1:], boxes).any()
         if not cut and g.blocked_since is None:
             return

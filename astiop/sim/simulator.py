@@ -17,6 +17,7 @@ import numpy as np
 
 from astiop.sim import lidar
 from astiop.sim.battery import Battery
+from astiop.sim.body import ASTIBOT_BODY, Body
 from astiop.sim.controller import ControllerGains, tracking_error
 from astiop.sim.conveyor import Conveyor
 from astiop.sim.geometry import wrap_angle
@@ -24,9 +25,8 @@ from astiop.sim.goal import Goal, GoalResult
 from astiop.sim.kinematics import ASTIBOT, MecanumParams, achievable_velocity, inverse_kinematics
 from astiop.sim.navigation import (
     BLOCKED_GIVE_UP_S,
-    INFLATION,
-    ROBOT_LENGTH,
-    ROBOT_WIDTH,
+    ROBOT_LENGTH,  # noqa: F401 - the ASTIbot's size, read from here by tests
+    ROBOT_WIDTH,  # noqa: F401
     GoalError,
     NavigationMixin,
 )
@@ -36,7 +36,7 @@ from astiop.sim.state import Event, SimState, lamp, state_word
 from astiop.sim.world import CT_OBSTACLE, CT_ROBOT, CT_STATIC, World
 from astiop.warehouse import WarehouseMap, default_map
 
-ROBOT_MASS = 45.0
+ROBOT_MASS = ASTIBOT_BODY.mass
 TELEOP_TIMEOUT_S = 0.5
 STOP_LATCHED = "the stop is latched: /release to move again"
 A_LIN, A_ANG = 1.0, 2.0  # m/s², rad/s² the base ramps with
@@ -62,8 +62,17 @@ class Simulator(NavigationMixin):
         v_max: float = 0.8,
         w_max: float = 0.8,
         blocked_give_up_s: float = BLOCKED_GIVE_UP_S,
+        body: Body = ASTIBOT_BODY,
+        gains: ControllerGains | None = None,
+        battery=None,
+        lidar_spec: lidar.LidarSpec | None = None,
     ):
+        """`body`, `gains`, `battery` and `lidar_spec` make another robot in the same
+        warehouse (a TurtleBot3); `params` is the body's wheels when `body` is the ASTIbot's."""
         self.map = warehouse or default_map()
+        self.chassis = body  # `self.body` is the pymunk body
+        if body is not ASTIBOT_BODY:
+            params = body.wheels
         self.blocked_give_up_s = blocked_give_up_s  # a blocked goal is aborted after this
         self.params = params
         self.rng = np.random.default_rng(seed)
@@ -73,12 +82,12 @@ class Simulator(NavigationMixin):
         self._control_every = max(1, physics_hz // 20)
         self._lidar_every = max(1, physics_hz // 10)
         self.lidar_enabled = lidar_enabled
-        self.lidar_spec = lidar.LidarSpec()
+        self.lidar_spec = lidar_spec or lidar.LidarSpec()
         self._beam_angles = self.lidar_spec.beam_angles()
-        self.gains = ControllerGains(v_max=v_max, w_max=w_max)
+        self.gains = gains or ControllerGains(v_max=v_max, w_max=w_max)
         self.world = World(self.map)
-        self.path_planner = PathPlanner(self.world.static_boxes, self.map.bounds, INFLATION)
-        self.battery = Battery(battery_soc)
+        self.path_planner = PathPlanner(self.world.static_boxes, self.map.bounds, body.inflation)
+        self.battery = battery if battery is not None else Battery(battery_soc)
         self.conveyor = Conveyor()
         self._build_robot(self._resolve_start(start))
         self.t = 0.0
@@ -126,7 +135,7 @@ class Simulator(NavigationMixin):
 
     def _build_robot(self, pose) -> None:
         self.control, self.body, self.shape = self.world.add_robot(
-            pose, ROBOT_MASS, ROBOT_LENGTH, ROBOT_WIDTH
+            pose, self.chassis.mass, self.chassis.length, self.chassis.width
         )
         for other in (CT_STATIC, CT_OBSTACLE):
             self.world.space.on_collision(
@@ -280,6 +289,14 @@ class Simulator(NavigationMixin):
                 self.cancel("overridden by /cmd_vel")
             self._teleop = _Teleop((float(vx), float(vy), float(wz)), self.t + timeout)
 
+    def clear_fault(self) -> None:
+        """For a base with no fault latch (a TurtleBot3's motors just stall against a wall):
+        its next command moves it again."""
+        with self.lock:
+            if self.fault:
+                self._event("fault", f"cleared by the next command: {self.fault}")
+                self.fault = ""
+
     def _say_ignored(self) -> None:
         if not self._ignored_said:
             self._ignored_said = True
@@ -413,15 +430,17 @@ class Simulator(NavigationMixin):
     def _control(self, dt: float) -> None:
         if self.goal is not None:
             self._target = self._navigate()
+            if self.chassis.differential:  # the small wheels' top speed bounds the controller
+                self._target = achievable_velocity(*self._target, self.params)
         elif self._teleop.until >= self.t:
             vx, vy, wz = self._teleop.v
+            if self.chassis.differential:
+                vy = 0.0  # no lateral motion; the wheels' limit bounds the rest
             self._target = achievable_velocity(vx, vy, wz, self.params)
         else:
             self._target = (0.0, 0.0, 0.0)
         w = inverse_kinematics(*self._v, self.params)
-        # rolling resistance at each wheel (0.34 N·m) plus idle draw of a turning motor, 75 % eff.
-        moving = np.abs(w) > 0.05
-        self._motor_power = float((0.34 * np.abs(w)).sum() + 2.0 * moving.sum()) / 0.75
+        self._motor_power = self.chassis.motor_power(w)
         self.battery.update(dt, self._motor_power, on_charger=self.docked())
         done = self.conveyor.update(dt)
         if done:

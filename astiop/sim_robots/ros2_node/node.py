@@ -8,64 +8,46 @@ executors.py, qos.py).
 
 from __future__ import annotations
 
-import math
-import threading
 import time
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-import rclpy
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import ReentrantCallbackGroup
-from rclpy.executors import MultiThreadedExecutor
-from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 
 from astiop.robot.backends.sim import messages as sm
 from astiop.robot.backends.sim.backend import SimBackend
-from astiop.robot.safety import UNIT_QUATERNION_TOLERANCE, clamp_twist
+from astiop.robot.safety import clamp_twist
 from astiop.robot.state import yaw_of
 from astiop.ros2.catalog import astibot_catalog
 from astiop.ros2.message_objects import interface_class, to_dict, to_message
 from astiop.sim.simulator import GoalError, Simulator
+from astiop.sim_robots.ros2_common import (
+    MAP_TYPE,
+    QOS,
+    RELIABLE,
+    RobotNodes,
+    duration,
+    goal_refusal,
+    stamped,
+)
 from astiop.store import Store
 
 LAPSE_S = 0.5  # the base stops when /cmd_vel stops for this long (wall time)
-GOAL_ABORT_S = 1.5  # at shutdown: how long running goals have to be aborted
 FEEDBACK_HZ = 5.0
 ABORTED = 9000  # nav2_msgs' UNKNOWN error code (kilted names it; jazzy has the field)
-MAP_TYPE = "nav_msgs/msg/OccupancyGrid"
-
-RELIABLE = QoSProfile(depth=10)
-LATCHED = QoSProfile(
-    depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE
-)
-QOS = {"": RELIABLE, "sensor_data": qos_profile_sensor_data, "transient_local": LATCHED}
+__all__ = ["QOS", "SimRobotNodes"]  # tests read QOS from here
 
 
-def _stamped(message: dict[str, Any], stamp: dict[str, int]) -> dict[str, Any]:
-    """Every header in the message stamped with the robot's clock, as a driver stamps it."""
-    out = {}
-    for key, value in message.items():
-        if key == "header" and isinstance(value, dict):
-            value = {**value, "stamp": stamp}
-        elif isinstance(value, dict):
-            value = _stamped(value, stamp)
-        elif isinstance(value, list) and value and isinstance(value[0], dict):
-            value = [_stamped(v, stamp) for v in value]
-        out[key] = value
-    return out
-
-
-class SimRobotNodes:
+class SimRobotNodes(RobotNodes):
     """The simulator at real time behind the catalog's ROS 2 nodes, in one rclpy context."""
 
     def __init__(self, *, seed: int, speed: float, locations_db: Path):
+        super().__init__()
         self.sim = Simulator(seed=seed)
         self.speed = speed  # sim seconds per wall second
-        self._goals_running = 0
         self.store = Store(locations_db)  # the robot's own named locations
         self.backend = SimBackend(self.sim, self.store, realtime=True, speed=speed)
         self.catalog = astibot_catalog()
@@ -73,19 +55,15 @@ class SimRobotNodes:
             "max_linear_speed": self.catalog.params[("/astibot_base", "max_linear_speed")].value,
             "max_angular_speed": self.catalog.params[("/astibot_base", "max_angular_speed")].value,
         }
-        self.context = rclpy.Context()
-        self.nodes: dict[str, Node] = {}
         self._publishers: dict[str, Any] = {}
-        self._executor: MultiThreadedExecutor | None = None
-        self._stopped = threading.Event()
 
     # -- set-up -----------------------------------------------------------------------------
     def start(self) -> None:
-        rclpy.init(context=self.context)
+        self.init_context()
         for name in self.catalog.nodes:
             if name == "/astiop_agent":
                 continue  # astiop's own node: the locations services live on the navigator here
-            self.nodes[name] = Node(name.lstrip("/"), context=self.context)
+            self.add_node(name)
         for spec in self.catalog.topics.values():
             if spec.publisher:
                 self._publish(spec.name, spec.type, spec.publisher, spec.rate_hz, spec.qos)
@@ -111,34 +89,11 @@ class SimRobotNodes:
         )
         self._declare_parameters()
         self.backend.start()
-        self._executor = MultiThreadedExecutor(num_threads=4, context=self.context)
-        for node in self.nodes.values():
-            self._executor.add_node(node)
-
-    def spin(self) -> None:
-        """Serve until `stop()` (from a signal handler or another thread); then a little longer,
-        so a goal still running is aborted and its client told so before the nodes go."""
-        assert self._executor is not None
-        while not self._stopped.is_set() and self.context.ok():
-            self._executor.spin_once(timeout_sec=0.1)
-        deadline = time.monotonic() + GOAL_ABORT_S
-        while self._goals_running and time.monotonic() < deadline and self.context.ok():
-            self._executor.spin_once(timeout_sec=0.05)
-        end = time.monotonic() + 0.2  # the result's response goes out
-        while time.monotonic() < end and self.context.ok():
-            self._executor.spin_once(timeout_sec=0.05)
-
-    def stop(self) -> None:
-        self._stopped.set()
+        self.start_executor()
 
     def close(self) -> None:
         self.backend.close()
-        if self._executor is not None:
-            self._executor.shutdown(timeout_sec=1.0)
-        for node in self.nodes.values():
-            node.destroy_node()
-        if self.context.ok():
-            rclpy.shutdown(context=self.context)
+        self.close_nodes()
         self.store.close()
 
     # -- topics -----------------------------------------------------------------------------
@@ -152,7 +107,7 @@ class SimRobotNodes:
             if message is not None:
                 now = self.nodes[node].get_clock().now().to_msg()
                 stamp = {"sec": now.sec, "nanosec": now.nanosec}
-                pub.publish(to_message(cls, _stamped(message, stamp)))
+                pub.publish(to_message(cls, stamped(message, stamp)))
 
         if rate_hz > 0:
             self.nodes[node].create_timer(1.0 / rate_hz, send)
@@ -191,17 +146,14 @@ class SimRobotNodes:
 
     # -- the action ---------------------------------------------------------------------------
     def _navigate(self, goal_handle: Any) -> Any:
-        self._goals_running += 1
-        try:
+        with self.goal_running():
             return self._navigate_goal(goal_handle)
-        finally:
-            self._goals_running -= 1
 
     def _navigate_goal(self, goal_handle: Any) -> Any:
         action = interface_class(self.catalog.actions["/navigate_to_pose"].type)
         request = to_dict(goal_handle.request)
         pose = request["pose"]
-        why = _goal_refusal(pose)
+        why = goal_refusal(pose)
         if why:
             return _ended(goal_handle, action, "abort", why)
         p, q = pose["pose"]["position"], pose["pose"]["orientation"]
@@ -215,7 +167,7 @@ class SimRobotNodes:
             if goal_handle.is_cancel_requested:
                 self.sim.cancel("canceled by the action client")
                 return _ended(goal_handle, action, "canceled", "")
-            if not self.context.ok() or self._stopped.is_set():
+            if self.stopping:
                 self.sim.cancel("the robot's navigator shut down")
                 return _ended(goal_handle, action, "abort", "the navigator shut down")
             goal_handle.publish_feedback(self._feedback(action, start, clock))
@@ -246,8 +198,8 @@ class SimRobotNodes:
                         "orientation": sm.quaternion(s.theta),
                     },
                 },
-                "navigation_time": _duration(elapsed),
-                "estimated_time_remaining": _duration(remaining),
+                "navigation_time": duration(elapsed),
+                "estimated_time_remaining": duration(remaining),
                 "number_of_recoveries": 0,
                 "distance_remaining": s.distance_remaining,
             },
@@ -278,23 +230,6 @@ class SimRobotNodes:
                     with self.sim.lock:
                         self.sim.gains = replace(self.sim.gains, v_max=float(param.value))
         return SetParametersResult(successful=True)
-
-
-def _goal_refusal(pose: dict[str, Any]) -> str:
-    frame = pose["header"]["frame_id"]
-    if frame not in ("", "map"):
-        return f"goals must be in the map frame, not '{frame}'"
-    q = pose["pose"]["orientation"]
-    norm = math.hypot(q["x"], q["y"], q["z"], q["w"])
-    if not abs(norm - 1.0) <= UNIT_QUATERNION_TOLERANCE:
-        return f"the orientation is not a unit quaternion (|q| = {norm:.6g})"
-    return ""
-
-
-def _duration(seconds: float) -> dict[str, int]:
-    seconds = max(0.0, min(seconds, 2.0**31 - 1))
-    sec = int(seconds)
-    return {"sec": sec, "nanosec": int((seconds - sec) * 1e9)}
 
 
 def _ended(goal_handle: Any, action: Any, how: str, why: str) -> Any:

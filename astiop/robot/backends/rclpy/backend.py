@@ -292,6 +292,9 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         now = time.monotonic()
         messages = self._fresh(now)
         profile = self.catalog.profile
+        goals = goal_status_topic(profile)
+        if goals in self._watches and goals not in messages:
+            messages[goals] = {"status_list": []}  # its server is up and has had no goal
         messages = without_finished_plan(messages, profile)
         seq = self.events.seq
         state = from_messages(

@@ -78,6 +78,15 @@ def read_params(proc: RosProcess, nodes: list[str], timeout: float) -> list[tupl
     return sorted(listed)
 
 
+def latched(proc: RosProcess, topic: str) -> bool:
+    """Every publisher of `topic` keeps its last message for a new subscriber (transient local):
+    `ros2 topic echo --once` prints that message at once."""
+    infos = proc.node.get_publishers_info_by_topic(topic)
+    return bool(infos) and all(
+        i.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL for i in infos
+    )
+
+
 def matched_qos(proc: RosProcess, topic: str, depth: int = 10) -> QoSProfile:
     """Best effort if any publisher is, transient local if every publisher is."""
     infos = proc.node.get_publishers_info_by_topic(topic)

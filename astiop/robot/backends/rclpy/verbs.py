@@ -13,7 +13,7 @@ from rclpy.action import ActionClient
 from rclpy.qos import qos_profile_sensor_data
 
 from astiop.robot.backend import BackendError
-from astiop.robot.backends.rclpy.graph import full_name, hidden, matched_qos, read_params
+from astiop.robot.backends.rclpy.graph import full_name, hidden, latched, matched_qos, read_params
 from astiop.robot.backends.rclpy.node import RosTimeout
 from astiop.robot.inflight import ENDED, Job
 from astiop.robot.verb_table import ServesVerbs, runs
@@ -155,6 +155,8 @@ class RclpyVerbs(ServesVerbs):
             # the robot's last publication, if it came within one period, is the message
             # `ros2 topic echo --once` would print next (one period newer at most)
             msg = w.current(1.0 / spec.rate_hz) or w.next_message(timeout)
+        elif w is not None and latched(self.proc, name) and w.latest_object() is not None:
+            msg = w.latest_object()  # what a new subscription is handed at once (/amcl_pose)
         elif w is not None:
             msg = w.next_message(timeout)
         else:

@@ -1,0 +1,134 @@
+"""What every simulated robot served as real ROS 2 nodes shares: its rclpy context, nodes and
+executor, a shutdown that lets running goals end first, QoS profiles, stamped messages, the
+robot's clock on every header. `serving.py` starts them (and needs no ROS to import).
+
+rclpy API used here is Humble's too (rclpy's humble branch: node.py, executors.py, qos.py).
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from typing import Any
+
+import rclpy
+from rclpy.executors import MultiThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+
+from astiop.robot.safety import UNIT_QUATERNION_TOLERANCE
+
+GOAL_ABORT_S = 1.5  # at shutdown: how long running goals have to be aborted
+MAP_TYPE = "nav_msgs/msg/OccupancyGrid"
+
+RELIABLE = QoSProfile(depth=10)
+LATCHED = QoSProfile(
+    depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE
+)
+QOS = {"": RELIABLE, "sensor_data": qos_profile_sensor_data, "transient_local": LATCHED}
+
+
+def stamped(message: dict[str, Any], stamp: dict[str, int]) -> dict[str, Any]:
+    """Every header in the message stamped with the robot's clock, as a driver stamps it."""
+    out = {}
+    for key, value in message.items():
+        if key == "header" and isinstance(value, dict):
+            value = {**value, "stamp": stamp}
+        elif isinstance(value, dict):
+            value = stamped(value, stamp)
+        elif isinstance(value, list) and value and isinstance(value[0], dict):
+            value = [stamped(v, stamp) for v in value]
+        out[key] = value
+    return out
+
+
+def now_stamp(node: Node) -> dict[str, int]:
+    now = node.get_clock().now().to_msg()
+    return {"sec": now.sec, "nanosec": now.nanosec}
+
+
+def duration(seconds: float) -> dict[str, int]:
+    seconds = max(0.0, min(seconds, 2.0**31 - 1))
+    sec = int(seconds)
+    return {"sec": sec, "nanosec": int((seconds - sec) * 1e9)}
+
+
+def goal_refusal(pose: dict[str, Any], frames: tuple[str, ...] = ("", "map")) -> str:
+    frame = pose["header"]["frame_id"]
+    if frame not in frames:
+        return f"goals must be in the map frame, not '{frame}'"
+    q = pose["pose"]["orientation"]
+    norm = math.hypot(q["x"], q["y"], q["z"], q["w"])
+    if not abs(norm - 1.0) <= UNIT_QUATERNION_TOLERANCE:
+        return f"the orientation is not a unit quaternion (|q| = {norm:.6g})"
+    return ""
+
+
+class RobotNodes:
+    """A robot's nodes in one rclpy context, spun by one executor until `stop()`."""
+
+    def __init__(self) -> None:
+        self.context = rclpy.Context()
+        self.nodes: dict[str, Node] = {}
+        self._executor: MultiThreadedExecutor | None = None
+        self._stopped = threading.Event()
+        self._goals_running = 0
+
+    def init_context(self) -> None:
+        rclpy.init(context=self.context)
+
+    def add_node(self, name: str, key: str = "", **options: Any) -> Node:
+        """A node by its full name ("/amcl", "/tb3_1/global_costmap/global_costmap"), kept
+        under `key` (default: that name)."""
+        ns, _, base = name.rpartition("/")
+        node = Node(base, namespace=ns or "/", context=self.context, **options)
+        self.nodes[key or name] = node
+        return node
+
+    def start_executor(self) -> None:
+        self._executor = MultiThreadedExecutor(num_threads=4, context=self.context)
+        for node in self.nodes.values():
+            self._executor.add_node(node)
+
+    @property
+    def stopping(self) -> bool:
+        return self._stopped.is_set() or not self.context.ok()
+
+    def goal_running(self) -> _GoalCount:
+        return _GoalCount(self)
+
+    def spin(self) -> None:
+        """Serve until `stop()` (from a signal handler or another thread); then a little longer,
+        so a goal still running is aborted and its client told so before the nodes go."""
+        assert self._executor is not None
+        while not self._stopped.is_set() and self.context.ok():
+            self._executor.spin_once(timeout_sec=0.1)
+        deadline = time.monotonic() + GOAL_ABORT_S
+        while self._goals_running and time.monotonic() < deadline and self.context.ok():
+            self._executor.spin_once(timeout_sec=0.05)
+        end = time.monotonic() + 0.2  # the result's response goes out
+        while time.monotonic() < end and self.context.ok():
+            self._executor.spin_once(timeout_sec=0.05)
+
+    def stop(self) -> None:
+        self._stopped.set()
+
+    def close_nodes(self) -> None:
+        if self._executor is not None:
+            self._executor.shutdown(timeout_sec=1.0)
+        for node in self.nodes.values():
+            node.destroy_node()
+        if self.context.ok():
+            rclpy.shutdown(context=self.context)
+
+
+class _GoalCount:
+    def __init__(self, robot: RobotNodes):
+        self.robot = robot
+
+    def __enter__(self) -> None:
+        self.robot._goals_running += 1
+
+    def __exit__(self, *_exc: object) -> None:
+        self.robot._goals_running -= 1
