@@ -101,8 +101,34 @@ def tb3_node(*, model: str = "burger", distro: str = "jazzy", namespace: str = "
         yield node
 
 
+def quiet_domain(timeout: float = 30.0) -> None:
+    """Wait until no other node is on this worker's domain: a robot an earlier test killed
+    (or that ended uncleanly) stays in every peer's discovery data until its lease runs out
+    (Fast DDS: 20 s), and a new robot's graph would hold its names too (a /stop the TurtleBot3
+    does not have). Only this process's long-lived participant (the gateways' shared one) can
+    hold a dead peer: a new participant learns only of live ones."""
+    from astiop.robot.backends.rclpy import node as rclpy_node
+
+    shared = rclpy_node._shared
+    if shared is None:
+        return
+    from astiop.ros2.catalog import astibot_catalog
+    from astiop.sim_robots.turtlebot3.graph import node_names
+
+    robots = {n.strip("/") for n in astibot_catalog().nodes}
+    robots |= {n.rsplit("/", 1)[-1] for d in ("jazzy", "humble") for n in node_names(d)}
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        left = [n for n, _ in shared.node.get_node_names_and_namespaces() if n in robots]
+        if not left:
+            return
+        time.sleep(0.5)
+    raise AssertionError(f"an earlier test's robot is still on the domain: {sorted(set(left))}")
+
+
 @contextlib.contextmanager
 def sim_node(**kw):
+    quiet_domain()
     node = SimNode(**kw)
     try:
         node.wait_ready()
