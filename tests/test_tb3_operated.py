@@ -70,6 +70,12 @@ def test_a_turtlebot3_is_read_answered_driven_and_sent_by_its_own_names(tmp_path
             assert profile.matches["velocity_command"].type == "geometry_msgs/msg/TwistStamped"
             assert profile.name("navigation") == "/navigate_to_pose"
             assert profile.make == "turtlebot3_burger" and not profile.has("stop")
+            # a client this process keeps (an E-STOP's call, tried) is not a service it has
+            from std_srvs.srv import Trigger
+
+            gateway.backend.proc.client(Trigger, "/stop")
+            gateway.backend.refresh()
+            assert not gateway.profile.has("stop"), gateway.catalog.services.keys()
             # the Dashboard's figures: the map pose (not odometry's origin), the battery, the map
             st = gateway.state()
             assert math.dist((st.pose.x, st.pose.y), (4.0, 4.0)) < 0.05, st.pose
@@ -151,10 +157,9 @@ def test_the_estop_cancels_every_nav2_goal_on_a_robot_with_no_stop_service(tmp_p
         assert until(lambda: odom and abs(odom[-1][1].twist.twist.linear.x) > 0.05, 15)
         db = str(tmp_path / "estop.db")
         cli = [sys.executable, "-m", "astiop", "--db", db, "--robot", "ros2"]
-        t0 = time.monotonic()
         out = subprocess.run([*cli, "--ros2-transport", "rclpy", "estop"],
                              capture_output=True, text=True, timeout=60)  # fmt: skip
-        took = time.monotonic() - t0
+        # 0: no failure said, so it did not wait out its timeout for a /stop it lacks
         assert out.returncode == 0, out.stdout + out.stderr
         result = client.result(handle.get_result_async(), 20)
         assert result.status == GoalStatus.STATUS_CANCELED, result.status  # not SUCCEEDED
@@ -162,7 +167,6 @@ def test_the_estop_cancels_every_nav2_goal_on_a_robot_with_no_stop_service(tmp_p
         stopped = time.monotonic()
         time.sleep(1.5)
         assert all(abs(m.twist.twist.linear.x) < 0.01 for t, m in odom if t > stopped)
-        assert took < 8.0, f"astiop estop took {took:.1f} s on a robot with no /stop"
 
 
 def test_a_turtlebot3_under_a_namespace_is_found_and_stopped_there(tmp_path):

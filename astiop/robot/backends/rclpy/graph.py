@@ -3,7 +3,7 @@ to read a topic with, matched to its publishers (as ros2topic's echo chooses it)
 
 from __future__ import annotations
 
-from rclpy.action import get_action_names_and_types
+from rclpy.action.graph import get_action_server_names_and_types_by_node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
 from astiop.robot.backends.live_catalog import GraphLists
@@ -36,22 +36,28 @@ def read_lists(proc: RosProcess) -> GraphLists:
     """Topics, services, actions and nodes from this process's DDS discovery cache (no call)."""
     node = proc.node
     me = full_name(node.get_namespace(), node.get_name())
-    mine = me + "/"  # this process's own services (type description) are not the robot's
+    others = [
+        (n, ns) for n, ns in node.get_node_names_and_namespaces()
+        if not n.startswith("_") and full_name(ns, n) != me
+    ]  # fmt: skip
+    # services and actions as their servers offer them: a client (this process's own, kept
+    # for the next call, or another's) is not a service the robot has (rmw lists both)
+    services, actions = set(), set()
+    for n, ns in others:
+        try:
+            served = node.get_service_names_and_types_by_node(n, ns)
+            offered = get_action_server_names_and_types_by_node(node, n, ns)
+        except Exception:  # noqa: BLE001 - the node left between the two reads
+            continue
+        services |= {(name, t[0]) for name, t in served if t and not hidden(name)}
+        actions |= {(name, t[0]) for name, t in offered if t}
     return {
         "topic": sorted(
             (n, t[0]) for n, t in node.get_topic_names_and_types() if t and not hidden(n)
         ),
-        "service": sorted(
-            (n, t[0])
-            for n, t in node.get_service_names_and_types()
-            if t and not hidden(n) and not n.startswith(mine)
-        ),
-        "action": sorted((n, t[0]) for n, t in get_action_names_and_types(node) if t),
-        "node": sorted(
-            (full_name(ns, n), "")
-            for n, ns in node.get_node_names_and_namespaces()
-            if not n.startswith("_") and full_name(ns, n) != me
-        ),
+        "service": sorted(services),
+        "action": sorted(actions),
+        "node": sorted((full_name(ns, n), "") for n, ns in others),
     }
 
 
