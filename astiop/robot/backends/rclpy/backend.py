@@ -437,31 +437,25 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
             self._estop.start(self._zero_burst, "estop-zero")
         except Exception as exc:  # noqa: BLE001 - /stop and the cancels go out regardless
             failures.append(f"{exc}: no zero Twist was sent")
-        read = bool(self._lists["node"])  # a new process's E-STOP does not wait for the graph
-        stop = self._name("stop") if read else self._fixed.namespace + "/stop"
+        # The graph this process holds may be partial (a new process's E-STOP does not wait
+        # for it): a stop service it shows is called; one it does not show is still tried, and
+        # only a robot seen without it has none (said, not failed). Then every NavigateToPose
+        # goal on the robot is cancelled, another client's too (a TurtleBot3 has no /stop).
+        stop = self._name("stop")
+        stop_type = stop_service_type(self.catalog)
         if stop:
-            stop_type = stop_service_type(self.catalog)  # a young process may not have seen it
-            if read:
-                self._estop.start(lambda: self._calls.call(stop, stop_type, "E-STOP"), "estop-stop")
-            else:
-                self._estop.start(
-                    lambda: self._calls.call_if_served(stop, stop_type, "E-STOP", self._base_seen),
-                    "estop-stop",
-                )
-        # a robot without a stop service (a TurtleBot3 under Nav2): every goal on it cancelled,
-        # another client's too, not only this process's own; before the graph is read, both
-        actions = (
-            navigation_actions(self.catalog, self._fixed.namespace)
-            if read
-            else [self._fixed.namespace + NAVIGATE]
-        )
-        for action in actions if not read or not stop else []:
-            self._estop.start(lambda a=action: self._cancel_every_goal(a), "estop-cancel")
-        if read and not stop:
-            failures.append(
-                f"the robot has no stop service ({self._fixed.namespace}/stop): "
-                "its navigation goals were cancelled instead"
+            self._estop.start(lambda: self._calls.call(stop, stop_type, "E-STOP"), "estop-stop")
+        else:
+            name = self._fixed.namespace + "/stop"
+            self._estop.start(
+                lambda: self._calls.call_if_served(name, stop_type, "E-STOP", self._base_seen),
+                "estop-stop",
             )
+            actions = navigation_actions(self.catalog, self._fixed.namespace) or [
+                self._fixed.namespace + NAVIGATE
+            ]
+            for action in actions:
+                self._estop.start(lambda a=action: self._cancel_every_goal(a), "estop-cancel")
         self._estop.said(failures)
         return failures
 
@@ -469,9 +463,9 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         """A CancelGoal with a zero goal id and a zero stamp cancels every goal of the action
         server (ros2/rcl_interfaces action_msgs/srv/CancelGoal.srv, humble and jazzy)."""
         name, what = f"{action}/_action/cancel_goal", "E-STOP cancel"
-        if self._lists["node"]:
+        if action in self.catalog.actions:
             self._calls.call(name, CANCEL_GOAL, what)
-        else:
+        else:  # not on the graph this process holds (yet)
             self._calls.call_if_served(name, CANCEL_GOAL, what, self._base_seen)
 
     def _base_seen(self) -> bool:
