@@ -7,6 +7,7 @@ off the UI thread and answers any open confirmation with "no".
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import threading
 from collections.abc import Iterable
@@ -111,6 +112,7 @@ class AstiopApp(App):
             self._approvals.start()
         if self.record_path is not None:
             self.start_recording(self.record_path)
+        self.run_worker(self._warm_model(), group="warm", exit_on_error=False)
         if not self.services.settings.robot.confirm_actuation:
             self.notify(
                 "robot.confirm_actuation is false: actuating commands run without asking",
@@ -118,6 +120,21 @@ class AstiopApp(App):
                 severity="warning",
                 timeout=30,
             )
+
+    async def _warm_model(self) -> None:
+        """The embedded model's prompts for this robot, evaluated before the first question."""
+        from astiop.agent.warm import warm
+
+        s = self.services
+        try:
+            took = await warm(s.endpoint, s.gateway, s.store, s.settings.llm.mode)
+        except Exception as exc:  # noqa: BLE001 - the first question says what is wrong
+            logging.getLogger("astiop.agent").info("warming the model failed: %s", exc)
+            return
+        if took is not None and s.store is not None:
+            said = f"{s.endpoint.spec.raw}: this robot's prompts evaluated in {took:.1f} s"
+            with contextlib.suppress(Exception):  # a read-only or busy store: not worth a word
+                s.store.add_event("model", said)
 
     def on_unmount(self) -> None:
         # The robot and the model are let go whatever fails before (a recording that cannot

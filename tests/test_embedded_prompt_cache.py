@@ -215,3 +215,43 @@ def test_a_state_file_is_hashed_once_per_version(tmp_path, monkeypatch):
     st = path.stat()
     os.utime(path, ns=(st.st_atime_ns, st.st_mtime_ns + 1_000_000))
     assert not prompt_cache.intact(path, digest) and len(hashed) == 2
+
+
+@pytest.mark.slow
+async def test_warming_keeps_this_robots_prompts_before_its_first_question(model_path, tmp_path):
+    """The console's warm-up (agent/warm.py) leaves the robot's planning and interpretation
+    prefixes in their slots and on disk: the first question evaluates its own words only."""
+    from astiop.agent import planner
+    from astiop.agent.models.embedded import EmbeddedServer
+    from astiop.agent.models.specs import open_endpoint
+    from astiop.agent.warm import warm
+    from astiop.config import load_settings
+    from astiop.robot.factory import make_sim_gateway
+    from astiop.store import Store
+
+    settings = load_settings({}, env={}, path=tmp_path / "none.toml")
+    store = Store(tmp_path / "a.db")
+    gateway = make_sim_gateway(settings, store)
+    server = EmbeddedServer(model_path, threads=1, n_ctx=settings.llm.context,
+                            cache_dir=tmp_path / "cache").start()  # fmt: skip
+
+    class Embedded:  # the console's endpoint, on this server
+        local, is_rules = True, False
+
+        def client(self):
+            return server.client()
+
+    try:
+        assert await warm(open_endpoint("rules"), gateway, store, "command") is None
+        assert await warm(Embedded(), gateway, store, settings.llm.mode) > 0
+        assert server.prompt_cache.saves == 2 and len(state_files(tmp_path / "cache")) == 2
+        places = [loc.name for loc in store.list_locations()]
+        req = planner.plan_request(
+            settings.llm.mode, gateway.catalog, places, "where is the robot?", [], []
+        )
+        first = await server.client().chat(req.messages, max_tokens=4)
+        assert first.prompt_tokens > 300 and first.prompt_tokens - first.cached_tokens < 30
+    finally:
+        server.stop()
+        gateway.close()
+        store.close()

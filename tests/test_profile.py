@@ -115,6 +115,18 @@ def test_a_written_profile_reads_back_as_the_same_profile(tmp_path):
     again = match_profile(tb3_graph("/tb3_1"), read_spec(str(f)))
     assert {r: again.name(r) for r in first.matches} == {r: first.name(r) for r in first.matches}
     assert again.units == first.units and again.limits == first.limits
+    assert again.map_name == first.map_name == "turtlebot3_burger" and not again.map.geofence
+
+
+def test_a_robots_places_belong_to_its_map_and_its_geofence_is_the_profiles(tmp_path):
+    assert match_profile(astibot_catalog()).map_name == "warehouse"  # the seeded places' map
+    tb3 = match_profile(tb3_graph())
+    assert tb3.map_name == "turtlebot3_burger" and tb3.map.geofence is None  # its /map's extent
+    f = tmp_path / "site.toml"
+    f.write_text('[map]\nname = "hall_b"\ngeofence = [-2, -2.5, 2, 2.5]\n')
+    site = match_profile(tb3_graph(), read_spec(str(f)))
+    assert site.map_name == "hall_b" and site.map.geofence == (-2.0, -2.5, 2.0, 2.5)
+    assert site.as_dict()["map"] == {"name": "hall_b", "geofence": [-2.0, -2.5, 2.0, 2.5]}
 
 
 @pytest.mark.parametrize(
@@ -128,6 +140,10 @@ def test_a_written_profile_reads_back_as_the_same_profile(tmp_path):
         ("[limits]\nmax_linear_speed = -1\n", "must be above 0"),
         ('[limits]\nradius = "big"\n', "is a number"),
         ('[robot]\nnamespace = "9bad"\n', "not a ROS 2 namespace"),
+        ('[map]\nname = "hall b"\n', "map.name is 1-64 letters"),
+        ("[map]\ngeofence = [0, 0, 5]\n", "map.geofence is [x_min"),
+        ("[map]\ngeofence = [5, 0, 1, 4]\n", "min below max"),
+        ("[map]\nfence = 1\n", "unknown key map.fence"),
     ],
 )
 def test_a_bad_profile_file_is_said_in_one_line(text, says):
@@ -187,6 +203,8 @@ def test_an_unsaid_battery_scale_reads_a_percentage_over_one_as_percent():
 def test_the_rules_plan_in_the_robots_own_names():
     from astiop.agent.intent import classify
     from astiop.agent.rules import plan_intents
+    from astiop.robot.safety import always_allowed
+    from astiop.ros2.validation import validate
 
     profile = match_profile(tb3_graph())
 
@@ -202,9 +220,40 @@ def test_the_rules_plan_in_the_robots_own_names():
     )
     assert "position: {x: 1.000, y: 0.500}" in goal and "frame_id: map" in goal
     assert plan("go to bench") == [goal]  # a named place by its coordinates
-    (stop,) = plan("stop the robot")
+    # no stop service: its Nav2 goals cancelled (a zero Twist alone, Nav2 drives on), then still
+    cancel, stop = plan("stop the robot")
+    assert cancel == (
+        'ros2 service call /navigate_to_pose/_action/cancel_goal action_msgs/srv/CancelGoal "{}"'
+    )
     assert stop.startswith("ros2 topic pub --once /cmd_vel geometry_msgs/msg/TwistStamped")
+    checked = validate(cancel, tb3_graph())  # the action's hidden service, always allowed
+    assert checked.valid and checked.kind == "actuate" and always_allowed(checked)
+    assert checked.message["goal_info"]["goal_id"]["uuid"] == [0] * 16  # every goal
+    assert not validate(cancel.replace("navigate_to_pose", "spin"), tb3_graph()).valid
     assert plan("dock the robot") == []  # it has no dock: nothing rather than a guess
+
+
+def test_a_place_the_robots_map_does_not_hold_is_said_so_not_guessed(tmp_path):
+    from astiop.agent.intent import classify
+    from astiop.agent.local_save import unknown_place
+    from astiop.store import Store
+
+    store = Store(tmp_path / "a.db")
+    store.use_map("turtlebot3_burger", None)
+    store.add_location("bench", 1.0, 0.5)
+    tb3 = match_profile(tb3_graph())
+
+    def said(request: str, profile=tb3):
+        return unknown_place(request, classify(request, ["bench"]), profile, store)
+
+    answer = said("go to shipping")
+    assert answer.startswith("There is no place named 'shipping' on this robot's map")
+    assert "(turtlebot3_burger); its places: bench." in answer
+    assert said("drive to the loading bay.").count("'loading bay'") == 1
+    assert said("go to bench") is None and said("go to x 1.0 y 0.5") is None
+    # the ASTIbot looks names up itself (/goto_position by name): the robot answers
+    assert said("go to shipping", match_profile(astibot_catalog())) is None
+    store.close()
 
 
 def test_a_question_the_robot_has_no_reading_for_is_answered_so():

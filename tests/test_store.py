@@ -71,6 +71,29 @@ def test_out_of_bounds_is_refused(store, x, y):
     assert store.get_location("p") is None
 
 
+def test_places_belong_to_a_map(tmp_path):
+    s = Store(tmp_path / "a.db")
+    s.use_map("turtlebot3_burger", (0.0, 0.0, 4.0, 4.0))  # the seeded six are not its places
+    assert s.list_locations() == [] and s.get_location("shipping") is None
+    assert s.other_maps() == {"warehouse": len(SEEDED)}
+    with pytest.raises(LocationError, match="on the map turtlebot3_burger"):
+        s.require_location("shipping")
+    with pytest.raises(LocationError, match="outside the geofence"):
+        s.add_location("far", 10.0, 2.0)  # inside the warehouse, outside this map's fence
+    s.add_location("shipping", 1.0, 2.0)  # a name is unique on its own map only
+    s.rename_location("shipping", "bench")
+    s.close()
+    again = Store(tmp_path / "a.db")
+    assert {loc.name for loc in again.list_locations()} == SEEDED  # the warehouse's
+    assert again.get_location("shipping").x == pytest.approx(37.6)
+    again.use_map("turtlebot3_burger", None)  # no fence known: only finite numbers are checked
+    assert [(loc.name, loc.x) for loc in again.list_locations()] == [("bench", 1.0)]
+    again.add_location("far", 100.0, -3.0)
+    again.remove_location("bench")
+    again.use_map("warehouse", default_map().bounds)
+    assert {loc.name for loc in again.list_locations()} == SEEDED
+
+
 def test_rename_and_remove(store):
     store.rename_location("shipping", "Shipping_Bay")
     assert store.get_location("shipping_bay").name == "Shipping_Bay"

@@ -142,3 +142,26 @@ def test_eight_processes_opening_one_new_database_at_once_all_succeed(tmp_path):
         assert len(store.list_locations()) == seeded and store.schema_version() == SCHEMA_VERSION
         store.close()
     assert failures == []
+
+
+def test_places_saved_before_maps_existed_are_the_warehouses(tmp_path):
+    from astiop.store.schema import MIGRATIONS
+
+    path = tmp_path / "v8.db"
+    conn = sqlite3.connect(path)
+    with conn:
+        for migrate in MIGRATIONS[:8]:
+            migrate(conn)
+        conn.execute(
+            "INSERT INTO locations (name, x, y, theta, description, created_at, updated_at) "
+            "VALUES ('bay_7', 12.0, 9.5, 0, 'mine', 0, 0)"
+        )
+        conn.execute("PRAGMA user_version = 8")
+    conn.close()
+    store = Store(path)
+    assert store.schema_version() == SCHEMA_VERSION
+    assert store.get_location("bay_7").description == "mine"  # on the warehouse map
+    store.use_map("turtlebot3_burger", None)
+    assert store.get_location("bay_7") is None
+    store.add_location("bay_7", 1.0, 1.0)  # the same name on another map
+    store.close()

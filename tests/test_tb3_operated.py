@@ -80,6 +80,10 @@ def test_a_turtlebot3_is_read_answered_driven_and_sent_by_its_own_names(tmp_path
             st = gateway.state()
             assert math.dist((st.pose.x, st.pose.y), (4.0, 4.0)) < 0.05, st.pose
             assert 0.0 < st.battery.percentage <= 1.0 and gateway.map_geometry() is not None
+            # its places are its map's (the warehouse's six are not offered); its geofence, the
+            # extent of its own /map
+            assert store.map_name == "turtlebot3_burger" and store.list_locations() == []
+            assert gateway.safety.geofence == gateway.map_geometry().bounds
             assert until(lambda: gateway.state().state_word == "idle", 10)
 
             result, _ = ask(gateway, "where is the robot?")
@@ -162,6 +166,44 @@ def test_the_estop_cancels_every_nav2_goal_on_a_robot_with_no_stop_service(tmp_p
         assert all(abs(m.twist.twist.linear.x) < 0.01 for t, m in odom if t > stopped)
 
 
+def test_stop_the_robot_in_chat_cancels_a_nav2_goal_and_says_so(tmp_path):
+    """A zero Twist alone does not stop a Nav2 robot (its controller drives on): "stop the
+    robot" cancels every goal of its NavigateToPose server, then holds it still."""
+    require_ros()
+    from action_msgs.msg import GoalStatus
+    from nav2_msgs.action import NavigateToPose
+    from nav_msgs.msg import Odometry
+    from rclpy.action import ActionClient
+
+    from tests.ros import tb3_node
+
+    with tb3_node(speed=4.0), ros_client("someone_else") as client:
+        gateway, store = gateway_on(tmp_path)
+        try:
+            odom = client.collect(Odometry, "/odom")
+            action = ActionClient(client.node, NavigateToPose, "/navigate_to_pose")
+            assert action.wait_for_server(timeout_sec=15)
+            goal = NavigateToPose.Goal()
+            goal.pose.header.frame_id = "map"
+            goal.pose.pose.position.x, goal.pose.pose.position.y = 12.0, 4.0
+            goal.pose.pose.orientation.w = 1.0
+            handle = client.result(action.send_goal_async(goal))
+            assert handle.accepted
+            assert until(lambda: odom and abs(odom[-1][1].twist.twist.linear.x) > 0.05, 15)
+            result, _ = ask(gateway, "stop the robot")
+            cancel, zero = (c.command for c in result.commands)
+            assert cancel.startswith("ros2 service call /navigate_to_pose/_action/cancel_goal")
+            assert zero.startswith("ros2 topic pub --once /cmd_vel")
+            assert all(c.executed and not c.error for c in result.commands), result.commands
+            assert "cancel" in result.answer.lower(), result.answer
+            done = client.result(handle.get_result_async(), 20)
+            assert done.status == GoalStatus.STATUS_CANCELED, done.status  # not SUCCEEDED
+            assert until(lambda: abs(odom[-1][1].twist.twist.linear.x) < 0.01, 5)
+        finally:
+            gateway.close()
+            store.close()
+
+
 def test_a_turtlebot3_under_a_namespace_is_found_and_stopped_there(tmp_path):
     require_ros()
     from tests.ros import tb3_node
@@ -202,3 +244,53 @@ def test_a_robot_with_no_battery_reading_says_so_when_asked(monkeypatch, tmp_pat
         finally:
             gateway.close()
             store.close()
+
+
+TB3_SUITE = """\
+name: tb3-check
+stage: 2
+system: You operate a mobile robot.
+cases:
+  - {id: pos, category: position, request: "Where is the robot right now?", expect: ["topic echo /robot_pose"], answer: [position]}
+  - {id: bat, category: battery, request: "What is the battery level?", expect: ["topic echo /battery_status"], answer: [battery]}
+  - {id: xy, category: coordinates, request: "Drive to x 6, y 4.5", expect: ["service call /goto_position x=6.0 y=4.5"], outcome: {arrive: [6.0, 4.5]}}
+  - {id: bench, category: navigation, request: "Go to bench", setup: {start: [6.0, 4.5, 0.0]}, expect: ["service call /goto_position name=bench"], outcome: {arrive: bench}}
+  - {id: nav, category: navigation, request: "Go to the shipping area", expect: ["service call /goto_position name=shipping"], outcome: {arrive: shipping}}
+  - {id: sta, category: status, request: "What is the robot status?", expect: ["topic echo /robot_status"], answer: [state]}
+  - {id: dck, category: docking, request: "Dock the robot", expect: ["service call /dock"], outcome: {docked: true}}
+"""
+
+
+def test_stage_2_runs_on_a_turtlebot3_in_its_own_names(tmp_path):
+    """The ASTIbot's cases, carried over by role: its pose, battery and NavigateToPose goals are
+    checked against what it reported; a case it has no role or place for is skipped, said why."""
+    require_ros()
+    from tests.ros import tb3_node
+
+    suite = tmp_path / "tb3.yaml"
+    suite.write_text(TB3_SUITE, encoding="utf-8")
+    db = str(tmp_path / "bench.db")
+    cli = [sys.executable, "-m", "astiop", "--db", db]
+    added = subprocess.run([*cli, "locations", "--map", "turtlebot3_burger", "add", "bench", "4.5",
+                            "4.0"], capture_output=True, text=True)  # fmt: skip
+    assert added.returncode == 0, added.stderr
+    with tb3_node(speed=8.0):
+        out = subprocess.run(
+            [*cli, "--robot", "ros2", "--ros2-transport", "rclpy", "bench", "run", "--stage", "2",
+             "--model", "rules", "--suite", str(suite), "--json"],
+            capture_output=True, text=True, timeout=600,
+        )  # fmt: skip
+    assert out.returncode == 0, out.stderr[-2000:]
+    report = subprocess.run([*cli, "bench", "report", "1", "--format", "json"],
+                            capture_output=True, text=True)  # fmt: skip
+    rows = {r["case_id"]: r for r in json.loads(report.stdout)["cases"]}
+    for case in ("pos", "bat", "xy", "bench"):
+        r = rows[case]
+        assert r["outcome"] == "ok" and r["command"] == 100.0 and r["interpretation"] == 100.0, str(
+            r
+        )
+    assert rows["xy"]["commands"][0].startswith("ros2 action send_goal /navigate_to_pose")
+    assert rows["bench"]["outcome_checks"] == {"arrive": True}
+    assert rows["nav"]["outcome"] == "skipped" and "no place" in rows["nav"]["skipped"]
+    assert rows["sta"]["outcome"] == "skipped" and "status" in rows["sta"]["skipped"]
+    assert rows["dck"]["outcome"] == "skipped" and "dock" in rows["dck"]["skipped"]

@@ -11,7 +11,7 @@ import math
 from dataclasses import dataclass
 
 from astiop.agent.intent import SERVICE_FOR, Intent
-from astiop.ros2.validation import Checked
+from astiop.ros2.validation import CANCEL_SUFFIX, Checked
 
 PLACE_TOLERANCE_M = 0.3
 
@@ -57,6 +57,8 @@ def action_of(checked: Checked) -> Action:
         if cmd.name == "/save_location":
             return Action("save", place=str(msg.get("name", "")))
         kind = _SERVICE_KINDS.get(cmd.name or "")
+        if (cmd.name or "").endswith(CANCEL_SUFFIX):
+            kind = "stop"  # a Nav2 robot's goals cancelled: how it stops without a stop service
         if kind:
             return Action(kind)
         return Action("read" if checked.kind == "read" else "configure")

@@ -1,10 +1,12 @@
-"""Saving where the robot is under a name, on a robot with no save service of its own (a
-TurtleBot3): astiop reads the robot's pose now, by its pose role, and keeps the place in its own
-store; the answer says what was read, from which topic. Nothing is saved from a pose not read."""
+"""Named places on a robot with no place services of its own (a TurtleBot3): "save this spot"
+reads the robot's pose now, by its pose role, and keeps the place in astiop's store under the
+robot's map (the answer says what was read, from which topic; nothing is saved from a pose not
+read); a place that map does not hold is said so, never guessed."""
 
 from __future__ import annotations
 
 import math
+import re
 from typing import Any
 
 from astiop.agent.intent import Intent
@@ -20,6 +22,27 @@ def asked(intents: list[Intent], profile: Any) -> str | None:
         return None
     only = intents[0]
     return only.place if only.kind == "save" and only.place else None
+
+
+_PLACE = re.compile(r"\b(?:to|at)\s+(?:the\s+)?([a-z][a-z0-9 _-]{1,40}?)[\s?.!]*$", re.I)
+
+
+def unknown_place(request: str, intents: list[Intent], profile: Any, store: Any) -> str | None:
+    """The answer to "go to X" when X is no place on the robot's map and the robot cannot look
+    names up itself (no by-name navigation service): None otherwise."""
+    if profile is None or store is None or profile.kind("navigation") == "service":
+        return None
+    if len(intents) != 1 or intents[0].kind != "navigate" or intents[0].place or intents[0].xy:
+        return None
+    m = _PLACE.search(request.strip())
+    if m is None:
+        return None
+    known = ", ".join(loc.name for loc in store.list_locations()) or "none yet"
+    return (
+        f"There is no place named '{m.group(1).strip()}' on this robot's map "
+        f"({store.map_name}); its places: {known}. Say 'save this spot as NAME' where the "
+        "robot stands, or give coordinates (go to x 1.0 y 0.5)."
+    )
 
 
 def save_here(gateway: Any, store: Any, name: str) -> tuple[Execution | None, str]:

@@ -15,6 +15,7 @@ from astiop.agent.intent import SERVICE_FOR, Intent, classify
 from astiop.agent.roles import name_for
 from astiop.robot.backend import Execution
 from astiop.ros2.render import nav_goal_command, velocity_pub_command
+from astiop.ros2.validation import CANCEL_SUFFIX
 
 Locate = Callable[[str], "tuple[float, float] | None"]
 
@@ -82,14 +83,21 @@ def _other_robot(intent: Intent, profile: Any, locate: Locate | None) -> str | N
         return nav_goal_command(action, xy[0], xy[1], intent.theta or 0.0)
     velocity = profile.name("velocity_command")
     if kind in SERVICE_FOR and not profile.has(kind):
+        if kind == "stop" and action:  # no stop service: Nav2 drives on after a zero Twist
+            return f'ros2 service call {action}{CANCEL_SUFFIX} action_msgs/srv/CancelGoal "{{}}"'
         if kind == "stop" and velocity:
-            return _publish(profile, velocity, "--once", 0.0, 0.0, 0.0)
+            return _zero_velocity(profile)
         return None
     if kind == "motion" and intent.motion is not None and velocity:
         m = intent.motion
         times = max(1, round(m.seconds * PUBLISH_HZ))
         return _publish(profile, velocity, f"-t {times} -r {PUBLISH_HZ}", m.vx, m.vy, m.wz)
     return False
+
+
+def _zero_velocity(profile: Any) -> str | None:
+    velocity = profile.name("velocity_command")
+    return _publish(profile, velocity, "--once", 0.0, 0.0, 0.0) if velocity else None
 
 
 def _publish(profile: Any, name: str, how: str, vx: float, vy: float, wz: float) -> str:
@@ -110,8 +118,10 @@ def plan_intents(
     commands: list[str] = []
     for intent in intents:
         command = command_for(intent, profile, locate)
-        if command and command not in commands:
-            commands.append(command)
+        also = [] if command is None else [command]
+        if intent.kind == "stop" and command and CANCEL_SUFFIX in command:
+            also.append(_zero_velocity(profile))  # its goals cancelled, then held still
+        commands += [c for c in also if c and c not in commands]
     return commands[:3]
 
 

@@ -15,6 +15,8 @@ from astiop.agent.roles import battery_percent, no_return, pose_of, role_of
 from astiop.robot.backend import Execution
 from astiop.ros2 import grammar
 
+# action_msgs/srv/CancelGoal.srv's return codes
+CANCEL_CODES = {0: "accepted", 1: "rejected", 2: "unknown goal", 3: "goal already ended"}
 STATUS_WORDS = {0: "unknown", 1: "charging", 2: "discharging", 3: "not charging", 4: "full"}
 STALE_PERIODS = 2  # a reading older than this many of its topic's periods is said with its age
 
@@ -52,6 +54,7 @@ def _summary(ex: Execution, v: Any) -> str | None:
     if role == "battery" and "percentage" in v:
         pct = battery_percent(ex)
         state = STATUS_WORDS.get(v.get("power_supply_status"), "unknown")
+        state = "charging state unknown" if state == "unknown" else state
         return f"battery {pct:.1f} %, {v['voltage']:.2f} V, {v['current']:.2f} A, {state}"
     if role == "pose" and (pose := pose_of(v)) is not None:
         x, y, theta = pose
@@ -96,6 +99,10 @@ def _summary(ex: Execution, v: Any) -> str | None:
         return "locations: " + ", ".join(
             f"{n} ({p['x']:.1f}, {p['y']:.1f})" for n, p in zip(v["names"], v["poses"])
         )
+    if "return_code" in v and "goals_canceling" in v:  # action_msgs/srv/CancelGoal
+        n, code = len(v["goals_canceling"] or []), v["return_code"]
+        why = CANCEL_CODES.get(code, f"return code {code}")
+        return f"navigation goals canceled: {n} ({why})"
     if "success" in v:
         word = (
             ("accepted" if provenance == "accepted" else "succeeded") if v["success"] else "FAILED"

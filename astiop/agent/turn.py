@@ -164,6 +164,10 @@ class Agent:
             if said := roles.nothing_to_read(intents, self.gateway.profile):
                 result.answer = said  # asked only of readings this robot does not publish
                 return await self._finish(request, result, t0)
+            said = local_save.unknown_place(request, intents, self.gateway.profile, self.store)
+            if said:  # a place its map does not hold, on a robot that cannot look it up
+                result.answer = said
+                return await self._finish(request, result, t0)
             place = local_save.asked(intents, self.gateway.profile)
             if place and self.store is not None:  # no save service: kept in astiop's store
                 ex, result.answer = await asyncio.to_thread(

@@ -1,6 +1,7 @@
 """Stage 2 on a live ROS 2 robot (`bench run --stage 2 --robot ros2`, e.g. against `astiop sim
-node`): each case is set up by driving the robot to its start, and checked against what the
-robot reported, a navigation by the robot's arrival."""
+node`, or a TurtleBot3 under Nav2): each case is carried over to the robot's own names
+(on_robot.py), set up by driving the robot to its start by its roles, and checked against what
+the robot reported, a navigation by the robot's arrival."""
 
 from __future__ import annotations
 
@@ -8,12 +9,16 @@ import asyncio
 import threading
 import time
 
+from astiop.agent import rules
+from astiop.agent.intent import Intent
 from astiop.bench import stage2
 from astiop.bench.case_turn import case_agent, scored
+from astiop.bench.on_robot import on_robot
 from astiop.config import Settings
 from astiop.robot.gateway import RobotGateway
 
 GOAL_WAIT_S = 600.0
+TRIGGER = "std_srvs/srv/Trigger"
 CONVEYOR_WAIT_S = 10.0
 _live: dict[int, RobotGateway] = {}
 _lock = threading.Lock()
@@ -54,33 +59,38 @@ def _settle(gateway: RobotGateway, timeout_s: float) -> None:
 
 
 def set_up(gateway: RobotGateway, case, store) -> str:
-    """Drive the robot to the case's start; "" or why it could not."""
+    """Drive the robot to the case's start, by its roles; "" or why it could not. A robot with
+    no dock starts a "docked" case where it stands."""
     start = case.setup.get("start", "docked")
+    profile = gateway.profile
     deadline = time.monotonic() + 15.0
-    while gateway.state().status is None:  # the robot's first /robot_status
+    while gateway.state().pose is None:  # the robot's first pose
         if time.monotonic() > deadline:
-            return "set-up failed: the robot publishes no /robot_status"
+            return f"set-up failed: the robot publishes no pose ({profile.name('pose')})"
         time.sleep(0.1)
-    gateway.run("ros2 service call /stop std_srvs/srv/Trigger", confirm=_yes)
-    if "/release" in gateway.catalog.services:  # a robot that latches its stop: let go of it
-        gateway.run("ros2 service call /release std_srvs/srv/Trigger", confirm=_yes)
+    for command in rules.plan_intents([Intent("stop")], profile):  # an earlier case's goal
+        gateway.run(command, confirm=_yes)
+    if profile.has("release"):  # a robot that latches its stop: let go of it
+        gateway.run(f"ros2 service call {profile.name('release')} {TRIGGER}", confirm=_yes)
+    _settle(gateway, 30)
     truth = stage2.Truth.of_robot(gateway.state())
     if start == "docked":
-        if truth.docked:
+        if truth.docked or not profile.has("dock"):
             return ""
-        command = "ros2 service call /dock std_srvs/srv/Trigger"
+        intent = Intent("dock")
     else:
-        if truth.docked:
-            gateway.run("ros2 service call /undock std_srvs/srv/Trigger", confirm=_yes)
+        if truth.docked and profile.has("undock"):
+            gateway.run(rules.command_for(Intent("undock"), profile), confirm=_yes)
             _settle(gateway, 60)
         x, y, th = stage2._pose_of(store, start)
-        command = (
-            "ros2 service call /goto_position astiop_msgs/srv/GotoPosition "
-            f'"{{x: {x}, y: {y}, theta: {th}}}"'
-        )
+        intent = Intent("navigate", xy=(x, y), theta=th)
+    command = rules.command_for(intent, profile)
+    if command is None:
+        return f"set-up failed: nothing on this robot does {intent.kind}"
     r = gateway.run(command, confirm=_yes)
-    if not r.executed or r.error or not (r.values or {}).get("success", False):
-        return f"set-up failed: {r.reason or r.error or (r.values or {}).get('message')}"
+    values = r.values if isinstance(r.values, dict) else {}
+    if not r.executed or r.error or not values.get("success", values.get("accepted", False)):
+        return f"set-up failed: {r.reason or r.error or values.get('message') or values}"
     _settle(gateway, GOAL_WAIT_S)
     return ""
 
@@ -90,6 +100,14 @@ async def live_case(store, settings, config, endpoint, case, mode):
     if why:
         return "skipped", {"total_s": 0.0, "skipped": why}, ""
     gateway = await asyncio.to_thread(live_gateway, settings, store)
+
+    def locate(name: str) -> tuple[float, float] | None:
+        loc = store.get_location(name)
+        return (loc.x, loc.y) if loc else None
+
+    case, why = on_robot(case, gateway.profile, locate)  # in the robot's own names
+    if why:
+        return "skipped", {"total_s": 0.0, "skipped": why}, ""
     failed = await asyncio.to_thread(set_up, gateway, case, store)
     if failed:
         return "error", {"total_s": 0.0}, failed

@@ -178,6 +178,8 @@ async def run(
     with tempfile.TemporaryDirectory(prefix="astiop-bench-") as tmp:
         # the cases' world: named locations seeded from data/, never the operator's tables
         world = Store(Path(tmp) / "world.db")
+        if config.robot == "ros2":  # a live robot's places are the operator's, on its map
+            world.copy_locations_from(store)
         try:
             finished = await _run_todo(
                 store, world, settings, config, run_id, suite, todo, on_progress

@@ -77,7 +77,8 @@ class Truth:
             bool(st.conveyor and st.conveyor.loaded),
             status.fault if status else "",
             bool(status and status.docked),
-            bool(status) and not status.active_goal and speed < 0.05,
+            # a Nav2 robot that never had a goal publishes no goal status: idle, said so
+            (not status.active_goal if status else st.state_word == "idle") and speed < 0.05,
         )
 
 

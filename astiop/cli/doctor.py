@@ -79,13 +79,18 @@ def _check_database(st, add) -> None:
     except (StoreError, OSError) as exc:
         add("FAIL", "database", str(exc))
         return
+    from astiop.cli.locations import robots_map
+    from astiop.robot.backend import BackendError
+
+    with contextlib.suppress(BackendError):  # a bad profile is said by the robot's own check
+        store.use_map(*robots_map(st.settings))
     version = store.schema_version()
     mode = "read-only" if store.readonly else "read-write"
     add(
         "ok",
         "database",
         f"{path}: schema {version}/{SCHEMA_VERSION}, quick_check ok, {mode}, "
-        f"{len(store.list_locations())} locations",
+        f"{len(store.list_locations())} locations on the map {store.map_name}",
     )
     store.close()
 

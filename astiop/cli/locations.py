@@ -9,18 +9,66 @@ import typer
 from astiop.bounded import escape_controls
 from astiop.cli.common import fail, print_json, state
 
-app = typer.Typer(help="List, show, add, rename and remove named locations.", no_args_is_help=True)
+app = typer.Typer(
+    help="List, show, add, rename and remove named locations (each belongs to a robot's map).",
+    no_args_is_help=True,
+)
+
+
+def robots_map(settings) -> tuple[str, tuple[float, float, float, float] | None]:
+    """The map the settings' robot is on, without connecting to it: the simulator's warehouse,
+    else what its profile (file or shipped) says, else its make's name."""
+    from astiop.robot.factory import profile_spec
+    from astiop.ros2.profile_file import shipped
+    from astiop.warehouse import default_map
+
+    if settings.robot.backend != "ros2":
+        return "warehouse", default_map().bounds
+    spec = profile_spec(settings)
+    base = shipped(spec.make)
+    where = spec.map.over(base.map) if base is not None else spec.map
+    name = where.name or spec.make or "warehouse"
+    if name == "warehouse" and where.geofence is None:
+        return name, default_map().bounds
+    return name, where.geofence
+
+
+@app.callback()
+def on_map(
+    ctx: typer.Context,
+    map_name: str = typer.Option(
+        "",
+        "--map",
+        help="The map whose places these are (default: the robot's, by its profile; the "
+        "simulator's is warehouse).",
+    ),
+) -> None:
+    from astiop.robot.backend import BackendError
+
+    st = state(ctx)
+    try:
+        name, fence = robots_map(st.settings)
+    except BackendError as exc:
+        fail(str(exc))
+    if map_name and map_name != name:
+        name, fence = map_name, None
+    st.store.use_map(name, fence)
 
 
 @app.command("list")
 def list_locations(ctx: typer.Context, as_json: bool = typer.Option(False, "--json")) -> None:
-    """List every named location."""
-    locations = state(ctx).store.list_locations()
+    """List the named locations of the robot's map."""
+    store = state(ctx).store
+    locations = store.list_locations()
     if as_json:
         print_json([loc.as_json() for loc in locations])
         return
     if not locations:
-        typer.echo("no named locations")
+        others = ", ".join(f"{m} ({n})" for m, n in sorted(store.other_maps().items()))
+        typer.echo(
+            f"no named locations on the map {store.map_name}"
+            + (f" (other maps: {others}; --map NAME lists one)" if others else "")
+        )
         return
     width = max(len(loc.name) for loc in locations)
     typer.echo(f"{'name':<{width}}  {'x':>7}  {'y':>7}  {'theta':>7}  description")

@@ -59,6 +59,9 @@ def profile(
     limits = found.as_dict()["limits"]
     if limits:
         typer.echo("limits: " + ", ".join(f"{k} {v:g}" for k, v in limits.items()))
+    fence = found.map.geofence
+    where = "geofence " + ", ".join(f"{v:g}" for v in fence) if fence else "geofence: its /map"
+    typer.echo(f"map: {found.map_name} (its named places belong to it; {where})")
     missing = found.missing()
     typer.echo("missing: " + (", ".join(missing) if missing else "nothing"))
     if write is not None:

@@ -11,8 +11,9 @@ from astiop.store import Store
 
 def make_safety(settings: Settings, store: Store | None, profile=None) -> SafetyPolicy:
     """The settings' limits, lowered to the robot's own where its profile knows them (a
-    TurtleBot3 Burger: 0.22 m/s, not the ASTIbot's 0.8)."""
-    bounds = store.bounds if store else (0.0, 0.0, 40.0, 25.0)
+    TurtleBot3 Burger: 0.22 m/s, not the ASTIbot's 0.8). The geofence is the profile's, else
+    the robot's map's once the gateway has it (`RobotGateway.use_map`)."""
+    bounds = profile.map.geofence if profile is not None else None
 
     def locate(name: str) -> tuple[float, float] | None:
         loc = store.get_location(name) if store else None

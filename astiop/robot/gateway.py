@@ -54,6 +54,7 @@ class RobotGateway:
         self._journal_lock = threading.Lock()
         self._latch_lock = threading.Lock()
         self._latch_seen = self.latched
+        self.use_map()
         if restore_latch and self._latch_seen and not backend.e_stopped:
             backend.estop()  # a restart keeps the E-STOP until it is released
         # another process's E-STOP ends what this one has in flight, with no one asking
@@ -78,7 +79,21 @@ class RobotGateway:
             if now == names and any(now.values()):
                 break
             names = now
+        self.use_map()
         return self.profile
+
+    def use_map(self) -> None:
+        """The robot's map from its profile: the store's places are that map's, and goals are
+        fenced by the profile's geofence, else by the extent of the robot's own map."""
+        profile = self.profile
+        fence = profile.map.geofence
+        if fence is None:
+            geometry = self.backend.map_geometry()
+            fence = geometry.bounds if geometry is not None else None
+        if fence is not None:
+            self.safety.geofence = fence
+        if self.store is not None:
+            self.store.use_map(profile.map_name, fence)
 
     @property
     def profile(self) -> Profile:
@@ -141,6 +156,10 @@ class RobotGateway:
 
     def state(self) -> RobotState:
         latched = self.follow_latch()  # first: the backend may follow another process
+        if self.safety.geofence is None or (
+            self.store is not None and self.store.map_name != self.profile.map_name
+        ):
+            self.use_map()  # its /map came in, or its make was recognised on a fuller graph
         return self.backend.state().with_e_stop(latched)
 
     def follow_latch(self) -> bool:
@@ -204,6 +223,8 @@ class RobotGateway:
         checked = validate(text, self.catalog)
         if not checked.valid and checked.reason.startswith("there is no") and self._refresh():
             checked = validate(text, self.catalog)  # it may have appeared since the last read
+        if self.safety.geofence is None:
+            self.use_map()  # the robot's /map may have come in since
         return self.safety.review(checked, self.e_stopped)
 
     def serves(self, name: str, timeout_s: float) -> bool:

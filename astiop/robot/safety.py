@@ -6,7 +6,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
-from astiop.ros2.validation import Checked
+from astiop.ros2.validation import CANCEL_SUFFIX, Checked
 from astiop.warehouse import GEOFENCE_MARGIN, fence_text, inside_fence
 
 # Services that only ever make the robot safer: never held by the e-stop, never confirmed
@@ -19,11 +19,13 @@ UNIT_QUATERNION_TOLERANCE = 1e-3
 
 
 def always_allowed(checked: Checked) -> bool:
-    """A call of the robot's stop service (under any namespace): only ever makes it safer."""
+    """A call of the robot's stop service (under any namespace), or a cancel of an action's
+    goals: only ever makes it safer."""
     cmd = checked.command
     if cmd is None or cmd.key != ("service", "call"):
         return False
-    return (cmd.name or "").rsplit("/", 1)[-1] in ALWAYS_ALLOWED
+    name = cmd.name or ""
+    return name.rsplit("/", 1)[-1] in ALWAYS_ALLOWED or name.endswith(CANCEL_SUFFIX)
 
 
 @dataclass(frozen=True)
@@ -38,16 +40,24 @@ class Review:
 class SafetyPolicy:
     max_linear: float = 0.8
     max_angular: float = 1.0
-    geofence: tuple[float, float, float, float] = (0.0, 0.0, 40.0, 25.0)
+    # None until known (the profile's [map] geofence, else the robot's map: RobotGateway.use_map)
+    geofence: tuple[float, float, float, float] | None = (0.0, 0.0, 40.0, 25.0)
     geofence_margin: float = GEOFENCE_MARGIN
     confirm_actuation: bool = True
     # where a named location is (x, y), so a goal by name is fenced like one by coordinates
     locate: Callable[[str], tuple[float, float] | None] | None = None
 
     def inside_geofence(self, x: float, y: float) -> bool:
+        if self.geofence is None:
+            return False
         return inside_fence(self.geofence, x, y, self.geofence_margin)
 
     def _fence_reason(self, x: float, y: float) -> str:
+        if self.geofence is None:
+            return (
+                f"goal ({x:.2f}, {y:.2f}) refused: no geofence is known for this robot (no /map "
+                "read yet, and no [map] geofence in its profile)"
+            )
         fence = fence_text(self.geofence, self.geofence_margin)
         return f"goal ({x:.2f}, {y:.2f}) is outside the geofence ({fence})"
 

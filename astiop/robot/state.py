@@ -233,10 +233,11 @@ def goal_status_topic(profile: Any) -> str | None:
     return f"{profile.name('navigation')}/_action/status"
 
 
-def _from_goal_status(msg: dict[str, Any], velocity: tuple | None) -> Status:
+def _from_goal_status(msg: dict[str, Any], velocity: tuple | None, action: str) -> Status:
     running = any(int(_f(g.get("status"), 0)) in ACTIVE_GOAL for g in msg.get("status_list") or [])
     speed = math.hypot(velocity[0], velocity[1]) if velocity else 0.0
-    return Status("navigating" if running else "idle", "", "", "", speed, False, False)
+    goal = f"a {action} goal" if running else ""  # a goal runs, whoever sent it
+    return Status("navigating" if running else "idle", "", goal, "", speed, False, False)
 
 
 def _pose(msg: dict[str, Any]) -> Pose2D:
@@ -308,7 +309,7 @@ def from_messages(
             bool(s.get("docked", False)),
         )
     if status is None and (goals := messages.get(goal_status_topic(profile) or "")) is not None:
-        status = _from_goal_status(goals, velocity)
+        status = _from_goal_status(goals, velocity, profile.name("navigation"))
     if (sc := messages.get(n["scan"])) is not None:
         stamp = sc.get("header", {}).get("stamp", {})
         scan = Scan(

@@ -141,6 +141,21 @@ KeyValue[] values
 bool success
 string message
 """,
+    # every action server's hidden cancel service (ros2/rcl_interfaces action_msgs, and
+    # ros2/unique_identifier_msgs msg/UUID.msg; the same on humble and jazzy): a zero goal id
+    # and stamp cancel every goal
+    "unique_identifier_msgs/msg/UUID": "uint8[16] uuid\n",
+    "action_msgs/msg/GoalInfo": "unique_identifier_msgs/UUID goal_id\nbuiltin_interfaces/Time stamp\n",
+    "action_msgs/srv/CancelGoal": """\
+GoalInfo goal_info
+---
+int8 ERROR_NONE=0
+int8 ERROR_REJECTED=1
+int8 ERROR_UNKNOWN_GOAL_ID=2
+int8 ERROR_GOAL_TERMINATED=3
+int8 return_code
+GoalInfo[] goals_canceling
+""",
     "nav2_msgs/action/NavigateToPose": """\
 geometry_msgs/PoseStamped pose
 string behavior_tree

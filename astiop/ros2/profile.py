@@ -172,6 +172,18 @@ class Limits:
 
 
 @dataclass(frozen=True)
+class MapSpec:
+    """The map the robot navigates on: its named locations belong to it (a place saved on one
+    robot's map means nothing on another's), and goals must fall inside its geofence."""
+
+    name: str = ""  # "" = the robot's make: robots of one make share their places
+    geofence: tuple[float, float, float, float] | None = None  # x_min, y_min, x_max, y_max (m)
+
+    def over(self, base: MapSpec) -> MapSpec:
+        return MapSpec(self.name or base.name, self.geofence or base.geofence)
+
+
+@dataclass(frozen=True)
 class ProfileSpec:
     """What the operator fixed (a profile file, --namespace): names by role ("" = the robot
     has none), units, limits; everything else is matched on the graph."""
@@ -182,6 +194,7 @@ class ProfileSpec:
     units: Units = Units()
     limits: Limits = Limits()
     source: str = ""  # where it was read: a file's path, "shipped astibot", ""
+    map: MapSpec = MapSpec()
 
 
 @dataclass(frozen=True)
@@ -192,6 +205,12 @@ class Profile:
     units: Units
     limits: Limits
     source: str  # "the graph", or the profile file and the graph
+    map: MapSpec = MapSpec()
+
+    @property
+    def map_name(self) -> str:
+        """Which map the robot's named locations belong to."""
+        return self.map.name or self.make
 
     def name(self, role: str) -> str | None:
         """The robot's name for `role`, or None when nothing on the robot plays it."""
@@ -234,6 +253,7 @@ class Profile:
                 )
                 if v is not None
             },
+            "map": {"name": self.map_name, "geofence": list(self.map.geofence or []) or None},
         }
 
 
@@ -335,6 +355,7 @@ def match_profile(catalog: Catalog, spec: ProfileSpec | None = None) -> Profile:
             spec.units.over(base.units),
             spec.limits.over(base.limits),
             spec.source or base.source,
+            spec.map.over(base.map),
         )
     entries = {k: _entries(catalog, k) for k in ("topic", "service", "action")}
     ns = spec.namespace
@@ -347,4 +368,4 @@ def match_profile(catalog: Catalog, spec: ProfileSpec | None = None) -> Profile:
             matches[role.name] = _fixed(role.name, full, catalog, entries, source)
         else:
             matches[role.name] = _match(role, catalog, ns, entries)
-    return Profile(make, ns, matches, spec.units, spec.limits, source)
+    return Profile(make, ns, matches, spec.units, spec.limits, source, spec.map)

@@ -7,18 +7,21 @@ from __future__ import annotations
 
 import functools
 import math
+import re
+from dataclasses import replace
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from astiop.ros2.profile import ROLE_NAMES, Limits, Profile, ProfileSpec, Units
+from astiop.ros2.profile import ROLE_NAMES, Limits, MapSpec, Profile, ProfileSpec, Units
 
 try:
     import tomllib
 except ModuleNotFoundError:  # Python 3.10: the Jetson's ROS 2 Humble
     import tomli as tomllib
 
-SECTIONS = ("robot", "roles", "units", "limits")
+SECTIONS = ("robot", "roles", "units", "limits", "map")
+MAP_NAME_RE = re.compile(r"^[A-Za-z0-9_.-]{1,64}$")
 PERCENTAGE = ("fraction", "percent")
 
 
@@ -65,7 +68,7 @@ def read_spec(setting: str, namespace: str = "") -> ProfileSpec:
             raise ProfileError(f"cannot read {path}: {exc.strerror}") from None
         spec = parse(text, str(path))
     if ns or not spec.namespace:
-        spec = ProfileSpec(spec.make, ns, spec.roles, spec.units, spec.limits, spec.source)
+        spec = replace(spec, namespace=ns)
     return spec
 
 
@@ -97,7 +100,34 @@ def parse(text: str, source: str) -> ProfileSpec:
         ns = normalise_namespace(robot.get("namespace", ""))
     except ValueError as exc:
         raise ProfileError(f"{source}: {exc}") from None
-    return ProfileSpec(robot.get("make", ""), ns, roles, Units(pct), Limits(**limits), source)
+    where = _map_table(data, source)
+    return ProfileSpec(
+        robot.get("make", ""), ns, roles, Units(pct), Limits(**limits), source, where
+    )
+
+
+def _map_table(data: dict, source: str) -> MapSpec:
+    """[map]: name (the robot's places belong to it), geofence [x_min, y_min, x_max, y_max]."""
+    table = data.get("map", {})
+    if not isinstance(table, dict):
+        raise ProfileError(f"{source}: [map] is a table")
+    unknown = sorted(set(table) - {"name", "geofence"})
+    if unknown:
+        raise ProfileError(f"{source}: unknown key map.{unknown[0]} (known: name, geofence)")
+    name = table.get("name", "")
+    if not isinstance(name, str) or (name and not MAP_NAME_RE.match(name)):
+        raise ProfileError(f"{source}: map.name is 1-64 letters, digits, '_', '-' or '.'")
+    fence = table.get("geofence")
+    if fence is None:
+        return MapSpec(name)
+    numbers = isinstance(fence, list) and all(
+        isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) for v in fence
+    )
+    if not numbers or len(fence) != 4 or fence[2] <= fence[0] or fence[3] <= fence[1]:
+        raise ProfileError(
+            f"{source}: map.geofence is [x_min, y_min, x_max, y_max] in metres, min below max"
+        )
+    return MapSpec(name, tuple(float(v) for v in fence))
 
 
 def _table(data: dict, section: str, source: str, keys: dict[str, type]) -> dict[str, Any]:
@@ -145,4 +175,9 @@ def write_profile(profile: Profile) -> str:
     limits = profile.as_dict()["limits"]
     if limits:
         lines += ["", "[limits]"] + [f"{k} = {v:g}" for k, v in limits.items()]
+    lines += ["", "[map]", f'name = "{profile.map_name}"  # its named locations belong to it']
+    if profile.map.geofence:
+        lines.append("geofence = [{}]".format(", ".join(f"{v:g}" for v in profile.map.geofence)))
+    else:
+        lines.append("# geofence = [x_min, y_min, x_max, y_max]  # else the robot's /map extent")
     return "\n".join(lines) + "\n"

@@ -8,7 +8,7 @@ import re
 from dataclasses import dataclass, field
 from typing import Any
 
-from astiop.ros2.catalog import Catalog
+from astiop.ros2.catalog import Catalog, ServiceSpec
 from astiop.ros2.grammar import CommandSyntaxError, Ros2Command, parse
 from astiop.ros2.interfaces import InterfaceError, fill, known_type, normalize_type
 
@@ -112,7 +112,7 @@ def _validate(cmd: Ros2Command, catalog: Catalog) -> Checked:
         msg = fill(spec.type, cmd.args.get("values"))
         return Checked(text, cmd, True, kind="actuate", type=spec.type, message=msg)
     if key in (("service", "type"), ("service", "call")):
-        spec = catalog.services.get(cmd.name)
+        spec = catalog.services.get(cmd.name) or cancel_service(catalog, cmd.name or "")
         if spec is None:
             raise InterfaceError(
                 f"there is no service {cmd.name} on this robot"
@@ -201,3 +201,17 @@ def _validate_param(cmd: Ros2Command, catalog: Catalog) -> Checked:
     if not (spec.minimum <= value <= spec.maximum):
         raise InterfaceError(f"{spec.name} must be within {spec.minimum}..{spec.maximum}")
     return Checked(cmd.text, cmd, True, kind="actuate", message={"value": value})
+
+
+CANCEL_SUFFIX = "/_action/cancel_goal"  # rcl_action's hidden service of every action server
+
+
+def cancel_service(catalog: Catalog, name: str) -> ServiceSpec | None:
+    """An action's hidden cancel service (`ros2 service list` hides it; it is on the graph with
+    every action server): a stop on a robot with no stop service (Nav2) cancels its goals."""
+    action = catalog.actions.get(name.removesuffix(CANCEL_SUFFIX))
+    if not name.endswith(CANCEL_SUFFIX) or action is None:
+        return None
+    return ServiceSpec(
+        name, "action_msgs/srv/CancelGoal", action.node, True, needs_confirmation=False
+    )

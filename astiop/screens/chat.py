@@ -21,8 +21,14 @@ from astiop.screens.messages import GoalEnded, TurnFinished
 
 HELP = (
     "Ask in plain language, e.g. 'what is the battery level?' or 'send the robot to "
-    "shipping'.  /model SPEC switches the model, /mode command|tool the reply mode."
+    "{where}'.  /model SPEC switches the model, /mode command|tool the reply mode."
 )
+
+
+def help_text(places: list[str]) -> str:
+    """The example goal is a place on this robot's map (or coordinates where it has none)."""
+    where = "shipping" if "shipping" in places else (places[0] if places else "x 1.0 y 0.5")
+    return HELP.format(where=where)
 
 
 class CommandView(Static):
@@ -101,7 +107,8 @@ class ChatScreen(ConsoleScreen):
 
     def compose(self) -> ComposeResult:
         yield Header(show_clock=False)
-        yield VerticalScroll(Static(HELP, classes="answer"), id="chat-log")
+        places = [loc.name for loc in self.services.store.list_locations()]
+        yield VerticalScroll(Static(help_text(places), classes="answer"), id="chat-log")
         yield Input(
             placeholder="Ask the robot…  (/model SPEC, /mode command|tool)", id="chat-input"
         )

@@ -37,7 +37,9 @@ class LocationsScreen(ConsoleScreen):
         self.reload()
 
     def reload(self) -> None:
-        self.locations = self.services.store.list_locations()
+        store = self.services.store
+        self.locations = store.list_locations()
+        self.sub_title = f"map {store.map_name}: {len(self.locations)} places"
         table = self.query_one(DataTable)
         table.clear()
         for loc in self.locations:

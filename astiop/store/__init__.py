@@ -70,7 +70,7 @@ class Store(LocationTables, JournalTables, BenchTables, ApprovalTables, MissionT
 
     def __init__(self, path: Path | str, bounds: Rect | None = None):
         self.path = Path(path).expanduser()
-        self.bounds = bounds or default_map().bounds  # named locations must lie inside
+        self.bounds = bounds or default_map().bounds  # named locations must lie inside (use_map)
         self._local = threading.local()
         check_database_file(self.path)
         self.readonly = not _writable(self.path)

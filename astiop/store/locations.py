@@ -1,4 +1,5 @@
-"""Named locations: unique names (case ignored), poses inside the geofence."""
+"""Named locations: each belongs to a map (the robot profile's), unique on it (case ignored),
+inside the map's geofence."""
 
 from __future__ import annotations
 
@@ -13,11 +14,30 @@ from astiop.warehouse import fence_text, inside_fence
 NAME_RE = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
 
 
+DEFAULT_MAP = "warehouse"  # the simulator's, where the seeded places are
+
+
 class LocationTables:
+    map_name: str = DEFAULT_MAP  # the map this store's places are read from and saved on
+    bounds: tuple[float, float, float, float] | None = None  # its geofence, when known
+
+    def use_map(self, name: str, bounds: tuple[float, float, float, float] | None) -> None:
+        """The robot's map: its places are the ones listed, found and saved from now on."""
+        self.map_name, self.bounds = name or DEFAULT_MAP, bounds
+
     # -- locations ----------------------------------------------------------------
     def list_locations(self) -> list[Location]:
-        rows = self.db.query("SELECT * FROM locations ORDER BY name COLLATE NOCASE")
+        rows = self.db.query(
+            "SELECT * FROM locations WHERE map = ? ORDER BY name COLLATE NOCASE", [self.map_name]
+        )
         return [location_of(r) for r in rows]
+
+    def other_maps(self) -> dict[str, int]:
+        """How many places each other map holds (said where this map has none)."""
+        rows = self.db.conn.execute(
+            "SELECT map, COUNT(*) FROM locations WHERE map != ? GROUP BY map", [self.map_name]
+        ).fetchall()
+        return dict(rows)
 
     def copy_locations_from(self, other: LocationTables) -> None:
         """This store's named locations become another's (a replay's or a bench run's own)."""
@@ -28,14 +48,21 @@ class LocationTables:
                 self.db["locations"].insert_all(rows)
 
     def get_location(self, name: str) -> Location | None:
-        rows = list(self.db.query("SELECT * FROM locations WHERE name = ? COLLATE NOCASE", [name]))
+        rows = list(
+            self.db.query(
+                "SELECT * FROM locations WHERE map = ? AND name = ? COLLATE NOCASE",
+                [self.map_name, name],
+            )
+        )
         return location_of(rows[0]) if rows else None
 
     def require_location(self, name: str) -> Location:
         loc = self.get_location(name)
         if loc is None:
             known = ", ".join(loc.name for loc in self.list_locations()) or "none"
-            raise LocationError(f"no location named '{name}' (known: {known})")
+            raise LocationError(
+                f"no location named '{name}' on the map {self.map_name} (known: {known})"
+            )
         return loc
 
     def _check_new_name(self, name: str) -> None:
@@ -49,7 +76,7 @@ class LocationTables:
     def _check_pose(self, x: float, y: float, theta: float) -> None:
         if not all(math.isfinite(v) for v in (x, y, theta)):
             raise LocationError("x, y and theta must be finite numbers")
-        if not inside_fence(self.bounds, x, y):
+        if self.bounds is not None and not inside_fence(self.bounds, x, y):
             raise LocationError(
                 f"({x:g}, {y:g}) is outside the geofence ({fence_text(self.bounds)})"
             )
@@ -66,6 +93,7 @@ class LocationTables:
         with self._tx():
             self.db["locations"].insert(
                 {
+                    "map": self.map_name,
                     "name": name,
                     "x": x,
                     "y": y,
@@ -85,13 +113,17 @@ class LocationTables:
             raise LocationError(f"invalid location name '{new}'")
         with self._tx():
             self.db.conn.execute(
-                "UPDATE locations SET name = ?, updated_at = ? WHERE name = ? COLLATE NOCASE",
-                [new, time.time(), loc.name],
+                "UPDATE locations SET name = ?, updated_at = ? "
+                "WHERE map = ? AND name = ? COLLATE NOCASE",
+                [new, time.time(), self.map_name, loc.name],
             )
         return Location(new, loc.x, loc.y, loc.theta, loc.description)
 
     def remove_location(self, name: str) -> Location:
         loc = self.require_location(name)
         with self._tx():
-            self.db.conn.execute("DELETE FROM locations WHERE name = ? COLLATE NOCASE", [loc.name])
+            self.db.conn.execute(
+                "DELETE FROM locations WHERE map = ? AND name = ? COLLATE NOCASE",
+                [self.map_name, loc.name],
+            )
         return loc

@@ -220,6 +220,30 @@ def _migrate_v8(conn: sqlite3.Connection) -> None:
     )
 
 
+def _migrate_v9(conn: sqlite3.Connection) -> None:
+    # Named locations belong to a map (the robot profile's): the places seeded so far are the
+    # warehouse's. A name is unique on its map; SQLite cannot change a constraint in place.
+    _run(
+        conn,
+        """
+        CREATE TABLE locations_v9 (
+            id INTEGER PRIMARY KEY,
+            map TEXT NOT NULL DEFAULT 'warehouse',
+            name TEXT NOT NULL COLLATE NOCASE,
+            x REAL NOT NULL, y REAL NOT NULL, theta REAL NOT NULL DEFAULT 0,
+            description TEXT NOT NULL DEFAULT '',
+            created_at REAL NOT NULL, updated_at REAL NOT NULL,
+            UNIQUE (map, name)
+        );
+        INSERT INTO locations_v9 (id, map, name, x, y, theta, description, created_at, updated_at)
+            SELECT id, 'warehouse', name, x, y, theta, description, created_at, updated_at
+            FROM locations;
+        DROP TABLE locations;
+        ALTER TABLE locations_v9 RENAME TO locations;
+        """,
+    )
+
+
 # Ordered; the database's PRAGMA user_version counts how many have run. Each runs inside one
 # transaction (Store._run_migrations): on a plain connection, with execute only.
 MIGRATIONS = [
@@ -231,6 +255,7 @@ MIGRATIONS = [
     _migrate_v6,
     _migrate_v7,
     _migrate_v8,
+    _migrate_v9,
 ]
 SCHEMA_VERSION = len(MIGRATIONS)
 _OUR_TABLES = {
