@@ -79,7 +79,7 @@ def test_a_turtlebot3_under_nav2_is_matched_by_type_then_name():
 
 
 def test_the_pose_falls_back_to_odometry_and_says_so():
-    profile = match_profile(tb3_graph(amcl_pose=True))
+    profile = match_profile(tb3_graph(amcl_pose=True, tf=True))  # no amcl, no /tf
     assert profile.name("pose") == "/odom"
     assert "for want of a Pose2D" in profile.matches["pose"].why
 

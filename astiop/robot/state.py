@@ -13,6 +13,8 @@ from typing import Any
 
 import numpy as np
 
+from astiop.ros2.profile import AMCL_POSE, TF
+from astiop.ros2.transforms import ODOM, base_pose, map_pose, tree, yaw_of
 from astiop.sim.kinematics import ASTIBOT, inverse_kinematics
 
 MAX_WHEEL_SPEED = ASTIBOT.max_wheel_speed  # rad/s at the wheel, the motor limit
@@ -184,16 +186,6 @@ class RobotState:
         return self if lost_s is None else replace(self, lost_s=lost_s)
 
 
-def yaw_of(q: dict[str, Any]) -> float:
-    """The heading of a quaternion, normalised first (so 1e308 components do not overflow)."""
-    w, x, y, z = (float(q.get(k, 0.0)) for k in ("w", "x", "y", "z"))
-    scale = max(abs(w), abs(x), abs(y), abs(z))
-    if not math.isfinite(scale) or scale == 0.0:
-        return 0.0
-    w, x, y, z = w / scale, x / scale, y / scale, z / scale
-    return math.atan2(2 * (w * z + x * y), w * w + x * x - y * y - z * z)
-
-
 def _f(value: Any, default: float = math.nan) -> float:
     try:
         v = float(value)
@@ -211,6 +203,8 @@ ASTIBOT_NAMES = {
     "obstacles": "/obstacles",
     "plan": "/plan",
     "conveyor": "/conveyor/status",
+    "transforms": "",  # the ASTIbot's pose is its /robot_pose
+    "static_transforms": "",
 }
 
 
@@ -249,6 +243,24 @@ def _pose(msg: dict[str, Any]) -> Pose2D:
     return Pose2D(_f(pos.get("x")), _f(pos.get("y")), yaw_of(p.get("orientation", {})))
 
 
+def _tf_pose(messages: dict[str, dict[str, Any]], n: dict[str, str], pose_type: str):
+    """map → odom ∘ odom → base from TF: amcl's map → odom comes with every scan, its pose only
+    after update_min_d of motion (nav2_amcl), so the chain is fresh where /amcl_pose lags; the
+    last /amcl_pose where TF has no map frame (yet); odometry's pose for a /tf pose without one."""
+    tf = [messages.get(n["static_transforms"]), messages.get(n["transforms"])]
+    odom = messages.get(n["odometry"])
+    found = map_pose(tf, odom)
+    if found is not None:
+        return Pose2D(*found[0])
+    if pose_type == AMCL_POSE:
+        p = messages.get(n["pose"])
+        return _pose(p) if p is not None else None
+    found = base_pose(tree(*tf), ODOM)
+    if found is not None:
+        return Pose2D(*found[0])
+    return _pose(odom) if odom is not None else None
+
+
 def battery_fraction(value: Any, units: str | None) -> float:
     """BatteryState.percentage as 0-1: "percent" robots (a TurtleBot3) send 0-100; a robot that
     did not say sends the message's 0-1, and a reading over 1 can only be a percentage."""
@@ -280,7 +292,11 @@ def from_messages(
     names from the robot's profile (ros2/profile.py; the ASTIbot's without one)."""
     n = role_names(profile)
     pose = velocity = wheels = battery = status = scan = obstacles = conveyor = None
-    if (p := messages.get(n["pose"])) is not None:
+    pose_match = profile.matches.get("pose") if profile is not None else None
+    pose_type = pose_match.type if pose_match is not None else ""
+    if pose_type in (AMCL_POSE, TF):
+        pose = _tf_pose(messages, n, pose_type)
+    elif (p := messages.get(n["pose"])) is not None:
         pose = _pose(p)
     if (o := messages.get(n["odometry"])) is not None:
         tw = o.get("twist", {}).get("twist", {})

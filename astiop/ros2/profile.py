@@ -18,6 +18,8 @@ TWIST = "geometry_msgs/msg/Twist"
 TWIST_STAMPED = "geometry_msgs/msg/TwistStamped"
 TRIGGER = "std_srvs/srv/Trigger"
 NAVIGATE_TO_POSE = "nav2_msgs/action/NavigateToPose"
+TF = "tf2_msgs/msg/TFMessage"
+TF_ROLES = ("transforms", "static_transforms")  # watched only for a pose that needs them
 
 
 @dataclass(frozen=True)
@@ -37,13 +39,22 @@ class Role:
 ROLES: tuple[Role, ...] = (
     Role(
         "pose",
-        (("topic", POSE2D), ("topic", AMCL_POSE), ("topic", ODOMETRY)),
-        ("/robot_pose", "/amcl_pose", "/pose", "/odom"),
-        never=("initial", "goal"),
+        (("topic", POSE2D), ("topic", AMCL_POSE), ("topic", TF), ("topic", ODOMETRY)),
+        ("/robot_pose", "/amcl_pose", "/pose", "/tf", "/odom"),
+        never=("initial", "goal", "static"),
         state=True,
         description="where the robot is in the map",
     ),
     Role("odometry", (("topic", ODOMETRY),), ("/odom",), state=True, description="velocity"),
+    Role(
+        "transforms",
+        (("topic", TF),),
+        ("/tf",),
+        state=True,
+        by_name_only=True,
+        description="map → odom → base: the map pose between a localiser's updates",
+    ),
+    Role("static_transforms", (("topic", TF),), ("/tf_static",), state=True, by_name_only=True),
     Role(
         "battery",
         (("topic", "sensor_msgs/msg/BatteryState"),),
@@ -228,9 +239,15 @@ class Profile:
         return [r for r in ROLE_NAMES if not self.has(r)]
 
     def state_topics(self) -> list[str]:
-        """The topics the live state is built from, where the robot has them."""
+        """The topics the live state is built from, where the robot has them (TF only for a
+        pose that is built from it: a 50 Hz /tf is not read for nothing)."""
+        tf = self.matches.get("pose", Match("pose", "", "", "", "")).type in (AMCL_POSE, TF)
         return sorted(
-            {m.name for m in self.matches.values() if m.kind == "topic" and _BY_NAME[m.role].state}
+            {
+                m.name
+                for m in self.matches.values()
+                if m.kind == "topic" and _BY_NAME[m.role].state and (tf or m.role not in TF_ROLES)
+            }
         )
 
     def as_dict(self) -> dict:
@@ -368,4 +385,20 @@ def match_profile(catalog: Catalog, spec: ProfileSpec | None = None) -> Profile:
             matches[role.name] = _fixed(role.name, full, catalog, entries, source)
         else:
             matches[role.name] = _match(role, catalog, ns, entries)
+    matches["pose"] = _pose_source(matches)
     return Profile(make, ns, matches, spec.units, spec.limits, source, spec.map)
+
+
+def _pose_source(matches: dict[str, Match]) -> Match:
+    """The pose's match, its "why" saying how the state builds it from TF where it does."""
+    pose, tf = matches["pose"], matches.get("transforms")
+    on_tf = tf is not None and bool(tf.name)
+    if pose.type == AMCL_POSE and on_tf:
+        # amcl publishes its pose only after update_min_d/update_min_a of motion, but map → odom
+        # on /tf with every scan: composed with odom → base, the pose is as fresh as odometry
+        how = f"; between its updates, {tf.name}'s map → odom ∘ odom → base"
+    elif pose.type == TF:
+        how = ": map → base_footprint or base_link (odom → base while it has no map frame)"
+    else:
+        return pose
+    return Match(pose.role, pose.kind, pose.name, pose.type, pose.why + how)

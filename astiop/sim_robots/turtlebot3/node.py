@@ -177,10 +177,14 @@ class TurtleBot3Nodes(RobotNodes):
         self.send("map_server", "/map", grid)
         self.send("global_costmap/global_costmap", "/global_costmap/costmap", grid)
 
-    def send(self, node: str, name: str, message: dict[str, Any]) -> None:
+    def send(self, node: str, name: str, message: dict[str, Any], ahead_s: float = 0.0) -> None:
         pub = self._pubs.get((node, name))
         if pub is not None:
-            pub.publish(to_message(pub.msg_type, stamped(message, now_stamp(self.nodes[node]))))
+            stamp = now_stamp(self.nodes[node])
+            if ahead_s:
+                ns = stamp["sec"] * 10**9 + stamp["nanosec"] + int(ahead_s * 1e9)
+                stamp = {"sec": ns // 10**9, "nanosec": ns % 10**9}
+            pub.publish(to_message(pub.msg_type, stamped(message, stamp)))
 
     # -- the robot ------------------------------------------------------------------------------
     def odom_pose(self, pose=None) -> tuple[float, float, float]:
@@ -261,13 +265,13 @@ class TurtleBot3Nodes(RobotNodes):
         )
 
     def _amcl(self) -> None:
-        """map → odom with each scan; /amcl_pose when the filter updates: at the start and
-        after update_min_d (m) or update_min_a (rad) of motion."""
+        """map → odom with each scan, stamped transform_tolerance ahead (nav2_amcl's
+        sendMapToOdomTransform); /amcl_pose when the filter updates: at the start and after
+        update_min_d (m) or update_min_a (rad) of motion."""
         amcl = self.params["amcl"]
         pose = self.sim.pose
-        self.send(
-            "amcl", "/tf", {"transforms": [tm.transform("map", self.frames.odom, self.odom_origin)]}
-        )
+        map_odom = {"transforms": [tm.transform("map", self.frames.odom, self.odom_origin)]}
+        self.send("amcl", "/tf", map_odom, ahead_s=amcl["transform_tolerance"])
         last = self._amcl_sent
         if last is not None:
             moved = math.hypot(pose[0] - last[0], pose[1] - last[1])

@@ -24,7 +24,7 @@ from astiop.robot.backends.rclpy.empty_calls import EmptyCalls
 from astiop.robot.backends.rclpy.graph import read_lists, read_params
 from astiop.robot.backends.rclpy.node import ros_process
 from astiop.robot.backends.rclpy.verbs import RclpyVerbs
-from astiop.robot.backends.rclpy.watch import TopicWatch, watch
+from astiop.robot.backends.rclpy.watch import TopicWatch, watch, watch_transforms
 from astiop.robot.inflight import InFlight, Job
 from astiop.robot.state import (
     GOAL_STATUS,
@@ -207,7 +207,11 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
                 self._map_watch = watch(self.proc, name, spec.type, self._on_map)
                 continue
             on_message = self._on_message if name == self._name("status") else None  # events
-            w = watch(self.proc, name, spec.type, on_message)
+            if name in (self._name("transforms"), self._name("static_transforms")):
+                static = name == self._name("static_transforms")
+                w = watch_transforms(self.proc, name, spec.type, static)
+            else:
+                w = watch(self.proc, name, spec.type, on_message)
             if w is not None:  # a new dict: the sampler may be iterating the old one
                 self._watches = {**self._watches, name: w}
         goals = goal_status_topic(self.catalog.profile)

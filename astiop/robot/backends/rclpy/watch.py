@@ -24,6 +24,7 @@ from rclpy.serialization import deserialize_message
 from astiop.robot.backends.rclpy.graph import matched_qos
 from astiop.robot.backends.rclpy.node import RosProcess
 from astiop.ros2.message_objects import MessageTypeError, interface_class, to_dict
+from astiop.ros2.transforms import STALE_S, TransformTable
 
 RATE_WINDOW_S = 2.0
 POLLED_DEPTH = 50  # a 50 Hz topic's messages over one second of a stalled poller
@@ -158,5 +159,30 @@ def watch(proc: RosProcess, name: str, type_: str, on_message=None) -> TopicWatc
     """A polled watch on the topic, or None when its type is not importable here."""
     try:
         return TopicWatch(proc, name, type_, on_message, polled=True)
+    except MessageTypeError:
+        return None
+
+
+class TransformWatch(TopicWatch):
+    """/tf or /tf_static: each message folded into the latest transform per (parent, child) as
+    it is taken (one /tf message holds a few of the tree's transforms, each publisher its own);
+    `latest()` is the tree so far as a TFMessage. An echo still gets the last message as sent."""
+
+    def __init__(self, proc: RosProcess, name: str, type_: str, static: bool):
+        self.table = TransformTable(stale_s=None if static else STALE_S)
+        super().__init__(proc, name, type_, polled=True)
+
+    def _receive(self, raw: bytes, at: float | None = None) -> None:
+        at = time.monotonic() if at is None else at
+        self.table.fold_object(deserialize_message(raw, self.cls), at)
+        super()._receive(raw, at)
+
+    def latest(self) -> dict[str, Any] | None:
+        return self.table.message(time.monotonic())
+
+
+def watch_transforms(proc: RosProcess, name: str, type_: str, static: bool):
+    try:
+        return TransformWatch(proc, name, type_, static)
     except MessageTypeError:
         return None

@@ -53,6 +53,7 @@ from astiop.ros2.interfaces import decode_bytes
 from astiop.ros2.printing import echo_text
 from astiop.ros2.profile import ProfileSpec
 from astiop.ros2.render import STAMPED, flow_yaml, sent_argv
+from astiop.ros2.transforms import STALE_S, TransformTable
 from astiop.ros2.validation import Checked
 
 ARRAYS = {"/scan", "/plan", "/obstacles"}  # echoed in full: ros2 truncates at 128 items
@@ -101,6 +102,7 @@ class Ros2Backend(RobotBackend):
         self._latest: dict[str, dict[str, Any]] = {}
         self._received: dict[str, float] = {}  # on the robot clock: s since t0
         self._streams: dict[str, TopicStream] = {}
+        self._transforms: dict[str, TransformTable] = {}  # /tf, /tf_static: fed by one stream each
         self._goal_procs: list[Any] = []
         self._last_outcome: str | None = None
         self._map: OccupancyGrid | None = None
@@ -186,6 +188,11 @@ class Ros2Backend(RobotBackend):
     def _on_message(self, name: str, msg: dict[str, Any], received: float) -> None:
         if name == self._name("status"):
             self.events.status(str(msg.get("state")), str(msg.get("fault") or ""))
+        if name in (self._name("transforms"), self._name("static_transforms")):
+            static = name == self._name("static_transforms")
+            table = self._transforms.setdefault(name, TransformTable(None if static else STALE_S))
+            table.fold(msg, received)  # the tree so far, not this message's few transforms
+            msg = table.message(received) or msg
         with self._lock:
             self._latest[name] = msg
             self._received[name] = received - self.t0
