@@ -132,6 +132,43 @@ def test_a_turtlebot3_is_read_answered_driven_and_sent_by_its_own_names(tmp_path
             store.close()
 
 
+def test_a_turtlebot3_session_is_recorded_and_replayed_by_its_own_roles(tmp_path):
+    """Its /amcl_pose, /tf and battery recorded with their schemas, and the replay reads them by
+    the roles found on the recording (not the ASTIbot's /robot_pose)."""
+    require_ros()
+    from astiop.recording import SessionRecorder
+    from astiop.robot.backends.replay.backend import open_replay
+    from tests.ros import tb3_node
+
+    with tb3_node(speed=8.0):
+        gateway, store = gateway_on(tmp_path)
+        path = tmp_path / "tb3.mcap"
+        try:
+            recorder = SessionRecorder(path, gateway, store, flush_s=0.0)
+            for _ in range(20):
+                gateway.drive(0.2, 0.0, 0.0)
+                recorder.poll()
+                time.sleep(0.1)
+            assert until(
+                lambda: gateway.state().speed is not None and gateway.state().speed < 0.01, 10
+            )
+            time.sleep(0.5)
+            recorder.poll()
+            live = gateway.state()
+            recorder.stop()
+        finally:
+            gateway.close()
+            store.close()
+    replay = open_replay(path, paused=True)
+    assert replay.catalog.profile.name("pose") == "/amcl_pose"
+    assert "/tf" in replay.recording.channels and "/amcl_pose" in replay.recording.channels
+    replay.playback.seek(replay.recording.duration_s)
+    st = replay.state()
+    assert math.dist((st.pose.x, st.pose.y), (live.pose.x, live.pose.y)) < 0.05, (st, live)
+    assert abs(st.battery.percentage - live.battery.percentage) < 0.01
+    assert st.pose.x > 4.2  # it drove from (4, 4): the map pose, not odometry's origin
+
+
 def test_the_estop_cancels_every_nav2_goal_on_a_robot_with_no_stop_service(tmp_path):
     require_ros()
     from action_msgs.msg import GoalStatus

@@ -44,6 +44,7 @@ float64 theta
 """,
     "geometry_msgs/msg/PoseStamped": "std_msgs/Header header\nPose pose\n",
     "geometry_msgs/msg/PoseWithCovariance": "Pose pose\nfloat64[36] covariance\n",
+    "geometry_msgs/msg/PoseWithCovarianceStamped": "std_msgs/Header header\nPoseWithCovariance pose\n",
     "geometry_msgs/msg/TwistStamped": """\
 std_msgs/Header header
 Twist twist

@@ -13,6 +13,7 @@ from typing import Any
 
 from astiop.recording.reader import Recording
 from astiop.robot.backend import BackendError, RobotBackend
+from astiop.robot.backends.live_catalog import describe_graph, nothing_listed
 from astiop.robot.inflight import InFlight
 from astiop.robot.state import (
     RobotEvent,
@@ -91,6 +92,23 @@ class Playback:
             return self.speed
 
 
+def recorded_catalog(recording: Recording) -> Catalog:
+    """The robot as it was recorded: another make's topics and roles (a TurtleBot3's pose from
+    /amcl_pose and /tf) read off the recording's channels; the ASTIbot's own catalog for one of
+    its sessions (its services and parameters listed as they were)."""
+    lists = nothing_listed()
+    lists["topic"] = sorted(
+        (name, ch.type)
+        for name, ch in recording.channels.items()
+        if ch.type and ch.schema_encoding == "ros2msg" and not name.startswith("/astiop/")
+    )
+    types = {t for _, t in lists["topic"]}
+    if not lists["topic"] or "astiop_msgs/msg/RobotStatus" in types:
+        return astibot_catalog()
+    lists["node"] = [("/recorded", "")]  # a recording keeps no node names: not the ASTIbot's
+    return describe_graph(lists)
+
+
 class ReplayBackend(RobotBackend):
     name = "replay"
     capabilities: frozenset[str] = frozenset()  # no commands, no teleop
@@ -100,7 +118,7 @@ class ReplayBackend(RobotBackend):
         self.recording = recording
         self.label = f"replay of {recording.path.name}"
         self.store = store  # a throwaway store: the recorded turns appear in it as they happen
-        self.catalog: Catalog = astibot_catalog()
+        self.catalog: Catalog = recorded_catalog(recording)
         self.inflight = InFlight()  # stays empty: a replay never actuates
         self.playback = Playback(recording.start_ns, recording.end_ns, speed, not paused)
         self._turns = recording.channels.get("/astiop/interactions")
@@ -175,7 +193,8 @@ class ReplayBackend(RobotBackend):
         self._show_turns(t_ns)
         messages = self.recording.latest(self.catalog.recorded_topics(), t_ns)
         seq = sum(1 for ev in self._events if ev.t * 1e9 <= t_ns)
-        return from_messages(t_ns / 1e9, messages, event_seq=seq)
+        profile = self.catalog.profile  # None: the ASTIbot's names
+        return from_messages(t_ns / 1e9, messages, event_seq=seq, profile=profile)
 
     def messages(self, names) -> dict[str, dict[str, Any]]:
         return self.recording.latest(names, self.playback.now_ns())
