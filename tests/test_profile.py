@@ -324,3 +324,26 @@ def test_every_state_topic_of_a_turtlebot3_can_be_recorded():
     assert "geometry_msgs/msg/PoseWithCovarianceStamped" in recorded and recorded <= types
     for type_name in recorded:
         assert "\nMSG: " in ros2msg(type_name)  # its definition, and each type it uses
+
+
+def test_a_robot_that_takes_goals_on_a_topic_is_sent_them_there_and_fenced():
+    """A navigator with /goal_pose and no action (the issue's third way to navigate)."""
+    from astiop.agent.gate import action_of
+    from astiop.agent.intent import classify
+    from astiop.agent.rules import plan_intents
+    from astiop.robot.safety import SafetyPolicy
+    from astiop.ros2.validation import validate
+
+    catalog = tb3_graph()
+    catalog.profile = match_profile(catalog, parse('[roles]\nnavigation = "/goal_pose"\n', "f"))
+    (goal,) = plan_intents(classify("go to x 5 y 6", []), catalog.profile)
+    assert goal.startswith("ros2 topic pub --once /goal_pose geometry_msgs/msg/PoseStamped")
+    checked = validate(goal, catalog)
+    assert checked.valid and checked.kind == "actuate"
+    assert action_of(checked).kind == "navigate" and action_of(checked).xy == (5.0, 6.0)
+    fence = SafetyPolicy(geofence=(0.0, 0.0, 10.0, 10.0))
+    assert fence.review(checked, False).allowed
+    far = validate(goal.replace("x: 5.000", "x: 55.000"), catalog)
+    assert "outside the geofence" in fence.review(far, False).reason
+    odom = validate(goal.replace("frame_id: map", "frame_id: odom"), catalog)
+    assert "map frame" in fence.review(odom, False).reason

@@ -331,3 +331,46 @@ def test_stage_2_runs_on_a_turtlebot3_in_its_own_names(tmp_path):
     assert rows["nav"]["outcome"] == "skipped" and "no place" in rows["nav"]["skipped"]
     assert rows["sta"]["outcome"] == "skipped" and "status" in rows["sta"]["skipped"]
     assert rows["dck"]["outcome"] == "skipped" and "dock" in rows["dck"]["skipped"]
+
+
+async def test_an_outside_agent_reads_and_drives_a_turtlebot3_through_mcp(tmp_path):
+    """The MCP tools by role: the state's ages by its own topics, a pose goal as a NavigateToPose
+    goal, and stop as its goals cancelled, on a robot with no /stop."""
+    require_ros()
+    import os
+
+    from mcp import Client, StdioServerParameters
+    from mcp.types import Implementation
+
+    from tests.ros import tb3_node
+
+    args = ["-m", "astiop", "--db", str(tmp_path / "mcp.db"), "--robot", "ros2",
+            "--ros2-transport", "rclpy", "mcp", "--approve-actuation"]  # fmt: skip
+    server = StdioServerParameters(command=sys.executable, args=args, env=dict(os.environ))
+
+    async def call(client, name, arguments=None):
+        result = await client.call_tool(name, arguments or {})
+        return result.is_error, "\n".join(c.text for c in result.content)
+
+    with tb3_node(speed=4.0):
+        async with Client(server, client_info=Implementation(name="pytest", version="1")) as c:
+            deadline = time.monotonic() + 30
+            while time.monotonic() < deadline:  # the server's robot discovered, then read
+                error, text = await call(c, "robot_state")
+                state = json.loads(text)
+                if state["pose"] and state["battery"]:
+                    break
+                time.sleep(0.5)
+            assert not error and 0 <= state["pose"]["age_s"] < 5, state
+            assert 0 <= state["battery"]["age_s"] < 5, state
+            error, text = await call(c, "read_topic", {"topic": "/battery_state"})
+            assert not error and "percentage:" in text, text
+            error, text = await call(c, "go_to_pose", {"x": 12.0, "y": 4.0, "theta_deg": 0.0})
+            assert not error and text.startswith("goal accepted"), text
+            time.sleep(2.0)
+            error, text = await call(c, "stop")
+            assert not error and text.startswith("its navigation goals canceled"), text
+            time.sleep(1.0)
+            state = json.loads((await call(c, "robot_state"))[1])
+            assert "still going" not in json.dumps(state.get("last_goal")), state
+            assert state["pose"]["x_m"] < 11.0, state  # stopped on its way, not arrived

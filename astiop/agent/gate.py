@@ -44,6 +44,9 @@ def action_of(checked: Checked) -> Action:
     if not checked.valid or cmd is None:
         return Action("invalid")
     msg = checked.message or {}
+    if cmd.key == ("topic", "pub") and checked.type == "geometry_msgs/msg/PoseStamped":
+        p = msg.get("pose", {}).get("position", {})  # a goal on a navigator's /goal_pose
+        return Action("navigate", xy=(float(p.get("x", 0.0)), float(p.get("y", 0.0))))
     if cmd.key == ("topic", "pub"):
         twist = msg.get("twist", msg)
         lin, ang = twist.get("linear", {}), twist.get("angular", {})

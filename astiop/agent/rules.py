@@ -14,7 +14,7 @@ from astiop.agent.grounding import factual_answer
 from astiop.agent.intent import SERVICE_FOR, Intent, classify
 from astiop.agent.roles import name_for
 from astiop.robot.backend import Execution
-from astiop.ros2.render import nav_goal_command, velocity_pub_command
+from astiop.ros2.render import goal_pose_command, nav_goal_command, velocity_pub_command
 from astiop.ros2.validation import CANCEL_SUFFIX
 
 Locate = Callable[[str], "tuple[float, float] | None"]
@@ -29,7 +29,8 @@ UNKNOWN = "[rules] I don't know how to do that"
 def command_for(intent: Intent, profile: Any = None, locate: Locate | None = None) -> str | None:
     """The command for one intent, in the names of the robot's `profile` (the ASTIbot's without
     one); None when the robot has nothing that does it."""
-    if nav_action(profile) or (profile is not None and not profile.has("stop")):
+    foreign = profile is not None and profile.kind("navigation") in ("action", "topic")
+    if foreign or (profile is not None and not profile.has("stop")):
         other = _other_robot(intent, profile, locate)
         if other is not False:
             return other
@@ -76,10 +77,13 @@ def _other_robot(intent: Intent, profile: Any, locate: Locate | None) -> str | N
     NavigateToPose, a stop by a zero velocity, motion on its own velocity topic and type;
     None: the robot has nothing that does it; False: as on the ASTIbot."""
     action, kind = nav_action(profile), intent.kind
-    if kind == "navigate" and action:
+    goal_topic = profile.name("navigation") if profile.kind("navigation") == "topic" else None
+    if kind == "navigate" and (action or goal_topic):
         xy = intent.xy or (locate(intent.place) if intent.place and locate else None)
         if xy is None:
             return None
+        if goal_topic:  # a navigator that takes its goals on a topic (/goal_pose)
+            return goal_pose_command(goal_topic, xy[0], xy[1], intent.theta or 0.0)
         return nav_goal_command(action, xy[0], xy[1], intent.theta or 0.0)
     velocity = profile.name("velocity_command")
     if kind in SERVICE_FOR and not profile.has(kind):

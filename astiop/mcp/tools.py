@@ -11,7 +11,7 @@ import time
 
 from astiop.agent import goals
 from astiop.agent.intent import Intent
-from astiop.agent.rules import command_for, nav_action
+from astiop.agent.rules import command_for, nav_action, plan_intents
 from astiop.bounded import MAX_COMMAND_CHARS, has_controls, one_line, preview
 from astiop.mcp.approval import Policy, clear
 from astiop.mcp.audit import CALL, AuditTrail, Call
@@ -193,16 +193,23 @@ class RobotTools(MissionTools):
 
     def stop(self) -> str:
         profile = self.gateway.profile
-        text = command_for(Intent("stop"), profile)
-        if text is None:
+        texts = plan_intents([Intent("stop")], profile)  # a Nav2 robot: its goals cancelled too
+        if not texts:
             raise Refused("this robot has neither a stop service nor a velocity command")
-        ex = self.gateway.run(text, confirm=lambda _c: True)
-        self._record(ex)
-        if not ex.executed or ex.error:
-            raise Refused(f"stop failed: {ex.reason or ex.error}")
-        if not profile.has("stop"):
-            return "zero velocity sent: this robot has no stop service (commanded)\n" + ex.output
-        return "stop sent: motion stopped and any goal canceled (commanded)\n" + ex.output
+        outputs = []
+        for text in texts:
+            ex = self.gateway.run(text, confirm=lambda _c: True)
+            self._record(ex)
+            if not ex.executed or ex.error:
+                raise Refused(f"stop failed: {ex.reason or ex.error}")
+            outputs.append(ex.output)
+        if profile.has("stop"):
+            said = "stop sent: motion stopped and any goal canceled (commanded)"
+        elif len(texts) > 1:
+            said = "its navigation goals canceled and zero velocity sent: this robot has no stop service (commanded)"
+        else:
+            said = "zero velocity sent: this robot has no stop service (commanded)"
+        return "\n".join([said, *outputs])
 
     def estop(self) -> str:
         failures = self.gateway.estop()

@@ -14,6 +14,7 @@ from astiop.warehouse import GEOFENCE_MARGIN, fence_text, inside_fence
 ALWAYS_ALLOWED = {"stop"}
 # A velocity command is clamped by its type, whatever the topic (a namespace's /tb3_1/cmd_vel)
 VELOCITY_TYPES = {"geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped"}
+POSE_STAMPED = "geometry_msgs/msg/PoseStamped"  # a goal on a navigator's goal topic
 # |q| may differ from 1 by this much (a heading printed to a few digits still passes)
 UNIT_QUATERNION_TOLERANCE = 1e-3
 
@@ -90,26 +91,12 @@ class SafetyPolicy:
             if (where or not msg.get("name")) and not self.inside_geofence(x, y):
                 label = f"'{msg['name']}' at " if where else ""
                 return Review(False, label + self._fence_reason(x, y), checked, False)
-        elif cmd.key == ("action", "send_goal"):
-            pose = msg["pose"]
-            frame = pose["header"]["frame_id"]
-            if frame not in ("", "map"):
-                return Review(
-                    False, f"goals must be in the map frame, not '{frame}'", checked, False
-                )
-            p = pose["pose"]["position"]
-            if not self.inside_geofence(p["x"], p["y"]):
-                return Review(False, self._fence_reason(p["x"], p["y"]), checked, False)
-            q = pose["pose"]["orientation"]
-            norm = math.hypot(q["x"], q["y"], q["z"], q["w"])  # hypot: no overflow at 1e308
-            if not abs(norm - 1.0) <= UNIT_QUATERNION_TOLERANCE:
-                return Review(
-                    False,
-                    f"the goal's orientation is not a unit quaternion (|q| = {norm:.6g}); "
-                    "for a heading θ use {z: sin(θ/2), w: cos(θ/2)}",
-                    checked,
-                    False,
-                )
+        elif cmd.key == ("action", "send_goal") or (
+            cmd.key == ("topic", "pub") and checked.type == POSE_STAMPED  # a /goal_pose
+        ):
+            why = self._goal_refusal(msg["pose"] if cmd.key[0] == "action" else msg)
+            if why:
+                return Review(False, why, checked, False)
         elif cmd.key == ("param", "set") and cmd.args.get("param") in (
             "max_linear_speed",
             "max_angular_speed",
@@ -119,6 +106,23 @@ class SafetyPolicy:
                 return Review(False, f"{cmd.args['param']} may not exceed {limit}", checked, False)
         out = replace(checked, message=msg, notes=tuple(notes))
         return Review(True, "", out, self.confirm_actuation)
+
+    def _goal_refusal(self, pose: dict) -> str:
+        """Why a goal pose (a PoseStamped) may not be sent: "" when it may."""
+        frame = pose["header"]["frame_id"]
+        if frame not in ("", "map"):
+            return f"goals must be in the map frame, not '{frame}'"
+        p = pose["pose"]["position"]
+        if not self.inside_geofence(p["x"], p["y"]):
+            return self._fence_reason(p["x"], p["y"])
+        q = pose["pose"]["orientation"]
+        norm = math.hypot(q["x"], q["y"], q["z"], q["w"])  # hypot: no overflow at 1e308
+        if not abs(norm - 1.0) <= UNIT_QUATERNION_TOLERANCE:
+            return (
+                f"the goal's orientation is not a unit quaternion (|q| = {norm:.6g}); "
+                "for a heading θ use {z: sin(θ/2), w: cos(θ/2)}"
+            )
+        return ""
 
     def _clamp_twist(self, msg: dict, notes: list[str]) -> tuple[dict, list[str]]:
         twist, more = clamp_twist(msg, self.max_linear, self.max_angular)

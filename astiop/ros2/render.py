@@ -34,6 +34,19 @@ def nav_goal_command(action: str, x: float, y: float, theta: float) -> str:
     )
 
 
+POSE_STAMPED = "geometry_msgs/msg/PoseStamped"
+
+
+def goal_pose_command(topic: str, x: float, y: float, theta: float) -> str:
+    """A goal published on a navigator's goal topic (Nav2's /goal_pose), in the map frame."""
+    half = theta / 2
+    return (
+        f'ros2 topic pub --once {topic} {POSE_STAMPED} "{{header: {{frame_id: map}}, pose: '
+        f"{{position: {{x: {x:.3f}, y: {y:.3f}}}, orientation: {{z: {math.sin(half):.4f}, "
+        f'w: {math.cos(half):.4f}}}}}}}"'
+    )
+
+
 def velocity_pub_command(name: str, type_: str, how: str, vx: float, vy: float, wz: float) -> str:
     """`ros2 topic pub HOW NAME TYPE` of a velocity (a TwistStamped: its twist)."""
     twist = (

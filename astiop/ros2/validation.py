@@ -93,7 +93,8 @@ def _validate(cmd: Ros2Command, catalog: Catalog) -> Checked:
     if key == ("topic", "pub"):
         spec = _topic(cmd, catalog)
         velocity = catalog.profile.name("velocity_command") if catalog.profile else "/cmd_vel"
-        if not spec.subscriber and spec.name != velocity:
+        goal = catalog.profile.name("navigation") if catalog.profile else None  # a /goal_pose
+        if not spec.subscriber and spec.name not in (velocity, goal):
             raise InterfaceError(
                 f"nothing on the robot listens to {spec.name}; the only topic "
                 f"you may publish to is {velocity or '/cmd_vel'}"
