@@ -38,9 +38,11 @@ def emulated_robot(
     daemon_stopped: bool = False,
     folder: Path | None = None,
     processes: list | None = None,
+    dds: bool = False,
 ):
     """`processes`: the robot's process is appended (a test that kills it); `folder`: the one
-    a killed robot ran in (its `ros2` is still on PATH), for it to come back."""
+    a killed robot ran in (its `ros2` is still on PATH), for it to come back. `dds`: no robot
+    of its own, the verbs run over real DDS against the robot on this worker's domain."""
     folder = folder or Path(tempfile.mkdtemp(prefix="emu-", dir="/tmp"))  # short: a socket path
     argv = [
         sys.executable,
@@ -60,6 +62,8 @@ def emulated_robot(
         argv += ["--missing", name]
     if daemon_stopped:
         argv.append("--daemon-stopped")
+    if dds:
+        argv.append("--dds")
     proc = subprocess.Popen(argv, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True)
     if processes is not None:
         processes.append(proc)

@@ -24,6 +24,7 @@ from astiop.robot.backends.live_catalog import (
 )
 from astiop.robot.backends.live_robot import without_finished_plan
 from astiop.robot.backends.ros2cli import process as ros2_process
+from astiop.robot.backends.ros2cli.estop_probe import StopProbe
 from astiop.robot.backends.ros2cli.graph import GraphReader
 from astiop.robot.backends.ros2cli.motion import (
     ESTOP_BURST,
@@ -40,11 +41,13 @@ from astiop.robot.backends.ros2cli.replies import (
 from astiop.robot.backends.ros2cli.streams import TopicStream, parse_document
 from astiop.robot.inflight import ENDED, InFlight, Job
 from astiop.robot.state import (
+    GOAL_STATUS,
     OccupancyGrid,
     RobotEvent,
     RobotState,
     TopicStat,
     from_messages,
+    goal_status_topic,
     grid_from_message,
     live_topic_stats,
 )
@@ -168,6 +171,11 @@ class Ros2Backend(RobotBackend):
             self._streams[name] = TopicStream(
                 self.executable, name, spec.type, self._on_message, self.events.add, extra
             ).start()
+        goals = goal_status_topic(self.catalog.profile)
+        if goals:  # a Nav2 robot's state word: does its action run a goal (a hidden topic)
+            self._streams[goals] = TopicStream(
+                self.executable, goals, GOAL_STATUS, self._on_message, self.events.add
+            ).start()
         if self._name("map"):
             threading.Thread(target=self._read_map, name="ros2-map", daemon=True).start()
         threading.Thread(target=self._refresh_loop, name="ros2-graph", daemon=True).start()
@@ -205,6 +213,9 @@ class Ros2Backend(RobotBackend):
             messages = dict(self._latest)
         seq = self.events.seq
         profile = self.catalog.profile
+        goals = goal_status_topic(profile)
+        if goals in self._streams and goals not in messages:
+            messages[goals] = {"status_list": []}  # its server was listed and had no goal
         messages = without_finished_plan(messages, profile)
         now = time.monotonic()
         state = from_messages(
@@ -296,7 +307,13 @@ class Ros2Backend(RobotBackend):
         stop = self._name("stop") if self.discovered else self._fixed.namespace + "/stop"
         if stop:
             stop_type = stop_service_type(self.catalog)  # not read yet: the catalog's type
-            self._background(lambda: ["service", "call", stop, stop_type, "{}"], stop)
+            answered = threading.Event()
+            probe = None if self.discovered else self._stop_probe(answered)
+            absent = probe.stop_absent if probe else None
+            argv = ["service", "call", stop, stop_type, "{}"]
+            self._background(lambda: argv, stop, absent=absent, finished=answered)
+            if probe is not None:  # a robot with no /stop: its Nav2 goals cancelled instead
+                self._estop.start(probe.probe, "estop probe")
         if not stop:
             # no stop service (a TurtleBot3 under Nav2): every navigation goal on the robot
             # cancelled, another client's too (action_msgs/srv/CancelGoal: a zero id and stamp
@@ -339,14 +356,38 @@ class Ros2Backend(RobotBackend):
                 )
             time.sleep(0.1)
 
-    def _background(self, argv_of, what: str, extra_s: float = 0.0) -> None:
-        """`ros2 ARGV` in a thread of the E-STOP's; `argv_of()` may itself ask the robot."""
+    def _stop_probe(self, answered: threading.Event) -> StopProbe:
+        return StopProbe(
+            self._run,
+            self._fixed.namespace,
+            self.timeout_s,
+            lambda argv, what: self._background(lambda: argv, what),
+            lambda said: self.events.add("estop", "info", said),
+            answered,
+        )
+
+    def _background(
+        self,
+        argv_of,
+        what: str,
+        extra_s: float = 0.0,
+        absent: threading.Event | None = None,
+        finished: threading.Event | None = None,
+    ) -> None:
+        """`ros2 ARGV` in a thread of the E-STOP's; `argv_of()` may itself ask the robot. Set,
+        `absent` ends the call: what it waits for is not on the robot (said elsewhere);
+        `finished` is set when it ends."""
 
         def go() -> None:
             try:
-                run = self._run(argv_of(), self.timeout_s + extra_s)
+                run = self._run(argv_of(), self.timeout_s + extra_s, cancel=absent)
             except BackendError as exc:
                 self.events.add("estop", "error", f"E-STOP {what}: {exc}")
+                return
+            finally:
+                if finished is not None:
+                    finished.set()
+            if absent is not None and absent.is_set():
                 return
             if run.returncode != 0 or run.stopped:
                 why = run.err.strip()[-200:] or ("timed out" if run.stopped else "failed")

@@ -110,9 +110,10 @@ def run(
     until: Callable[[str], bool] | None = None,
     grace_s: float = 3.0,
     job: Job | None = None,
+    cancel: threading.Event | None = None,
 ) -> Run:
-    """Run to completion within `timeout`, or stop it there, or as soon as `until(stdout)`;
-    as part of `job`, the E-STOP kills it.
+    """Run to completion within `timeout`, or stop it there, or as soon as `until(stdout)` or
+    `cancel` is set; as part of `job`, the E-STOP kills it.
 
     The output printed before a stop is kept.
     """
@@ -133,7 +134,7 @@ def run(
     deadline = time.monotonic() + timeout
     try:
         while proc.poll() is None and not done.is_set():
-            if time.monotonic() >= deadline:
+            if time.monotonic() >= deadline or (cancel is not None and cancel.is_set()):
                 break
             done.wait(0.02)
         if proc.poll() is None:
