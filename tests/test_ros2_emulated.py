@@ -484,7 +484,7 @@ def test_param_and_interface_lists_print_as_ros2cli_on_the_emulated_and_in_proce
             ("ros2 param list /astibot_base --param-type", "  max_angular_speed (type: double)\n"),
             ("ros2 param list --filter 'max_l.*'", "/astibot_base:\n  max_linear_speed\n"),
             ("ros2 param list --param-prefixes max", ""),
-            ("ros2 interface list -s", "Services:\n    astiop_msgs/srv/GotoPosition\n"),
+            ("ros2 interface list -s", "Services:\n    action_msgs/srv/CancelGoal\n    astiop_msgs/srv/GotoPosition\n"),
         ):
             for where, gw in (("emulated ros2", gateway), ("in process", sim)):
                 r = gw.run(command)
