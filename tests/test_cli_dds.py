@@ -117,6 +117,18 @@ def test_a_turtlebot3_through_the_ros2_cli_is_profiled_answered_and_sent(monkeyp
                 "/navigate_to_pose",
                 "nav2_msgs/action/NavigateToPose",
             ]
+
+            # "stop the robot": its goals cancelled through the action's hidden cancel service
+            ran = gateway.run(far, confirm=lambda _c: True)
+            assert until(lambda: gateway.state().state_word == "navigating", 10), gateway.state()
+            result, _ = ask(gateway, "stop the robot")
+            assert result.commands[0].command.startswith(
+                "ros2 service call /navigate_to_pose/_action/cancel_goal"
+            ), result.commands
+            assert all(c.executed and not c.error for c in result.commands), result.commands
+            assert until(lambda: gateway.state().state_word == "idle", 15), gateway.state()
+            # the E-STOP of a console that read the graph: no stop service is no failure
+            assert gateway.estop() == []
         finally:
             gateway.close()
             store.close()

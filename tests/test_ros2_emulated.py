@@ -131,8 +131,9 @@ def test_estop_sends_zero_twist_even_without_a_stop_service(monkeypatch):
         try:
             time.sleep(0.6)  # the armed publisher has paid its start-up
             pressed = time.monotonic()
-            failures = gateway.estop()
-            assert any("/stop" in f for f in failures)
+            assert gateway.estop() == []  # a robot with no stop service: said, not failed
+            said = [e.message for e in gateway.events_since(0) if e.kind == "estop"]
+            assert any("no stop service (/stop)" in m for m in said), said
             assert until(lambda: cmd_vel_received(folder))
             first = cmd_vel_received(folder)[0]
             assert first["twist"]["linear"]["x"] == 0.0
@@ -484,7 +485,10 @@ def test_param_and_interface_lists_print_as_ros2cli_on_the_emulated_and_in_proce
             ("ros2 param list /astibot_base --param-type", "  max_angular_speed (type: double)\n"),
             ("ros2 param list --filter 'max_l.*'", "/astibot_base:\n  max_linear_speed\n"),
             ("ros2 param list --param-prefixes max", ""),
-            ("ros2 interface list -s", "Services:\n    action_msgs/srv/CancelGoal\n    astiop_msgs/srv/GotoPosition\n"),
+            (
+                "ros2 interface list -s",
+                "Services:\n    action_msgs/srv/CancelGoal\n    astiop_msgs/srv/GotoPosition\n",
+            ),
         ):
             for where, gw in (("emulated ros2", gateway), ("in process", sim)):
                 r = gw.run(command)

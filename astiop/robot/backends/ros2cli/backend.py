@@ -321,9 +321,11 @@ class Ros2Backend(RobotBackend):
             for action in navigation_actions(self.catalog, self._fixed.namespace):
                 call = ["service", "call", f"{action}/_action/cancel_goal", CANCEL_GOAL, "{}"]
                 self._background(lambda call=call: call, f"cancel every {action} goal")
-            failures.append(
+            self.events.add(  # how such a robot stops: said, not failed (as through rclpy)
+                "estop",
+                "info",
                 f"the robot has no stop service ({self._fixed.namespace}/stop): "
-                "its navigation goals were cancelled instead"
+                "its navigation goals were cancelled instead",
             )
         self._estop.said(failures)
         return failures
