@@ -61,6 +61,31 @@ class RobotSettings(_Section):
     namespace: str = Field("", description="the robot's ROS 2 namespace, e.g. /tb3_1")
 
 
+class FleetRobot(_Section):
+    """One robot of a fleet: its name (what --robot-name takes) and where it is reached."""
+
+    name: str = Field(pattern=r"^[A-Za-z0-9_-]{1,64}$")
+    namespace: str = Field("", description="its ROS 2 namespace, e.g. /astibot_2")
+    profile: str = Field("", description="its profile (robot.profile when empty)")
+
+
+class FleetSettings(_Section):
+    # "auto": every namespace on the domain that holds a velocity command and a pose or
+    # odometry, named for its namespace (/tb3_2 is tb3_2); "list": the robots below
+    discover: Literal["list", "auto"] = "list"
+    robots: list[FleetRobot] = Field(default_factory=list)
+
+    @field_validator("robots")
+    @classmethod
+    def _unique(cls, robots: list[FleetRobot]) -> list[FleetRobot]:
+        for key in ("name", "namespace"):
+            seen = [getattr(r, key) for r in robots]
+            dup = next((v for v in seen if seen.count(v) > 1), None)
+            if dup is not None:
+                raise ValueError(f"two robots of the fleet have the {key} '{dup}'")
+        return robots
+
+
 class SimSettings(_Section):
     seed: int = Field(0, ge=0, le=2**32 - 1)
     speed: float = Field(
@@ -101,6 +126,7 @@ class Settings(BaseSettings):
     robot: RobotSettings = Field(default_factory=RobotSettings)
     sim: SimSettings = Field(default_factory=SimSettings)
     llm: LLMSettings = Field(default_factory=LLMSettings)
+    fleet: FleetSettings = Field(default_factory=FleetSettings)
 
     @classmethod
     def settings_customise_sources(

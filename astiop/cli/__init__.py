@@ -6,7 +6,10 @@ import os
 import sys
 
 # the app's global options that take a value (a bare `--record` is made `--record=` first)
-_VALUED = ("--db", "--model", "--robot", "--ros2-transport", "--namespace", "--profile", "--record")
+_VALUED = (
+    "--db", "--model", "--robot", "--ros2-transport", "--namespace", "--profile", "--record",
+    "--robot-name", "--fleet",
+)  # fmt: skip
 SERVED_ELSEWHERE = ("rules", "ollama:", "openai:", "dmr:")  # specs with no model process here
 
 

@@ -15,6 +15,7 @@ from astiop.cli import (
     doctor,
     emulate,
     export,
+    fleet,
     locations,
     mcp,
     mission,
@@ -41,6 +42,7 @@ app.add_typer(export.app, name="export")
 app.add_typer(ros2.app, name="ros2")
 app.add_typer(mission.app, name="mission")
 app.add_typer(robot_profile.app, name="robot")
+app.add_typer(fleet.app, name="fleet")
 app.command("exec")(robot.exec_command)
 app.command("estop")(robot.estop)
 app.command("chat")(agent.chat)
@@ -86,6 +88,18 @@ def main(
         help="Which names play which role: auto (from the robot's graph), a shipped profile "
         "(astibot, turtlebot3_burger, turtlebot3_waffle) or a profile file (robot.profile).",
     ),
+    robot_name: str | None = typer.Option(
+        None,
+        "--robot-name",
+        help="One robot of the fleet, by name ([[fleet.robots]], or its namespace with --fleet "
+        "auto): every command acts on it.",
+    ),
+    fleet: str | None = typer.Option(
+        None,
+        "--fleet",
+        help="auto: the fleet is every robot namespace on the ROS 2 domain; list: the "
+        "settings' [[fleet.robots]] (fleet.discover).",
+    ),
     record: str | None = typer.Option(
         None,
         "--record",
@@ -109,7 +123,9 @@ def main(
         overrides.setdefault("robot", {})["namespace"] = namespace
     if profile is not None:
         overrides.setdefault("robot", {})["profile"] = profile
-    ctx.obj = CliState(overrides=overrides)
+    if fleet is not None:
+        overrides.setdefault("fleet", {})["discover"] = fleet
+    ctx.obj = CliState(overrides=overrides, robot_name=robot_name)
     if ctx.invoked_subcommand is None:
         from astiop.cli.console import run_console
 

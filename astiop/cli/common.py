@@ -45,8 +45,17 @@ def print_json(data: Any) -> None:
 @dataclass
 class CliState:
     overrides: dict[str, Any] = field(default_factory=dict)
+    robot_name: str | None = None  # --robot-name: one robot of the fleet
     _settings: Settings | None = None
     _store: Store | None = None
+
+    @property
+    def fleet_settings(self) -> Settings:
+        """The settings as read, before --robot-name picks one robot of the fleet."""
+        try:
+            return load_settings(self.overrides)
+        except ConfigError as exc:
+            fail(str(exc))
 
     @property
     def settings(self) -> Settings:
@@ -55,6 +64,13 @@ class CliState:
                 self._settings = load_settings(self.overrides)
             except ConfigError as exc:
                 fail(str(exc))
+            if self.robot_name is not None:
+                from astiop.robot.fleet import FleetError, robot_settings
+
+                try:
+                    self._settings = robot_settings(self._settings, self.robot_name)
+                except FleetError as exc:
+                    fail(str(exc))
             if not self._settings.robot.confirm_actuation:
                 typer.echo(
                     "astiop: warning: robot.confirm_actuation is false: actuating commands run "

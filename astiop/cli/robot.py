@@ -108,13 +108,32 @@ def estop(
         False, "--release", help="Release the E-STOP (asks first; --yes does not ask)."
     ),
     yes: bool = typer.Option(False, "--yes", "-y", help="Release without asking."),
+    every: bool = typer.Option(
+        False,
+        "--all",
+        help="Every robot of the fleet at once ([[fleet.robots]], or with --fleet auto every "
+        "robot namespace on the domain, read first).",
+    ),
 ) -> None:
     """E-STOP from a second shell or a script: stop the robot on the configured backend and
     latch it in the database, as the console's ctrl+e does; every astiop process on that
-    database then refuses motion until it is released."""
+    database then refuses motion until it is released. --robot-name NAME stops one robot of
+    the fleet, --all every one."""
     from astiop.robot.factory import make_robot_gateway
 
     st = state(ctx)
+    if every and st.robot_name is not None:
+        fail("--all stops every robot of the fleet: leave out --robot-name")
+    if every and not release:
+        from astiop.cli.fleet import estop_all
+
+        estop_all(st)
+        return
+    if release and every:
+        from astiop.cli.fleet import release_all
+
+        release_all(st, yes)
+        return
     if release:
         latch = st.store.estop_latch()
         live = st.settings.robot.backend == "ros2"  # its own stop may hold it (a bare /stop)

@@ -184,8 +184,17 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
             self._publisher()  # matched now, so the first key and the E-STOP do not wait for it
         self._watch_state_topics()
         threading.Thread(target=self._graph_loop, name="rclpy-graph", daemon=True).start()
-        threading.Thread(target=self.refresh, name="rclpy-params", daemon=True).start()
+        threading.Thread(target=self._first_refresh, name="rclpy-params", daemon=True).start()
         threading.Thread(target=self._teleop_loop, name="rclpy-teleop", daemon=True).start()
+
+    def _first_refresh(self) -> None:
+        """The robot's parameters read in the background; a backend closed meanwhile (a short
+        command: `astiop fleet list`) ends it, said by nothing."""
+        try:
+            self.refresh()
+        except Exception:
+            if not self._closed.is_set():
+                raise
 
     def _watch_state_topics(self) -> None:
         with self._watch_lock:

@@ -1,0 +1,216 @@
+"""`astiop fleet`: the robots of the fleet and their state; `astiop estop --all` stops them all.
+
+Each robot is reached as one robot is (its namespace on the ROS 2 domain), all of them at once
+in threads of this process."""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+
+import typer
+
+from astiop.cli.common import fail, print_json, state
+
+app = typer.Typer(help="The robots of the fleet: their state; one E-STOP for all.")
+READ_S = 10.0  # a robot's first pose and battery, or it is said to be silent
+
+
+def members(st, on_found=None) -> list:
+    """The fleet's robots: the settings' list, or every robot namespace on the domain, read
+    until the graph has settled; `on_found(robot)` is called as each is found (an E-STOP does
+    not wait for the whole graph to stop the first robot)."""
+    from astiop.robot.backend import BackendError
+    from astiop.robot.factory import make_robot_gateway
+    from astiop.robot.fleet import discovered
+    from astiop.robot.gateway import SETTLED_S
+
+    on_found = on_found or (lambda _robot: None)
+    settings = st.fleet_settings
+    if settings.robot.backend != "ros2":
+        fail("a fleet is reached over ROS 2: add --robot ros2")
+    if settings.fleet.discover == "list":
+        if not settings.fleet.robots:
+            fail("no fleet: list its robots as [[fleet.robots]] in the settings, or --fleet auto")
+        for robot in settings.fleet.robots:
+            on_found(robot)
+        return list(settings.fleet.robots)
+    whole = settings.model_copy(
+        update={"robot": settings.robot.model_copy(update={"namespace": ""})}
+    )
+    try:
+        gateway = make_robot_gateway(whole, None, who="fleet", discover=False)
+    except BackendError as exc:
+        fail(f"the ROS 2 graph could not be read: {exc}")
+    found: dict[str, object] = {}
+    try:
+        now = time.monotonic()
+        deadline, changed = now + settings.robot.ros2_timeout_s, now
+        while now < deadline and not (found and now - changed >= SETTLED_S):
+            gateway.backend.refresh()
+            for robot in discovered(gateway.catalog):
+                if robot.name not in found:
+                    found[robot.name], changed = robot, time.monotonic()
+                    on_found(robot)
+            time.sleep(0.2)
+            now = time.monotonic()
+    finally:
+        gateway.close()
+    if not found:
+        fail("no robot namespace on the ROS 2 domain (a velocity command and a pose under one)")
+    return list(found.values())
+
+
+def each(robots: list, work) -> dict[str, object]:
+    """`work(robot)` for every robot at once; its result or the exception it raised, by name."""
+    results: dict[str, object] = {}
+
+    def run(robot) -> None:
+        try:
+            results[robot.name] = work(robot)
+        except Exception as exc:  # noqa: BLE001 - one robot's failure is its own line
+            results[robot.name] = exc
+
+    threads = [threading.Thread(target=run, args=(r,), daemon=True) for r in robots]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    return results
+
+
+def _read(settings, robot) -> dict:
+    from astiop.robot.factory import make_robot_gateway
+    from astiop.robot.fleet import robot_settings
+
+    gateway = make_robot_gateway(robot_settings(settings, robot.name), None, who="fleet")
+    try:
+        gateway.start()
+        deadline = time.monotonic() + READ_S
+        while time.monotonic() < deadline:
+            st = gateway.state()
+            if st.pose is not None and st.battery is not None:
+                break
+            time.sleep(0.2)
+        st, profile = gateway.state(), gateway.profile
+        return {
+            "name": robot.name,
+            "namespace": robot.namespace,
+            "make": profile.make,
+            "state": st.state_word,
+            "battery_percent": round(st.battery.percentage * 100, 1) if st.battery else None,
+            "x_m": round(st.pose.x, 2) if st.pose else None,
+            "y_m": round(st.pose.y, 2) if st.pose else None,
+            "theta_deg": round(math.degrees(st.pose.theta), 1) if st.pose else None,
+            "speed_m_s": round(st.speed, 2) if st.speed is not None else None,
+        }
+    finally:
+        gateway.close()
+
+
+@app.command("list")
+def list_cmd(ctx: typer.Context, as_json: bool = typer.Option(False, "--json")) -> None:
+    """Every robot of the fleet with what it reports: state, battery, pose, speed."""
+    st = state(ctx)
+    robots = members(st)
+    settings = st.fleet_settings
+    found = each(robots, lambda r: _read(settings, r))
+    rows = []
+    for robot in robots:
+        got = found[robot.name]
+        if isinstance(got, Exception):
+            got = {"name": robot.name, "namespace": robot.namespace, "error": str(got)}
+        rows.append(got)
+    if as_json:
+        print_json(rows)
+        return
+    width = max(len(r["name"]) for r in rows)
+    typer.echo(f"{'name':<{width}}  {'state':<10}  {'battery':>7}  {'x':>7}  {'y':>7}  namespace")
+    for r in rows:
+        if "error" in r:
+            typer.echo(f"{r['name']:<{width}}  not reached: {r['error']}")
+            continue
+        battery = f"{r['battery_percent']:.1f} %" if r["battery_percent"] is not None else "-"
+        x = f"{r['x_m']:.2f}" if r["x_m"] is not None else "-"
+        y = f"{r['y_m']:.2f}" if r["y_m"] is not None else "-"
+        typer.echo(
+            f"{r['name']:<{width}}  {r['state']:<10}  {battery:>7}  {x:>7}  {y:>7}  {r['namespace']}"
+        )
+
+
+def estop_all(st) -> None:
+    """Every robot of the fleet stopped at once, each through its own zero Twists and stop (or
+    its goals cancelled), then the E-STOP latched for every process on this database."""
+    from astiop.robot.factory import make_robot_gateway
+    from astiop.robot.fleet import robot_settings
+
+    settings = st.fleet_settings
+    store = st.store
+    results: dict[str, object] = {}
+    threads: list[threading.Thread] = []
+
+    def stop(robot) -> list[str]:
+        gateway = make_robot_gateway(
+            robot_settings(settings, robot.name), store, who="estop --all", discover=False,
+            restore_latch=False,
+        )  # fmt: skip
+        try:
+            failures = gateway.estop()
+            return failures + gateway.settle_estop(settings.robot.ros2_timeout_s)
+        finally:
+            gateway.close()
+
+    def stop_now(robot) -> None:  # each robot as soon as it is found
+        thread = threading.Thread(target=lambda: results.update(each([robot], stop)))
+        thread.start()
+        threads.append(thread)
+
+    robots = members(st, stop_now)
+    for thread in threads:
+        thread.join()
+    store.latch_estop("estop --all")  # held even where a robot was not reached
+    failed = False
+    for robot in robots:
+        got = results[robot.name]
+        if isinstance(got, Exception):
+            failed = True
+            typer.echo(f"{robot.name}: NOT REACHED: {got}", err=True)
+        elif got:
+            failed = True
+            typer.echo(f"{robot.name}: stopped with failures: {'; '.join(got)}", err=True)
+        else:
+            typer.echo(f"{robot.name}: E-STOP engaged")
+    typer.echo(f"E-STOP latched for {len(robots)} robots")
+    if failed:
+        raise typer.Exit(1)
+
+
+def release_all(st, yes: bool) -> None:
+    """The latch released, and each robot that latches its own stop (/release) let go."""
+    from astiop.cli.common import interactive
+    from astiop.robot.factory import make_robot_gateway
+    from astiop.robot.fleet import robot_settings
+
+    robots = members(st)
+    names = ", ".join(r.name for r in robots)
+    if not yes:
+        if not interactive():
+            fail("releasing the E-STOP needs a person to confirm it (or --yes)")
+        if not typer.confirm(f"release the E-STOP of {names} (they may move again)?", err=True):
+            fail("not released", code=1)
+    st.store.release_estop("estop --release --all")
+    settings = st.fleet_settings
+
+    def release(robot) -> list[str]:
+        gateway = make_robot_gateway(robot_settings(settings, robot.name), st.store, who="release")
+        try:
+            return gateway.release_estop()
+        finally:
+            gateway.close()
+
+    results = each(robots, release)
+    failed = [f"{n}: {r}" for n, r in results.items() if isinstance(r, Exception) or r]
+    typer.echo(f"E-STOP released: {names}")
+    if failed:
+        fail("; ".join(str(f) for f in failed), code=1)

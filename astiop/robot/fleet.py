@@ -1,0 +1,54 @@
+"""A fleet: several robots on one ROS 2 domain, each under its own namespace (the ROS 2
+convention: /tb3_1/cmd_vel, /tb3_2/cmd_vel). Its robots are the settings' [[fleet.robots]], or
+with fleet.discover = "auto" every namespace on the graph that holds a velocity command and a
+pose or odometry, each named for its namespace (/tb3_2 is tb3_2). A robot is addressed by its
+name (--robot-name): the settings of that one robot are the fleet's, its namespace and profile
+put in robot.namespace and robot.profile."""
+
+from __future__ import annotations
+
+from astiop.config import FleetRobot, Settings
+from astiop.ros2.catalog import Catalog
+from astiop.ros2.profile import ProfileSpec, match_profile
+
+
+class FleetError(ValueError):
+    """A robot name or fleet that cannot be used, said in one line."""
+
+
+def is_fleet(settings: Settings) -> bool:
+    return settings.fleet.discover == "auto" or bool(settings.fleet.robots)
+
+
+def robot_settings(settings: Settings, name: str) -> Settings:
+    """The settings of the fleet's robot `name`."""
+    found = next((r for r in settings.fleet.robots if r.name == name), None)
+    if found is None and settings.fleet.discover == "auto":
+        found = FleetRobot(name=name, namespace="/" + name)
+    if found is None:
+        known = ", ".join(r.name for r in settings.fleet.robots) or "none"
+        raise FleetError(
+            f"no robot named '{name}' in the fleet (its robots: {known}; "
+            "[[fleet.robots]] in the settings, or --fleet auto)"
+        )
+    robot = settings.robot.model_copy(
+        update={"namespace": found.namespace, "profile": found.profile or settings.robot.profile}
+    )
+    return settings.model_copy(update={"robot": robot})
+
+
+def namespaces(catalog: Catalog) -> list[str]:
+    """The namespaces on the graph that hold a robot: a velocity command and a pose or odometry
+    matched inside it (a name's first segment is a candidate namespace)."""
+    names = list(catalog.topics)
+    candidates = sorted({"/" + n.split("/")[1] for n in names if n.count("/") >= 2})
+    robots = []
+    for ns in candidates:
+        profile = match_profile(catalog, ProfileSpec(namespace=ns))
+        if profile.has("velocity_command") and (profile.has("pose") or profile.has("odometry")):
+            robots.append(ns)
+    return robots
+
+
+def discovered(catalog: Catalog) -> list[FleetRobot]:
+    return [FleetRobot(name=ns.lstrip("/"), namespace=ns) for ns in namespaces(catalog)]

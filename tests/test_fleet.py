@@ -1,0 +1,119 @@
+"""A fleet on one ROS 2 domain, a robot per namespace: two TurtleBot3 programs under /tb3_1 and
+/tb3_2, found with --fleet auto or listed in the settings, each addressed by --robot-name, and
+`astiop estop --all` stopping both at once (each one's Nav2 goal cancelled)."""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from astiop.config import ConfigError, load_settings
+from astiop.robot.fleet import FleetError, namespaces, robot_settings
+from tests.ros import SimNode, require_ros, ros_client
+
+pytestmark = [pytest.mark.slow, pytest.mark.ros]
+TB3 = ("--robot", "turtlebot3", "--model", "burger", "--distro", "jazzy")
+
+
+def test_a_robot_of_the_fleet_is_its_namespace_and_profile(tmp_path):
+    fleet = {"robots": [{"name": "left", "namespace": "/tb3_1"},
+                        {"name": "right", "namespace": "/tb3_2", "profile": "turtlebot3_waffle"}]}  # fmt: skip
+    settings = load_settings({"fleet": fleet}, env={}, path=tmp_path / "none.toml")
+    right = robot_settings(settings, "right")
+    assert right.robot.namespace == "/tb3_2" and right.robot.profile == "turtlebot3_waffle"
+    assert robot_settings(settings, "left").robot.profile == "auto"
+    with pytest.raises(FleetError, match="no robot named 'middle' .*left, right"):
+        robot_settings(settings, "middle")
+    auto = load_settings({"fleet": {"discover": "auto"}}, env={}, path=tmp_path / "none.toml")
+    assert robot_settings(auto, "tb3_7").robot.namespace == "/tb3_7"
+    with pytest.raises(ConfigError, match="two robots of the fleet have the namespace"):
+        load_settings(
+            {"fleet": {"robots": [{"name": "a", "namespace": "/x"}, {"name": "b", "namespace": "/x"}]}},
+            env={}, path=tmp_path / "none.toml",
+        )  # fmt: skip
+
+
+def test_robot_namespaces_are_those_with_a_velocity_command_and_a_pose():
+    from tests.test_profile import tb3_graph
+
+    one, two = tb3_graph("/tb3_1"), tb3_graph("/tb3_2")
+    one.topics.update(two.topics)
+    one.topics["/amcl/transition_event"] = one.topics["/tb3_1/odom"]  # a Nav2 node's, no robot
+    assert namespaces(one) == ["/tb3_1", "/tb3_2"]
+
+
+@contextlib.contextmanager
+def two_robots():
+    from tests.ros import quiet_domain
+
+    quiet_domain()
+    nodes = [SimNode(seed=i, speed=4.0, robot_args=(*TB3, "--namespace", f"/tb3_{i}"))
+             for i in (1, 2)]  # fmt: skip
+    try:
+        for node in nodes:
+            node.wait_ready()
+        yield nodes
+    finally:
+        for node in nodes:
+            node.stop()
+
+
+def astiop(db: Path, *args: str, timeout: float = 120) -> subprocess.CompletedProcess:
+    cli = [sys.executable, "-m", "astiop", "--db", str(db), "--robot", "ros2"]
+    cli += ["--ros2-transport", "rclpy"]
+    return subprocess.run([*cli, *args], capture_output=True, text=True, timeout=timeout)
+
+
+def test_two_turtlebot3s_are_found_read_addressed_and_stopped_at_once(tmp_path):
+    require_ros()
+    from action_msgs.msg import GoalStatus
+    from nav2_msgs.action import NavigateToPose
+    from rclpy.action import ActionClient
+
+    db = tmp_path / "fleet.db"
+    with two_robots(), ros_client("someone_else") as client:
+        out = astiop(db, "--fleet", "auto", "fleet", "list", "--json")
+        assert out.returncode == 0, out.stderr[-2000:]
+        rows = {r["name"]: r for r in json.loads(out.stdout)}
+        assert set(rows) == {"tb3_1", "tb3_2"}, rows
+        for name, row in rows.items():
+            assert row["namespace"] == "/" + name and row["make"] == "turtlebot3_burger", row
+            assert row["state"] == "idle" and 1.0 < row["battery_percent"] <= 100.0, row
+            assert abs(row["x_m"] - 4.0) < 0.1 and abs(row["y_m"] - 4.0) < 0.1, row
+
+        out = astiop(db, "--fleet", "auto", "--robot-name", "tb3_2", "robot", "profile", "--json")
+        assert out.returncode == 0, out.stderr[-2000:]
+        assert json.loads(out.stdout)["roles"]["navigation"]["name"] == "/tb3_2/navigate_to_pose"
+
+        # a goal on each, another client's: --all cancels both, each through its own names
+        handles = []
+        for ns in ("/tb3_1", "/tb3_2"):
+            action = ActionClient(client.node, NavigateToPose, f"{ns}/navigate_to_pose")
+            assert action.wait_for_server(timeout_sec=15)
+            goal = NavigateToPose.Goal()
+            goal.pose.header.frame_id = "map"
+            goal.pose.pose.position.x, goal.pose.pose.position.y = 30.0, 4.0
+            goal.pose.pose.orientation.w = 1.0
+            handles.append(client.result(action.send_goal_async(goal)))
+        assert all(h.accepted for h in handles)
+        pressed = time.monotonic()
+        out = astiop(db, "--fleet", "auto", "estop", "--all")
+        took = time.monotonic() - pressed
+        assert out.returncode == 0, out.stdout + out.stderr[-2000:]
+        assert "tb3_1: E-STOP engaged" in out.stdout and "tb3_2: E-STOP engaged" in out.stdout
+        for handle in handles:
+            done = client.result(handle.get_result_async(), 20)
+            assert done.status == GoalStatus.STATUS_CANCELED, (done.status, took)
+        # latched for every process on the database: one robot's command is refused
+        out = astiop(db, "--fleet", "auto", "--robot-name", "tb3_1", "exec",
+                     "ros2 topic pub --once /tb3_1/cmd_vel geometry_msgs/msg/TwistStamped "
+                     "'{twist: {linear: {x: 0.1}}}'", "--yes")  # fmt: skip
+        assert out.returncode != 0 and "E-STOP" in out.stdout + out.stderr, out
+        out = astiop(db, "--fleet", "auto", "estop", "--release", "--all", "--yes")
+        assert out.returncode == 0 and "released: tb3_1, tb3_2" in out.stdout, out
