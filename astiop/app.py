@@ -126,6 +126,8 @@ class AstiopApp(App):
         from astiop.agent.warm import warm
 
         s = self.services
+        if s.gateway.playback is not None:
+            return  # a replay asks no model until asked
         try:
             took = await warm(s.endpoint, s.gateway, s.store, s.settings.llm.mode)
         except Exception as exc:  # noqa: BLE001 - the first question says what is wrong

@@ -117,3 +117,13 @@ def test_two_turtlebot3s_are_found_read_addressed_and_stopped_at_once(tmp_path):
         assert out.returncode != 0 and "E-STOP" in out.stdout + out.stderr, out
         out = astiop(db, "--fleet", "auto", "estop", "--release", "--all", "--yes")
         assert out.returncode == 0 and "released: tb3_1, tb3_2" in out.stdout, out
+
+
+def test_a_bad_robot_name_and_a_release_of_one_robot_are_said_in_one_line(tmp_path):
+    db = tmp_path / "f.db"
+    out = astiop(db, "--fleet", "auto", "--robot-name", "a/b", "robot", "profile")
+    assert out.returncode == 2 and "'a/b' is no robot name" in out.stderr, out.stderr
+    out = astiop(db, "--fleet", "auto", "--robot-name", "tb3_1", "estop", "--release", "--yes")
+    assert out.returncode == 2 and "release it with --release --all" in out.stderr, out.stderr
+    out = astiop(db, "--fleet", "auto", "--robot-name", "tb3_1", "estop", "--all")
+    assert out.returncode == 2 and "leave out --robot-name" in out.stderr, out.stderr

@@ -18,6 +18,7 @@ ROS = (
     "astiop.sim_robots.ros2_common",
     "astiop.sim_robots.turtlebot3.node",
     "astiop.sim_robots.turtlebot3.navigator",
+    "astiop.sim_robots.emulated_cli.dds",  # the emulated ros2 over DDS: dds, dds_calls, ...
 )
 ROS_FREE = ("astiop.robot.backends.rclpy.available",)
 

@@ -248,7 +248,9 @@ def test_a_place_the_robots_map_does_not_hold_is_said_so_not_guessed(tmp_path):
 
     answer = said("go to shipping")
     assert answer.startswith("There is no place named 'shipping' on this robot's map")
-    assert "(turtlebot3_burger); its places: bench." in answer
+    assert (
+        "(turtlebot3_burger); its places: bench (other maps hold places too: warehouse)." in answer
+    )
     assert said("drive to the loading bay.").count("'loading bay'") == 1
     assert said("go to bench") is None and said("go to x 1.0 y 0.5") is None
     # the ASTIbot looks names up itself (/goto_position by name): the robot answers
@@ -347,3 +349,37 @@ def test_a_robot_that_takes_goals_on_a_topic_is_sent_them_there_and_fenced():
     assert "outside the geofence" in fence.review(far, False).reason
     odom = validate(goal.replace("frame_id: map", "frame_id: odom"), catalog)
     assert "map frame" in fence.review(odom, False).reason
+
+
+def test_a_pose_told_to_the_localiser_is_never_a_stop_and_is_fenced():
+    """amcl's /initialpose (a PoseWithCovarianceStamped with no twist): not taken for a stop by
+    the intent gate, and fenced and held to the map frame like a goal; with no geofence known,
+    every goal is refused."""
+    from astiop.agent.gate import action_of, check
+    from astiop.agent.intent import Intent
+    from astiop.robot.safety import SafetyPolicy
+    from astiop.ros2.catalog import TopicSpec
+    from astiop.ros2.validation import validate
+
+    catalog = tb3_graph()
+    catalog.topics["/initialpose"] = TopicSpec(
+        "/initialpose", "geometry_msgs/msg/PoseWithCovarianceStamped", 0, "", subscriber="amcl"
+    )
+    far = validate(
+        "ros2 topic pub --once /initialpose geometry_msgs/msg/PoseWithCovarianceStamped "
+        '"{header: {frame_id: map}, pose: {pose: {position: {x: 30.0, y: 1.0}, '
+        'orientation: {w: 1.0}}}}"',
+        catalog,
+    )
+    assert far.valid and action_of(far).kind == "configure"
+    assert check([Intent("stop")], [(far.text, action_of(far))], {}) is not None
+    fence = SafetyPolicy(geofence=(0.0, 0.0, 10.0, 10.0))
+    assert "outside the geofence" in fence.review(far, False).reason
+    goal = validate(
+        "ros2 action send_goal /navigate_to_pose nav2_msgs/action/NavigateToPose "
+        '"{pose: {header: {frame_id: map}, pose: {position: {x: 1.0, y: 1.0}}}}"',
+        catalog,
+    )
+    assert fence.review(goal, False).allowed
+    unknown = SafetyPolicy(geofence=None).review(goal, False)
+    assert not unknown.allowed and "no geofence is known" in unknown.reason

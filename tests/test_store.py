@@ -94,6 +94,21 @@ def test_places_belong_to_a_map(tmp_path):
     assert {loc.name for loc in again.list_locations()} == SEEDED
 
 
+def test_a_place_saved_on_the_wrong_map_is_moved(store):
+    store.move_location("shipping", "turtlebot3_burger")
+    assert store.get_location("shipping") is None
+    with pytest.raises(LocationError, match="on the map warehouse"):
+        store.move_location("shipping", "x")
+    store.use_map("turtlebot3_burger", None)
+    assert store.get_location("shipping").x == pytest.approx(37.6)
+    store.add_location("dock", 1.0, 1.0)
+    store.use_map("warehouse", None)
+    store.add_location("dock", 2.0, 2.0)
+    with pytest.raises(LocationError, match="has a place named 'dock' already"):
+        store.move_location("dock", "turtlebot3_burger")
+    assert store.get_location("dock").x == 2.0  # left where it was
+
+
 def test_rename_and_remove(store):
     store.rename_location("shipping", "Shipping_Bay")
     assert store.get_location("shipping_bay").name == "Shipping_Bay"

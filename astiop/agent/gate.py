@@ -11,6 +11,7 @@ import math
 from dataclasses import dataclass
 
 from astiop.agent.intent import SERVICE_FOR, Intent
+from astiop.robot.safety import POSE_STAMPED, VELOCITY_TYPES
 from astiop.ros2.validation import CANCEL_SUFFIX, Checked
 
 PLACE_TOLERANCE_M = 0.3
@@ -44,9 +45,11 @@ def action_of(checked: Checked) -> Action:
     if not checked.valid or cmd is None:
         return Action("invalid")
     msg = checked.message or {}
-    if cmd.key == ("topic", "pub") and checked.type == "geometry_msgs/msg/PoseStamped":
+    if cmd.key == ("topic", "pub") and checked.type == POSE_STAMPED:
         p = msg.get("pose", {}).get("position", {})  # a goal on a navigator's /goal_pose
         return Action("navigate", xy=(float(p.get("x", 0.0)), float(p.get("y", 0.0))))
+    if cmd.key == ("topic", "pub") and checked.type not in VELOCITY_TYPES:
+        return Action("configure")  # e.g. amcl's /initialpose: never taken for a stop
     if cmd.key == ("topic", "pub"):
         twist = msg.get("twist", msg)
         lin, ang = twist.get("linear", {}), twist.get("angular", {})

@@ -38,10 +38,12 @@ def unknown_place(request: str, intents: list[Intent], profile: Any, store: Any)
     if m is None:
         return None
     known = ", ".join(loc.name for loc in store.list_locations()) or "none yet"
+    others = ", ".join(sorted(store.other_maps()))
+    elsewhere = f" (other maps hold places too: {others})" if others else ""
     return (
         f"There is no place named '{m.group(1).strip()}' on this robot's map "
-        f"({store.map_name}); its places: {known}. Say 'save this spot as NAME' where the "
-        "robot stands, or give coordinates (go to x 1.0 y 0.5)."
+        f"({store.map_name}); its places: {known}{elsewhere}. Say 'save this spot as NAME' "
+        "where the robot stands, or give coordinates (go to x 1.0 y 0.5)."
     )
 
 

@@ -16,9 +16,9 @@ from astiop.bench.case_turn import case_agent, scored
 from astiop.bench.on_robot import on_robot
 from astiop.config import Settings
 from astiop.robot.gateway import RobotGateway
+from astiop.ros2.profile import TRIGGER
 
 GOAL_WAIT_S = 600.0
-TRIGGER = "std_srvs/srv/Trigger"
 CONVEYOR_WAIT_S = 10.0
 _live: dict[int, RobotGateway] = {}
 _lock = threading.Lock()
@@ -33,6 +33,7 @@ def live_gateway(settings: Settings, store) -> RobotGateway:
         if gw is None:
             gw = make_robot_gateway(settings, store, who="bench")
             gw.start()
+            gw.settled_profile(settings.robot.ros2_timeout_s)  # its roles, read whole
             _live[id(store)] = gw
         return gw
 

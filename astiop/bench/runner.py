@@ -176,9 +176,11 @@ async def run(
     finished = 0
     status = "interrupted"
     with tempfile.TemporaryDirectory(prefix="astiop-bench-") as tmp:
-        # the cases' world: named locations seeded from data/, never the operator's tables
+        # the cases' world: on the simulator, the named locations seeded from data/ (never the
+        # operator's tables); on a live robot, the operator's places of its map (copied: the
+        # run never changes them)
         world = Store(Path(tmp) / "world.db")
-        if config.robot == "ros2":  # a live robot's places are the operator's, on its map
+        if config.robot == "ros2":
             world.copy_locations_from(store)
         try:
             finished = await _run_todo(

@@ -147,6 +147,7 @@ def estop_all(st) -> None:
 
     settings = st.fleet_settings
     store = st.store
+    store.latch_estop("estop --all")  # first: held even if no robot is found or reached
     results: dict[str, object] = {}
     threads: list[threading.Thread] = []
 
@@ -169,7 +170,6 @@ def estop_all(st) -> None:
     robots = members(st, stop_now)
     for thread in threads:
         thread.join()
-    store.latch_estop("estop --all")  # held even where a robot was not reached
     failed = False
     for robot in robots:
         got = results[robot.name]

@@ -16,9 +16,9 @@ app = typer.Typer(
 
 
 def robots_map(settings) -> tuple[str, tuple[float, float, float, float] | None]:
-    """The map the settings' robot is on, without connecting to it: the simulator's warehouse,
-    else what its profile (file or shipped) says, else its make's name."""
-    from astiop.robot.factory import profile_spec
+    """The map the settings' robot is on: the simulator's warehouse, else what its profile
+    (file or shipped) says, else its profile as read on its graph (the robot reached)."""
+    from astiop.robot.factory import make_robot_gateway, profile_spec
     from astiop.ros2.profile_file import shipped
     from astiop.warehouse import default_map
 
@@ -27,10 +27,17 @@ def robots_map(settings) -> tuple[str, tuple[float, float, float, float] | None]
     spec = profile_spec(settings)
     base = shipped(spec.make)
     where = spec.map.over(base.map) if base is not None else spec.map
-    name = where.name or spec.make or "warehouse"
-    if name == "warehouse" and where.geofence is None:
-        return name, default_map().bounds
-    return name, where.geofence
+    if where.name or spec.make:
+        name = where.name or spec.make
+        fence = where.geofence or (default_map().bounds if name == "warehouse" else None)
+        return name, fence
+    gateway = make_robot_gateway(settings, None, who="locations")  # its make, from its graph
+    try:
+        profile = gateway.settled_profile(settings.robot.ros2_timeout_s)
+        gateway.use_map()
+        return profile.map_name, gateway.safety.geofence
+    finally:
+        gateway.close()
 
 
 @app.callback()
@@ -46,12 +53,13 @@ def on_map(
     from astiop.robot.backend import BackendError
 
     st = state(ctx)
+    if map_name:  # said: no robot need be reached
+        st.store.use_map(map_name, None)
+        return
     try:
         name, fence = robots_map(st.settings)
     except BackendError as exc:
-        fail(str(exc))
-    if map_name and map_name != name:
-        name, fence = map_name, None
+        fail(f"the robot's map is not known ({exc}): name it with --map NAME")
     st.store.use_map(name, fence)
 
 
@@ -114,6 +122,24 @@ def add(
     except LocationError as exc:
         fail(str(exc))
     typer.echo(f"added {loc.name} at ({loc.x:.2f}, {loc.y:.2f}, {math.degrees(loc.theta):.1f}°)")
+
+
+@app.command("move")
+def move(
+    ctx: typer.Context,
+    name: str,
+    to_map: str = typer.Option(..., "--to-map", help="The map it belongs to."),
+) -> None:
+    """Move a location to another map (one saved on the wrong robot's map)."""
+    from astiop.store import LocationError  # sqlite-utils: imported by the command that needs it
+
+    store = state(ctx).store
+    here = store.map_name
+    try:
+        loc = store.move_location(name, to_map)
+    except LocationError as exc:
+        fail(str(exc))
+    typer.echo(f"moved {loc.name} from the map {here} to {to_map}")
 
 
 @app.command("rename")

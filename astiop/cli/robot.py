@@ -134,6 +134,11 @@ def estop(
 
         release_all(st, yes)
         return
+    if release and st.robot_name is not None:
+        fail(
+            "the E-STOP is latched for every robot on this database (a latch per robot is "
+            "not built yet): release it with --release --all"
+        )
     if release:
         latch = st.store.estop_latch()
         live = st.settings.robot.backend == "ros2"  # its own stop may hold it (a bare /stop)

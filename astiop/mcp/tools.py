@@ -196,13 +196,15 @@ class RobotTools(MissionTools):
         texts = plan_intents([Intent("stop")], profile)  # a Nav2 robot: its goals cancelled too
         if not texts:
             raise Refused("this robot has neither a stop service nor a velocity command")
-        outputs = []
-        for text in texts:
+        outputs, failed = [], []
+        for text in texts:  # each one, whatever happened to the one before
             ex = self.gateway.run(text, confirm=lambda _c: True)
             self._record(ex)
             if not ex.executed or ex.error:
-                raise Refused(f"stop failed: {ex.reason or ex.error}")
+                failed.append(ex.reason or ex.error)
             outputs.append(ex.output)
+        if failed:
+            raise Refused(f"stop failed: {'; '.join(failed)}")
         if profile.has("stop"):
             said = "stop sent: motion stopped and any goal canceled (commanded)"
         elif len(texts) > 1:

@@ -24,7 +24,12 @@ def robot_settings(settings: Settings, name: str) -> Settings:
     """The settings of the fleet's robot `name`."""
     found = next((r for r in settings.fleet.robots if r.name == name), None)
     if found is None and settings.fleet.discover == "auto":
-        found = FleetRobot(name=name, namespace="/" + name)
+        try:
+            found = FleetRobot(name=name, namespace="/" + name)
+        except ValueError:  # pydantic's ValidationError
+            raise FleetError(
+                f"'{name}' is no robot name: 1-64 letters, digits, '_' or '-'"
+            ) from None
     if found is None:
         known = ", ".join(r.name for r in settings.fleet.robots) or "none"
         raise FleetError(

@@ -6,6 +6,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
+from astiop.ros2.render import POSE_STAMPED  # a goal on a navigator's goal topic
 from astiop.ros2.validation import CANCEL_SUFFIX, Checked
 from astiop.warehouse import GEOFENCE_MARGIN, fence_text, inside_fence
 
@@ -14,7 +15,7 @@ from astiop.warehouse import GEOFENCE_MARGIN, fence_text, inside_fence
 ALWAYS_ALLOWED = {"stop"}
 # A velocity command is clamped by its type, whatever the topic (a namespace's /tb3_1/cmd_vel)
 VELOCITY_TYPES = {"geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped"}
-POSE_STAMPED = "geometry_msgs/msg/PoseStamped"  # a goal on a navigator's goal topic
+POSE_WITH_COVARIANCE = "geometry_msgs/msg/PoseWithCovarianceStamped"
 # |q| may differ from 1 by this much (a heading printed to a few digits still passes)
 UNIT_QUATERNION_TOLERANCE = 1e-3
 
@@ -41,7 +42,8 @@ class Review:
 class SafetyPolicy:
     max_linear: float = 0.8
     max_angular: float = 1.0
-    # None until known (the profile's [map] geofence, else the robot's map: RobotGateway.use_map)
+    # make_safety gives the profile's [map] geofence, else None until the robot's map is read
+    # (RobotGateway.use_map): None refuses every goal; the default is the warehouse's
     geofence: tuple[float, float, float, float] | None = (0.0, 0.0, 40.0, 25.0)
     geofence_margin: float = GEOFENCE_MARGIN
     confirm_actuation: bool = True
@@ -97,6 +99,11 @@ class SafetyPolicy:
             why = self._goal_refusal(msg["pose"] if cmd.key[0] == "action" else msg)
             if why:
                 return Review(False, why, checked, False)
+        elif cmd.key == ("topic", "pub") and checked.type == POSE_WITH_COVARIANCE:
+            # where the robot is told it is (amcl's /initialpose): on the map, inside the fence
+            why = self._goal_refusal({"header": msg["header"], "pose": msg["pose"]["pose"]})
+            if why:
+                return Review(False, why.replace("goal", "pose"), checked, False)
         elif cmd.key == ("param", "set") and cmd.args.get("param") in (
             "max_linear_speed",
             "max_angular_speed",

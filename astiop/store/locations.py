@@ -119,6 +119,26 @@ class LocationTables:
             )
         return Location(new, loc.x, loc.y, loc.theta, loc.description)
 
+    def move_location(self, name: str, to_map: str) -> Location:
+        """A place of this map moved to another (one saved on the wrong map)."""
+        loc = self.require_location(name)
+        if not to_map or to_map == self.map_name:
+            raise LocationError(f"'{loc.name}' is on the map {self.map_name} already")
+        here = self.map_name
+        try:
+            self.map_name = to_map  # its name must be free there
+            if self.get_location(loc.name) is not None:
+                raise LocationError(f"the map {to_map} has a place named '{loc.name}' already")
+        finally:
+            self.map_name = here
+        with self._tx():
+            self.db.conn.execute(
+                "UPDATE locations SET map = ?, updated_at = ? "
+                "WHERE map = ? AND name = ? COLLATE NOCASE",
+                [to_map, time.time(), here, loc.name],
+            )
+        return loc
+
     def remove_location(self, name: str) -> Location:
         loc = self.require_location(name)
         with self._tx():

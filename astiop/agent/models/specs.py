@@ -3,6 +3,7 @@ dmr:NAME (Docker Model Runner's default local endpoint)."""
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -97,6 +98,7 @@ class LLMEndpoint:
         self.timeout_s = timeout_s
         self.server: EmbeddedServer | None = None
         self._client: ChatClient | None = None
+        self._lock = threading.Lock()  # the console's warm-up and its first question at once
 
     @property
     def is_rules(self) -> bool:
@@ -115,6 +117,10 @@ class LLMEndpoint:
 
     def client(self) -> ChatClient:
         """The chat client; starts the embedded server on first use (about half a second)."""
+        with self._lock:
+            return self._client_locked()
+
+    def _client_locked(self) -> ChatClient:
         if self._client is None:
             from astiop.agent.models.llm import OllamaClient, OpenAIClient  # after `launch`: httpx
 

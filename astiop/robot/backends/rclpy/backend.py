@@ -42,6 +42,7 @@ from astiop.ros2.grammar import current_distro
 from astiop.ros2.message_objects import interface_class, to_dict, to_message
 from astiop.ros2.profile import ProfileSpec
 from astiop.ros2.render import velocity_message, zero_twist
+from astiop.ros2.validation import CANCEL_SUFFIX
 
 GRAPH_POLL_S = 1.0
 DISCOVERY_S = 3.0  # at most this long for a new process's discovery to settle
@@ -475,7 +476,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
     def _cancel_every_goal(self, action: str) -> None:
         """A CancelGoal with a zero goal id and a zero stamp cancels every goal of the action
         server (ros2/rcl_interfaces action_msgs/srv/CancelGoal.srv, humble and jazzy)."""
-        name, what = f"{action}/_action/cancel_goal", "E-STOP cancel"
+        name, what = f"{action}{CANCEL_SUFFIX}", "E-STOP cancel"
         if action in self.catalog.actions:
             self._calls.call(name, CANCEL_GOAL, what)
         else:  # not on the graph this process holds (yet)

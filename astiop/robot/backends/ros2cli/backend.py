@@ -57,16 +57,22 @@ from astiop.ros2.printing import echo_text
 from astiop.ros2.profile import ProfileSpec
 from astiop.ros2.render import STAMPED, flow_yaml, sent_argv
 from astiop.ros2.transforms import STALE_S, TransformTable
-from astiop.ros2.validation import Checked
+from astiop.ros2.validation import CANCEL_SUFFIX, Checked
 
 ARRAYS = {"/scan", "/plan", "/obstacles"}  # echoed in full: ros2 truncates at 128 items
 GRAPH_REFRESH_S = 30.0
 ZERO_PUB_S = 1.0  # an E-STOP's ten zero Twists at 10 Hz: a second on top of the start-up
+NO_GOAL_AFTER_S = 5.0  # a latched goal status echoed this long and none came: no goal yet
 
 
 def _waited_for_service(out: str) -> bool:
     """`ros2 service call` found no server of its type (ros2service/verb/call.py waits)."""
     return "waiting for service" in out and "response:" not in out
+
+
+def _unsent(out: str) -> bool:
+    """A `ros2 service call` still waiting for its server: it sent no request yet."""
+    return "requester:" not in out
 
 
 def _zero_burst(name: str, type_: str) -> list[str]:
@@ -105,6 +111,7 @@ class Ros2Backend(RobotBackend):
         self._latest: dict[str, dict[str, Any]] = {}
         self._received: dict[str, float] = {}  # on the robot clock: s since t0
         self._streams: dict[str, TopicStream] = {}
+        self._goal_stream_at: float | None = None  # when the goal status echo started
         self._transforms: dict[str, TransformTable] = {}  # /tf, /tf_static: fed by one stream each
         self._goal_procs: list[Any] = []
         self._last_outcome: str | None = None
@@ -176,6 +183,7 @@ class Ros2Backend(RobotBackend):
             self._streams[goals] = TopicStream(
                 self.executable, goals, GOAL_STATUS, self._on_message, self.events.add
             ).start()
+            self._goal_stream_at = time.monotonic()
         if self._name("map"):
             threading.Thread(target=self._read_map, name="ros2-map", daemon=True).start()
         threading.Thread(target=self._refresh_loop, name="ros2-graph", daemon=True).start()
@@ -214,8 +222,12 @@ class Ros2Backend(RobotBackend):
         seq = self.events.seq
         profile = self.catalog.profile
         goals = goal_status_topic(profile)
-        if goals in self._streams and goals not in messages:
-            messages[goals] = {"status_list": []}  # its server was listed and had no goal
+        # the status is latched (rcl_action): an echo running this long without one means its
+        # server has had no goal; before that (a `ros2` starting up) the state is not known
+        since = self._goal_stream_at
+        waited = since is not None and time.monotonic() - since > NO_GOAL_AFTER_S
+        if goals in self._streams and goals not in messages and waited:
+            messages[goals] = {"status_list": []}
         messages = without_finished_plan(messages, profile)
         now = time.monotonic()
         state = from_messages(
@@ -318,15 +330,19 @@ class Ros2Backend(RobotBackend):
             # no stop service (a TurtleBot3 under Nav2): every navigation goal on the robot
             # cancelled, another client's too (action_msgs/srv/CancelGoal: a zero id and stamp
             # cancel all, ros2/rcl_interfaces humble and jazzy)
-            for action in navigation_actions(self.catalog, self._fixed.namespace):
-                call = ["service", "call", f"{action}/_action/cancel_goal", CANCEL_GOAL, "{}"]
+            actions = navigation_actions(self.catalog, self._fixed.namespace)
+            for action in actions:
+                call = ["service", "call", f"{action}{CANCEL_SUFFIX}", CANCEL_GOAL, "{}"]
                 self._background(lambda call=call: call, f"cancel every {action} goal")
-            self.events.add(  # how such a robot stops: said, not failed (as through rclpy)
-                "estop",
-                "info",
-                f"the robot has no stop service ({self._fixed.namespace}/stop): "
-                "its navigation goals were cancelled instead",
-            )
+            if actions:  # how such a robot stops: said, not failed (as through rclpy)
+                self.events.add(
+                    "estop",
+                    "info",
+                    f"the robot has no stop service ({self._fixed.namespace}/stop): "
+                    f"every goal of {', '.join(actions)} is being cancelled instead",
+                )
+            else:
+                failures.append("the robot has neither a stop service nor a navigation action")
         self._estop.said(failures)
         return failures
 
@@ -364,7 +380,6 @@ class Ros2Backend(RobotBackend):
             self._fixed.namespace,
             self.timeout_s,
             lambda argv, what: self._background(lambda: argv, what),
-            lambda said: self.events.add("estop", "info", said),
             answered,
         )
 
@@ -382,14 +397,19 @@ class Ros2Backend(RobotBackend):
 
         def go() -> None:
             try:
-                run = self._run(argv_of(), self.timeout_s + extra_s, cancel=absent)
+                # ended as absent only while it still waits for its server: a request already
+                # sent (a slow but real /stop) runs to its answer
+                run = self._run(
+                    argv_of(), self.timeout_s + extra_s, cancel=absent, cancellable=_unsent
+                )
             except BackendError as exc:
                 self.events.add("estop", "error", f"E-STOP {what}: {exc}")
                 return
             finally:
                 if finished is not None:
                     finished.set()
-            if absent is not None and absent.is_set():
+            if absent is not None and absent.is_set() and run.stopped and _unsent(run.out):
+                self.events.add("estop", "info", f"E-STOP: the robot serves no {what}")
                 return
             if run.returncode != 0 or run.stopped:
                 why = run.err.strip()[-200:] or ("timed out" if run.stopped else "failed")

@@ -4,8 +4,9 @@
 robot shows. Every goal of its NavigateToPose server is cancelled once listed. A listing cannot
 say whether /stop is served: rmw lists a service by its clients too, and the /stop call's own
 client is one. So a robot listed while the /stop call still waits, ABSENT_S on, has none (a
-TurtleBot3 under Nav2): that call is ended and that is said, not failed, as the rclpy transport
-does it (rclpy/empty_calls.py; the CLI's call pays its start-up and a discovery of its own)."""
+TurtleBot3 under Nav2): that call is ended, if it still waits for its server (a request sent is
+a slow but real /stop: it runs to its answer), and that is said, not failed, as the rclpy
+transport does it (rclpy/empty_calls.py; the CLI's call pays its start-up and a discovery)."""
 
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ import time
 from collections.abc import Callable
 
 from astiop.robot.backends.live_catalog import CANCEL_GOAL, NAVIGATE
+from astiop.ros2.validation import CANCEL_SUFFIX
 
 ABSENT_S = 3.0  # a robot listed this long while /stop is not answered has none
 _LISTED = re.compile(r"^(?P<name>/\S*)\s+\[(?P<type>[^\]]+)\]\s*$")
@@ -27,15 +29,13 @@ class StopProbe:
         namespace: str,
         timeout_s: float,
         call: Callable[[list[str], str], None],  # a background `ros2` call of the E-STOP's
-        said: Callable[[str], None],  # an info event
         stop_answered: threading.Event,  # the /stop call ended
     ):
         self.run = run
         self.stop = namespace + "/stop"
-        self.cancel = namespace + NAVIGATE + "/_action/cancel_goal"
+        self.cancel = namespace + NAVIGATE + CANCEL_SUFFIX
         self.timeout_s = timeout_s
         self.call = call
-        self.said = said
         self.stop_answered = stop_answered
         self.stop_absent = threading.Event()  # set: the pending /stop call is ended
 
@@ -63,8 +63,7 @@ class StopProbe:
             if self.cancel in services:
                 seen = seen or now
                 if now - seen > ABSENT_S and cancelled:
-                    self.stop_absent.set()
-                    self.said(f"E-STOP: the robot serves no {self.stop}")
+                    self.stop_absent.set()  # said by the call, if it ended still waiting
                     return
             if now > deadline:
                 return  # the /stop call says why it failed

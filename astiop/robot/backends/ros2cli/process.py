@@ -111,9 +111,11 @@ def run(
     grace_s: float = 3.0,
     job: Job | None = None,
     cancel: threading.Event | None = None,
+    cancellable: Callable[[str], bool] | None = None,
 ) -> Run:
     """Run to completion within `timeout`, or stop it there, or as soon as `until(stdout)` or
-    `cancel` is set; as part of `job`, the E-STOP kills it.
+    `cancel` is set (while `cancellable(stdout)` holds, if given); as part of `job`, the E-STOP
+    kills it.
 
     The output printed before a stop is kept.
     """
@@ -134,7 +136,10 @@ def run(
     deadline = time.monotonic() + timeout
     try:
         while proc.poll() is None and not done.is_set():
-            if time.monotonic() >= deadline or (cancel is not None and cancel.is_set()):
+            cancelled = cancel is not None and cancel.is_set()
+            if cancelled and cancellable is not None and not cancellable(result.out):
+                cancelled = False  # e.g. a request already sent: it runs to its answer
+            if time.monotonic() >= deadline or cancelled:
                 break
             done.wait(0.02)
         if proc.poll() is None:
