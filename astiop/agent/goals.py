@@ -14,8 +14,9 @@ import time
 from astiop.robot.backend import Execution
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.state import LOST
+from astiop.ros2.render import POSE_STAMPED
 
-NAVIGATING = ("/goto_position", "/dock", "/undock", "send_goal")
+NAVIGATING = ("/goto_position", "/dock", "/undock", "send_goal", POSE_STAMPED)
 MOVING = ("navigating", "docking", "undocking", "blocked")
 ARRIVED_M = 0.3
 STATUS_LAG_S = 2.0  # a status stream may still say idle this long after a goal starts
@@ -26,6 +27,8 @@ def started(ex: Execution) -> bool:
     """Whether the command started a goal the robot is now driving to."""
     if not ex.executed or ex.error or not any(k in ex.command for k in NAVIGATING):
         return False
+    if POSE_STAMPED in ex.command:  # a goal published on a navigator's /goal_pose: sent
+        return True
     v = ex.values if isinstance(ex.values, dict) else {}
     return bool(v.get("success") or v.get("accepted"))
 
