@@ -256,6 +256,13 @@ def test_a_turtlebot3_under_a_namespace_is_found_and_stopped_there(tmp_path):
         assert profile["roles"]["battery"]["name"] == "/tb3_1/battery_state"
         assert profile["roles"]["velocity_command"]["name"] == "/tb3_1/cmd_vel"
         assert profile["roles"]["navigation"]["name"] == "/tb3_1/navigate_to_pose"
+        # a one-shot command reads the robot's /map for the geofence (its watch never started)
+        far = ("ros2 action send_goal /tb3_1/navigate_to_pose nav2_msgs/action/NavigateToPose "
+               "'{pose: {header: {frame_id: map}, pose: {position: {x: 60.0, y: 4.0}}}}'")  # fmt: skip
+        out = subprocess.run([*cli, "exec", far, "--yes"], capture_output=True, text=True)
+        assert (
+            out.returncode != 0 and "outside the geofence (x 0.5..39.5" in out.stdout + out.stderr
+        )
         out = subprocess.run([*cli, "estop"], capture_output=True, text=True, timeout=60)
         assert out.returncode == 0, out.stdout + out.stderr
         assert "no /cmd_vel" not in out.stderr

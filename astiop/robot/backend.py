@@ -170,3 +170,8 @@ class RobotBackend(ABC):
 
     @abstractmethod
     def map_geometry(self) -> MapGeometry: ...
+
+    def read_map(self, timeout_s: float) -> MapGeometry:
+        """The robot's map, read now if it has not been (a one-shot command never started the
+        watch that reads it): a goal's geofence may be its extent."""
+        return self.map_geometry()

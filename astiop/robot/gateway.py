@@ -223,8 +223,11 @@ class RobotGateway:
         checked = validate(text, self.catalog)
         if not checked.valid and checked.reason.startswith("there is no") and self._refresh():
             checked = validate(text, self.catalog)  # it may have appeared since the last read
-        if self.safety.geofence is None:
+        if self.safety.geofence is None and checked.valid and checked.kind == "actuate":
             self.use_map()  # the robot's /map may have come in since
+            if self.safety.geofence is None:  # a one-shot command: its map read now
+                self.backend.read_map(self.timeout_s)
+                self.use_map()
         return self.safety.review(checked, self.e_stopped)
 
     def serves(self, name: str, timeout_s: float) -> bool:

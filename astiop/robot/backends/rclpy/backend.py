@@ -280,6 +280,17 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
                     self._name("odometry")
                 )  # its velocity is worth its cost while the robot moves
 
+    def read_map(self, timeout_s: float):
+        name = self._name("map")
+        spec = self.catalog.topics.get(name) if name else None
+        with self._watch_lock:
+            if spec is not None and self._map_watch is None and not self._closed.is_set():
+                self._map_watch = watch(self.proc, name, spec.type, self._on_map)
+        deadline = time.monotonic() + timeout_s
+        while self._map is None and spec is not None and time.monotonic() < deadline:
+            time.sleep(0.05)  # latched: it comes with the subscription's first match
+        return self._map
+
     def _on_map(self, name: str, msg: Any) -> None:
         try:
             self._map = grid_from_message(to_dict(msg))

@@ -262,6 +262,11 @@ class Ros2Backend(RobotBackend):
     def map_geometry(self):
         return self._map
 
+    def read_map(self, timeout_s: float):
+        if self._map is None and self._name("map") in self.catalog.topics:
+            self._read_map()
+        return self._map
+
     def _read_map(self) -> None:
         name = self._name("map")
         spec = self.catalog.topics[name]
