@@ -6,6 +6,7 @@ from __future__ import annotations
 import contextlib
 import importlib
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -89,6 +90,23 @@ def whole_robot(gateway, timeout: float = 60.0) -> None:
     loaded machine discovery takes seconds, and a command meanwhile is refused as unknown."""
     assert gateway.serves("/undock", timeout), sorted(gateway.catalog.services)
     assert until(lambda: gateway.state().status is not None, timeout), "no /robot_status"
+
+
+def battery_answer_agrees(gateway, answer_of: Callable[[], str], topic: str = "/battery_state"):
+    """The battery figure an answer states lies between `ros2 topic echo`es taken just before and
+    just after it was asked (a simulated battery drains while the question is answered)."""
+
+    def echo() -> float:
+        return gateway.run(f"ros2 topic echo {topic} --once").values["percentage"]
+
+    before = echo()
+    answer = answer_of()
+    after = echo()
+    assert 1.0 < after <= 100.0  # the TurtleBot3's 0-100
+    said = re.search(r"battery (\d+\.\d) %", answer)
+    assert said, answer
+    low, high = min(before, after) - 0.05, max(before, after) + 0.05
+    assert low <= float(said[1]) <= high, (before, answer, after)
 
 
 @contextlib.contextmanager
