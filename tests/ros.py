@@ -49,11 +49,18 @@ def until(predicate: Callable[[], object], timeout: float, step: float = 0.05):
 class SimNode:
     """`astiop sim node` in a process of its own; stderr is kept for the failure report."""
 
-    def __init__(self, *, seed: int = 0, speed: float = 4.0, robot_args: tuple[str, ...] = ()):
+    def __init__(
+        self,
+        *,
+        seed: int = 0,
+        speed: float = 4.0,
+        robot_args: tuple[str, ...] = (),
+        env: dict | None = None,
+    ):
         argv = [sys.executable, "-m", "astiop", "sim", "node", "--seed", str(seed)]
         argv += ["--speed", str(speed), *robot_args]
         self.proc = subprocess.Popen(
-            argv, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True
+            argv, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True, env=env
         )
         self.lines: list[str] = []
         self.ready = threading.Event()

@@ -56,14 +56,15 @@ def action_of(checked: Checked) -> Action:
         v = (float(lin.get("x", 0.0)), float(lin.get("y", 0.0)), float(ang.get("z", 0.0)))
         return Action("stop" if not any(v) else "motion", twist=v)
     if cmd.key == ("service", "call"):
-        if cmd.name == "/goto_position":
+        name = checked.local_name or ""
+        if name == "/goto_position":
             if msg.get("name"):
                 return Action("navigate", place=str(msg["name"]))
             return Action("navigate", xy=(float(msg.get("x", 0.0)), float(msg.get("y", 0.0))))
-        if cmd.name == "/save_location":
+        if name == "/save_location":
             return Action("save", place=str(msg.get("name", "")))
-        kind = _SERVICE_KINDS.get(cmd.name or "")
-        if (cmd.name or "").endswith(CANCEL_SUFFIX):
+        kind = _SERVICE_KINDS.get(name)
+        if name.endswith(CANCEL_SUFFIX):
             kind = "stop"  # a Nav2 robot's goals cancelled: how it stops without a stop service
         if kind:
             return Action(kind)

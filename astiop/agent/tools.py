@@ -87,16 +87,23 @@ def build_tools(catalog: Catalog, locations: list[str]) -> list[Tool]:
     """The model's choices on this robot: its readings by role, its places, its services, its
     motions; in the names of its profile (the ASTIbot's own without one)."""
     profile = catalog.profile
+    ns = profile.namespace if profile else ""
+
+    def local(name: str) -> str:  # the ASTIbot's names, compared inside its namespace
+        return name[len(ns) :] if ns and name.startswith(ns + "/") else name
+
     role_of = {m.name: r for r, m in profile.matches.items() if m.name} if profile else {}
     skip = READABLE_EXCLUDED | {profile.name(r) for r in UNREADABLE_ROLES if profile} - {None}
     tools = [
         Tool(
-            ROLE_TOOLS.get(role_of.get(t.name, ""), TOPIC_TOOLS.get(t.name, t.name)),
+            ROLE_TOOLS.get(role_of.get(t.name, ""), TOPIC_TOOLS.get(local(t.name), t.name)),
             f"reads {t.name}",
             f"ros2 topic echo {t.name} --once",
         )
         for t in catalog.topics.values()
-        if t.name not in skip and (t.name in role_of or not profile or profile.make == "astibot")
+        if t.name not in skip
+        and local(t.name) not in skip
+        and (t.name in role_of or not profile or profile.make == "astibot")
     ]
     pose = profile.name("pose") if profile else "/robot_pose"
     if pose in catalog.topics:  # both words operators use for it
@@ -106,17 +113,18 @@ def build_tools(catalog: Catalog, locations: list[str]) -> list[Tool]:
         Tool(name, f"drives to {name}", goto_command(name), "navigate")
         for name in (locations if not action else [])
     ]
-    if "/goto_position" in catalog.services or action:
+    goto = profile.name("navigation") if profile else "/goto_position"
+    if goto in catalog.services or action:
         tools.append(Tool(COORDINATES, "drives to x, y in metres", None, "navigate", action or ""))
     tools += [
         Tool(
-            SERVICE_TOOLS.get(s.name, s.name),
+            SERVICE_TOOLS.get(local(s.name), s.name),
             f"calls {s.name}",
             f"ros2 service call {s.name} {TRIGGER}",
-            SERVICE_KINDS.get(s.name, "other"),
+            SERVICE_KINDS.get(local(s.name), "other"),
         )
         for s in catalog.services.values()
-        if s.type == TRIGGER and s.name not in OPERATOR_ONLY
+        if s.type == TRIGGER and local(s.name) not in OPERATOR_ONLY
     ]
     velocity = profile.name("velocity_command") if profile else "/cmd_vel"
     if velocity in catalog.topics:
@@ -130,9 +138,9 @@ def build_tools(catalog: Catalog, locations: list[str]) -> list[Tool]:
             for name, m in MOTION_TOOLS.items()
             if not m.vy or not action  # a Nav2 base (differential drive) does not strafe
         ]
-    if "/save_location" in catalog.services:
+    if ns + "/save_location" in catalog.services:
         tools.append(Tool(SAVE, "saves the robot's pose under a new name", None, "save"))
-    if "/list_locations" in catalog.services:
+    if ns + "/list_locations" in catalog.services:
         tools.append(
             Tool(
                 "locations",

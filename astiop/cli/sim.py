@@ -119,6 +119,8 @@ def goto(
 
 
 ROBOTS = ("astibot", "turtlebot3")
+MAX_ROBOTS = 50  # a dock each along the warehouse's walls (sim/fleet.py)
+MAX_DOMAIN_ID = 232  # the highest Fast DDS maps to UDP ports (ROS 2's domain ID docs)
 
 
 @app.command("node")
@@ -139,10 +141,21 @@ def node(
         "--distro",
         help="TurtleBot3: whose names and types, jazzy (/cmd_vel TwistStamped) or humble (Twist).",
     ),
+    robots: int = typer.Option(
+        1, "--robots", min=1, max=MAX_ROBOTS, help="ASTIbots in one warehouse, one per namespace."
+    ),
+    prefix: str = typer.Option(
+        None, "--prefix", help="The robots' names and namespaces: PREFIX1, PREFIX2, … (astibot_)."
+    ),
+    domains: bool = typer.Option(
+        False,
+        "--domains",
+        help="Each robot un-namespaced on a domain of its own: ROS_DOMAIN_ID, then +1, +2, ….",
+    ),
 ) -> None:
     """Run a simulated robot as real ROS 2 nodes on this machine's ROS domain, until Ctrl-C or
-    SIGTERM: the ASTIbot, or a TurtleBot3 under Nav2. It respects the ROS environment
-    (ROS_DOMAIN_ID, ROS_AUTOMATIC_DISCOVERY_RANGE)."""
+    SIGTERM: the ASTIbot (or a fleet of them in one warehouse, --robots N), or a TurtleBot3
+    under Nav2. It respects the ROS environment (ROS_DOMAIN_ID, ROS_AUTOMATIC_DISCOVERY_RANGE)."""
     from astiop.sim_robots.serving import NodeSetupError
 
     say = lambda line: typer.echo(line, err=True)  # noqa: E731
@@ -154,10 +167,15 @@ def node(
                      ("distro", distro != "jazzy")) if v]  # fmt: skip
             if given:
                 fail(f"{', '.join(given)}: only for --robot turtlebot3")
+            if robots > 1 or prefix is not None or domains:
+                _serve_fleet(robots, prefix, domains, seed, speed, say)
+                return
             from astiop.sim_robots.ros2_node.run import serve
 
             serve(seed, speed, say)
             return
+        if robots > 1 or prefix is not None or domains:
+            fail("--robots, --prefix and --domains: only for --robot astibot")
         from astiop.sim_robots.turtlebot3.graph import DISTROS, MODELS
 
         if model not in MODELS:
@@ -171,6 +189,28 @@ def node(
         serve_tb3(seed=seed, speed=speed, distro=distro, model=model, namespace=namespace, say=say)
     except NodeSetupError as exc:
         fail(str(exc))
+
+
+def _serve_fleet(robots: int, prefix, domains: bool, seed: int, speed: float, say) -> None:
+    import os
+    import re
+
+    from astiop.sim_robots.ros2_node.run import serve_fleet
+
+    prefix = "astibot_" if prefix is None else prefix
+    if not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", prefix):
+        fail(f"--prefix '{prefix}' must start a ROS name: a letter, then letters, digits or '_'")
+    names = [f"{prefix}{i}" for i in range(1, robots + 1)]
+    placed = None
+    if domains:
+        base = os.environ.get("ROS_DOMAIN_ID", "0") or "0"
+        if not base.isdigit():
+            fail(f"ROS_DOMAIN_ID must be a number, not '{base}'")
+        placed = [int(base) + i for i in range(robots)]
+        if placed[-1] > MAX_DOMAIN_ID:
+            fail(f"--domains: robot {robots} would be on domain {placed[-1]} (at most "
+                 f"{MAX_DOMAIN_ID}): lower ROS_DOMAIN_ID or --robots")  # fmt: skip
+    serve_fleet(names, seed=seed, speed=speed, domains=placed, say=say)
 
 
 def _valid_namespace(text: str) -> bool:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import difflib
 import math
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from astiop.ros2.catalog import Catalog, ServiceSpec
@@ -25,6 +25,16 @@ class Checked:
     type: str | None = None  # the resolved interface type, where one applies
     message: dict[str, Any] | None = None  # checked values with defaults filled
     notes: tuple[str, ...] = field(default_factory=tuple)
+    namespace: str = ""  # the robot's: names were resolved inside it
+
+    @property
+    def local_name(self) -> str | None:
+        """The command's name inside the robot's namespace (/goto_position for
+        /astibot_3/goto_position): what the ASTIbot's own names are compared with."""
+        name = self.command.name if self.command else None
+        if name and self.namespace and name.startswith(self.namespace + "/"):
+            return name[len(self.namespace) :]
+        return name
 
 
 def _suggest(name: str, known, avoid: set[str] | frozenset = frozenset()) -> str:
@@ -44,10 +54,37 @@ def validate(text: str, catalog: Catalog, distro: str | None = None) -> Checked:
         cmd = parse(text, distro)
     except CommandSyntaxError as exc:
         return Checked(text, None, False, str(exc))
+    namespace = catalog.profile.namespace if catalog.profile is not None else ""
+    typed, cmd = cmd, in_namespace(cmd, catalog, namespace)
+    resolved = () if cmd is typed else (f"{_named(typed)} is {_named(cmd)} on this robot",)
     try:
-        return _validate(cmd, catalog)
+        checked = _validate(cmd, catalog)
     except (InterfaceError, CommandSyntaxError) as exc:
-        return Checked(text, cmd, False, str(exc))
+        return Checked(text, cmd, False, str(exc), namespace=namespace)
+    return replace(checked, namespace=namespace, notes=(*resolved, *checked.notes))
+
+
+def _named(cmd: Ros2Command) -> str:
+    return cmd.args["node"] if cmd.verb == "param" else cmd.name
+
+
+def in_namespace(cmd: Ros2Command, catalog: Catalog, namespace: str) -> Ros2Command:
+    """A name the robot has only inside its namespace is read as that one (/goto_position is
+    /astibot_3/goto_position on the robot under /astibot_3), as a relative name resolves in
+    ROS 2: the commands the rules and the model write in a robot's own names reach it."""
+    if not namespace:
+        return cmd
+    tables = {"topic": catalog.topics, "service": catalog.services, "action": catalog.actions}
+    known = tables.get(cmd.verb, catalog.nodes if cmd.verb in ("node", "param") else None)
+    key = "node" if cmd.verb == "param" else "name"
+    name = cmd.args.get(key)
+    if known is None or not name or name in known:
+        return cmd
+    inside = namespace + name
+    is_cancel = cmd.verb == "service" and cancel_service(catalog, inside) is not None
+    if inside not in known and not is_cancel:
+        return cmd
+    return replace(cmd, args={**cmd.args, key: inside})
 
 
 def moving_topics(catalog: Catalog) -> set[str]:

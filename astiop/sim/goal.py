@@ -27,6 +27,8 @@ class Goal:
     leg: int = 0
     replans: int = 0
     blocked_since: float | None = None
+    yielding_since: float | None = None  # waiting for another robot in the way
+    replanned_for_robot_t: float = -math.inf
     known_boxes: list[tuple[float, float, float, float]] = field(default_factory=list)
 
     @property

@@ -24,6 +24,14 @@ from astiop.sim.path_planner import PlanningError
 ROBOT_LENGTH, ROBOT_WIDTH = ASTIBOT_BODY.length, ASTIBOT_BODY.width
 INFLATION = ASTIBOT_BODY.inflation  # circumscribed radius + margin
 BLOCKED_GIVE_UP_S = 60.0
+# Another robot of the fleet in the way: wait for it; plan around it every YIELD_REPLAN_S;
+# give the goal up (and say so) after ROBOT_GIVE_UP_S. "In the way" is a robot seen within
+# YIELD_GAP_M of the base's front, in its lane toward its next waypoint.
+YIELD_GAP_M = 2.0  # two bases closing at full speed stop ~1.4 m apart from it
+YIELD_LANE_MARGIN_M = 0.15  # each side of the base: robots docked side by side are 0.26 m apart
+YIELD_REPLAN_S = 2.0
+ROBOT_GIVE_UP_S = 30.0
+ROBOT_BOX_PAD_M = 0.5  # a robot is seen from one side: its box grows this much each way
 
 
 class GoalError(ValueError):
@@ -68,7 +76,7 @@ class NavigationMixin:
     def dock(self) -> Goal:
         with self.lock:
             self._check_can_move()
-            st = self.map.station("charging_dock")
+            st = self.map.station(self.dock_name)
             if st is None or st.docked_pose is None:
                 raise GoalError("this map has no charging dock")
             if self.docked():
@@ -87,7 +95,7 @@ class NavigationMixin:
     def undock(self) -> Goal:
         with self.lock:
             self._check_can_move()
-            st = self.map.station("charging_dock")
+            st = self.map.station(self.dock_name)
             if not self.docked() or st is None:
                 raise GoalError("the robot is not docked")
             leg = Leg("undock", st.pose, [st.pose[:2]], 0.2, planned=False)
@@ -144,6 +152,10 @@ class NavigationMixin:
                 return (0.0, 0.0, 0.0)
             self._finish("succeeded", f"reached {g.name}")
             return (0.0, 0.0, 0.0)
+        remaining = path_length([pose[:2]] + leg.path[leg.waypoint :])
+        if self._yield_to_robots(pose, remaining):
+            return (0.0, 0.0, 0.0)
+        leg = g.current  # a plan around a robot may have changed its path
         final = leg.waypoint == len(leg.path) - 1
         gains = (
             self.gains
@@ -160,7 +172,7 @@ class NavigationMixin:
             return
         x, y, _ = self.pose
         for ob in self.detected:
-            if ob.distance < 12.0:
+            if ob.kind != "robot" and ob.distance < 12.0:  # robots move: see _yield_to_robots
                 bx0, by0, bx1, by1 = ob.bbox
                 g.remember((bx0 - 0.15, by0 - 0.15, bx1 + 0.15, by1 + 0.15))
         if not g.known_boxes:
@@ -186,3 +198,78 @@ class NavigationMixin:
         g.replans += 1
         leg.path, leg.waypoint = list(path[1:]), 0
         self._refresh_plan()
+
+    # -- a fleet: other robots in the way ---------------------------------------------------
+    def _robot_ahead(self, pose, remaining: float):
+        """The nearest robot seen in the base's way: in the lane as wide as the base (and a
+        margin) ahead of it toward its next waypoint, up to its yield gap and not beyond where
+        this leg ends."""
+        leg = self.goal.current
+        wx, wy = leg.path[leg.waypoint] if leg.path else leg.target[:2]
+        x, y, theta = pose
+        if math.hypot(wx - x, wy - y) < 1e-3:
+            return None
+        heading = math.atan2(wy - y, wx - x)
+        c, s = math.cos(heading), math.sin(heading)
+        reach = self.chassis.length / 2 + min(YIELD_GAP_M, remaining + 0.2)
+        half = self.chassis.width / 2 + YIELD_LANE_MARGIN_M
+        for ob in self.detected:  # nearest first
+            if ob.distance > reach:
+                break
+            if ob.kind != "robot":
+                continue
+            near = (x + ob.distance * math.cos(theta + ob.bearing),
+                    y + ob.distance * math.sin(theta + ob.bearing))  # fmt: skip
+            x0, y0, x1, y1 = ob.bbox
+            for px, py in (near, (x0, y0), (x0, y1), (x1, y0), (x1, y1)):
+                along = (px - x) * c + (py - y) * s
+                across = -(px - x) * s + (py - y) * c
+                if 0.0 < along < reach and abs(across) < half:
+                    return ob
+        return None
+
+    def _yield_to_robots(self, pose, remaining: float) -> bool:
+        """Whether to hold still for another robot in the way this control step."""
+        g = self.goal
+        ahead = self._robot_ahead(pose, remaining)
+        if ahead is None:
+            if g.yielding_since is not None:
+                g.yielding_since = None
+                self._event("nav", f"path to {g.name} clear of robots again")
+            return False
+        if g.yielding_since is None:
+            g.yielding_since = g.replanned_for_robot_t = self.t
+            self._event("nav", f"waiting for a robot {ahead.distance:.1f} m ahead", "warning")
+            return True
+        if self.t - g.yielding_since > ROBOT_GIVE_UP_S:
+            self._finish("aborted", f"another robot stayed in the way for {ROBOT_GIVE_UP_S:.0f} s")
+            return True
+        if self._gives_way_to(ahead.robot) and self.t - g.replanned_for_robot_t >= YIELD_REPLAN_S:
+            g.replanned_for_robot_t = self.t
+            if self._plan_around(ahead) and self._robot_ahead(pose, remaining) is None:
+                self._event("nav", f"path to {g.name} planned around a robot in the way")
+                return False
+        return True
+
+    def _gives_way_to(self, rank: int) -> bool:
+        """The fleet's right of way: of two robots with goals, the one added to the world later
+        plans around the other, which waits (two face to face never both turn back); a robot
+        with no goal does not move, so it is planned around."""
+        if not self.goal.current.planned:
+            return False
+        other = self.world.robots[rank][3]
+        return getattr(other, "goal", None) is None or rank < self.world.robot_rank(self.body)
+
+    def _plan_around(self, robot) -> bool:
+        g, leg = self.goal, self.goal.current
+        x0, y0, x1, y1 = robot.bbox
+        pad = ROBOT_BOX_PAD_M
+        box = (x0 - pad, y0 - pad, x1 + pad, y1 + pad)
+        try:
+            path = self._plan(self.pose[:2], leg.target[:2], [*g.known_boxes, box])
+        except PlanningError:
+            return False  # no way around: keep waiting
+        g.replans += 1
+        leg.path, leg.waypoint = list(path[1:]), 0
+        self._refresh_plan()
+        return True

@@ -23,6 +23,7 @@ class DetectedObstacle:
     y: float
     size: float  # m, largest extent of the points
     bbox: tuple[float, float, float, float]  # map frame, of the points seen
+    robot: int = -1  # which robot of the world it is (its rank), for kind "robot"
 
 
 def classify(size: float) -> str:
@@ -36,9 +37,14 @@ def classify(size: float) -> str:
 
 
 def detect(
-    ranges: np.ndarray, unmapped: np.ndarray, angles: np.ndarray, pose: tuple[float, float, float]
+    ranges: np.ndarray,
+    unmapped: np.ndarray,
+    angles: np.ndarray,
+    pose: tuple[float, float, float],
+    robots: np.ndarray | None = None,
 ) -> list[DetectedObstacle]:
-    """`unmapped[i]` is true where beam i hit something that is not on the map."""
+    """`unmapped[i]` is true where beam i hit something that is not on the map; `robots[i]` is
+    the rank of the robot beam i hit, or -1 (a fleet's robots know one another: kind "robot")."""
     n = len(ranges)
     beams = np.nonzero(unmapped & np.isfinite(ranges))[0]
     if len(beams) == 0:
@@ -64,15 +70,18 @@ def detect(
         gx, gy = px[g], py[g]
         size = max(float(np.hypot(gx[:, None] - gx, gy[:, None] - gy).max()), 0.1)
         nearest = g[int(np.argmin(ranges[beams[g]]))]
+        ranks = robots[beams[g]] if robots is not None else np.array([-1])
+        robot = int(np.bincount(ranks[ranks >= 0]).argmax()) if (ranks >= 0).mean() > 0.5 else -1
         found.append(
             DetectedObstacle(
-                kind=classify(size),
+                kind="robot" if robot >= 0 else classify(size),
                 distance=float(ranges[beams[nearest]]),
                 bearing=float(angles[beams[nearest]]),
                 x=float(gx.mean()),
                 y=float(gy.mean()),
                 size=size,
                 bbox=(float(gx.min()), float(gy.min()), float(gx.max()), float(gy.max())),
+                robot=robot,
             )
         )
     found.sort(key=lambda o: o.distance)

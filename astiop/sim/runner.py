@@ -5,11 +5,12 @@ from __future__ import annotations
 import threading
 import time
 
+from astiop.sim.fleet import SimFleet
 from astiop.sim.simulator import Simulator
 
 
 class SimRunner:
-    def __init__(self, sim: Simulator, speed: float = 1.0, period_s: float = 0.02):
+    def __init__(self, sim: Simulator | SimFleet, speed: float = 1.0, period_s: float = 0.02):
         self.sim = sim
         self.speed = speed
         self.period_s = period_s

@@ -33,7 +33,7 @@ from astiop.sim.navigation import (
 from astiop.sim.path_planner import PathPlanner
 from astiop.sim.perception import DetectedObstacle, detect
 from astiop.sim.state import Event, SimState, lamp, state_word
-from astiop.sim.world import CT_OBSTACLE, CT_ROBOT, CT_STATIC, World
+from astiop.sim.world import CT_OBSTACLE, CT_STATIC, ROBOT_OWNER, World
 from astiop.warehouse import WarehouseMap, default_map
 
 ROBOT_MASS = ASTIBOT_BODY.mass
@@ -66,10 +66,18 @@ class Simulator(NavigationMixin):
         gains: ControllerGains | None = None,
         battery=None,
         lidar_spec: lidar.LidarSpec | None = None,
+        world: World | None = None,
+        lock: threading.RLock | None = None,
+        dock: str = "charging_dock",
+        name: str = "robot",
     ):
         """`body`, `gains`, `battery` and `lidar_spec` make another robot in the same
-        warehouse (a TurtleBot3); `params` is the body's wheels when `body` is the ASTIbot's."""
+        warehouse (a TurtleBot3); `params` is the body's wheels when `body` is the ASTIbot's.
+        `world` and `lock` make it one robot of a fleet (`sim/fleet.py` steps them all);
+        `dock` is the station it charges at."""
         self.map = warehouse or default_map()
+        self.name = name
+        self.dock_name = dock
         self.chassis = body  # `self.body` is the pymunk body
         if body is not ASTIBOT_BODY:
             params = body.wheels
@@ -77,7 +85,7 @@ class Simulator(NavigationMixin):
         self.params = params
         self.rng = np.random.default_rng(seed)
         self.seed = seed
-        self.lock = threading.RLock()
+        self.lock = lock or threading.RLock()
         self.dt = 1.0 / physics_hz
         self._control_every = max(1, physics_hz // 20)
         self._lidar_every = max(1, physics_hz // 10)
@@ -85,7 +93,8 @@ class Simulator(NavigationMixin):
         self.lidar_spec = lidar_spec or lidar.LidarSpec()
         self._beam_angles = self.lidar_spec.beam_angles()
         self.gains = gains or ControllerGains(v_max=v_max, w_max=w_max)
-        self.world = World(self.map)
+        self.in_fleet = world is not None
+        self.world = world or World(self.map)
         self.path_planner = PathPlanner(self.world.static_boxes, self.map.bounds, body.inflation)
         self.battery = battery if battery is not None else Battery(battery_soc)
         self.conveyor = Conveyor()
@@ -124,7 +133,7 @@ class Simulator(NavigationMixin):
     # -- construction ----------------------------------------------------------------
     def _resolve_start(self, start) -> tuple[float, float, float]:
         if start is None or start == "docked":
-            dock = self.map.station("charging_dock")
+            dock = self.map.station(self.dock_name)
             return dock.docked_pose if dock and dock.docked_pose else (2.0, 2.0, 0.0)
         if isinstance(start, str):
             st = self.map.station(start)
@@ -135,11 +144,11 @@ class Simulator(NavigationMixin):
 
     def _build_robot(self, pose) -> None:
         self.control, self.body, self.shape = self.world.add_robot(
-            pose, self.chassis.mass, self.chassis.length, self.chassis.width
+            pose, self.chassis.mass, self.chassis.length, self.chassis.width, self
         )
         for other in (CT_STATIC, CT_OBSTACLE):
             self.world.space.on_collision(
-                CT_ROBOT, other, begin=self._on_contact, post_solve=self._on_depth
+                self.shape.collision_type, other, begin=self._on_contact, post_solve=self._on_depth
             )
 
     def _on_contact(self, arbiter, space, data) -> None:
@@ -167,7 +176,7 @@ class Simulator(NavigationMixin):
         return (p.x, p.y, wrap_angle(self.body.angle))
 
     def docked(self) -> bool:
-        dock = self.map.station("charging_dock")
+        dock = self.map.station(self.dock_name)
         if dock is None or dock.docked_pose is None:
             return False
         ex, ey, eth = tracking_error(self.pose, dock.docked_pose)
@@ -358,6 +367,8 @@ class Simulator(NavigationMixin):
 
     # -- time ------------------------------------------------------------------------
     def step(self, duration: float) -> None:
+        if self.in_fleet:
+            raise RuntimeError("a fleet's robot is stepped by its fleet (SimFleet.step)")
         with self.lock:
             self._carry += duration
             n = int(self._carry / self.dt + 1e-9)
@@ -384,6 +395,12 @@ class Simulator(NavigationMixin):
         return self.last_result
 
     def _substep(self) -> None:
+        self._before_physics()
+        self.world.space.step(self.dt)
+        self._after_physics()
+
+    def _before_physics(self) -> None:
+        """The robot's share of a substep before the world moves: control, lidar, its motors."""
         self._tick += 1
         self.t = self._tick * self.dt
         if self._tick % self._control_every == 0:
@@ -408,7 +425,8 @@ class Simulator(NavigationMixin):
             self._applied = command
             self.control.velocity = command[:2]
             self.control.angular_velocity = command[2]
-        self.world.space.step(self.dt)
+
+    def _after_physics(self) -> None:
         if self._contact is not None:
             self._on_collision(self._contact)
 
@@ -449,11 +467,15 @@ class Simulator(NavigationMixin):
     # -- 10 Hz: lidar, obstacles, re-planning -----------------------------------------------
     def _scan(self) -> None:
         t0 = time.perf_counter()
-        a, b, owner = self.world.edges()
+        a, b, owner = self.world.edges(self.body)
         x, y, th = self.pose
         ranges, hit = lidar.cast(x, y, th, a, b, self.lidar_spec)
         self.lidar_ms.append((time.perf_counter() - t0) * 1e3)
         self.scan_ranges = lidar.add_noise(ranges, self.rng, self.lidar_spec)
         self.scan_stamp = self.t
-        unmapped = (hit >= 0) & (owner[np.maximum(hit, 0)] >= 0)
-        self.detected = detect(self.scan_ranges, unmapped, self._beam_angles, (x, y, th))
+        owners = owner[np.maximum(hit, 0)]
+        unmapped = (hit >= 0) & (owners >= 0)
+        robots = None
+        if len(self.world.robots) > 1:
+            robots = np.where(unmapped & (owners >= ROBOT_OWNER), owners - ROBOT_OWNER, -1)
+        self.detected = detect(self.scan_ranges, unmapped, self._beam_angles, (x, y, th), robots)

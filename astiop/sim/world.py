@@ -13,6 +13,8 @@ from astiop.sim.geometry import circle_polygon, oriented_box, polygon_edges, rec
 from astiop.warehouse import WarehouseMap
 
 CT_ROBOT, CT_STATIC, CT_OBSTACLE = 1, 2, 3
+CT_MORE_ROBOTS = 100  # the second robot of a world and on: one collision type each
+ROBOT_OWNER = 1_000_000  # a lidar edge's owner id from here on is a robot's (its index added)
 
 # kind -> (length, width) of a box, or (diameter, 0) of a round obstacle
 OBSTACLE_SIZES: dict[str, tuple[float, float]] = {
@@ -67,10 +69,12 @@ class World:
         self._obstacle_bodies: dict[int, tuple[pymunk.Body, pymunk.Shape]] = {}
         self._ids = itertools.count(1)
         self._edges_cache: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self.robots: list[tuple[pymunk.Body, float, float, object]] = []  # … length, width, sim
 
-    def add_robot(self, pose, mass: float, length: float, width: float):
+    def add_robot(self, pose, mass: float, length: float, width: float, sim: object = None):
         """The robot's box body, led by a kinematic body through two joints with bounded force
-        (the base's motors): a wall stops it instead of being pushed through.
+        (the base's motors): a wall stops it instead of being pushed through. The first robot
+        has collision type CT_ROBOT, each further one a type of its own (CT_MORE_ROBOTS on).
         Returns (control, body, shape)."""
         self.space.collision_slop = 0.002
         control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
@@ -79,8 +83,10 @@ class World:
         body.angle = control.angle = pose[2]
         hl, hw = length / 2, width / 2
         shape = pymunk.Poly(body, [(-hl, -hw), (hl, -hw), (hl, hw), (-hl, hw)])
-        shape.collision_type = CT_ROBOT
+        shape.collision_type = CT_MORE_ROBOTS + len(self.robots) - 1 if self.robots else CT_ROBOT
         shape.friction = 0.5
+        shape.kind = f"robot {getattr(sim, 'name', 'robot')}"
+        self.robots.append((body, length, width, sim))
         pivot = pymunk.PivotJoint(control, body, (0, 0), (0, 0))
         pivot.max_bias, pivot.max_force = 0.0, 1500.0
         gear = pymunk.GearJoint(control, body, 0.0, 1.0)
@@ -118,8 +124,26 @@ class World:
         self._edges_cache = None
         return self.obstacles.pop(obstacle_id)
 
-    def edges(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """All edges the lidar sees, with an owner per edge: -1 fixed geometry, else obstacle id."""
+    def robot_rank(self, body: pymunk.Body) -> int:
+        """The order in which this robot was added to the world, from 0."""
+        return next(i for i, r in enumerate(self.robots) if r[0] is body)
+
+    def edges(self, seen_by: pymunk.Body | None = None) -> tuple[np.ndarray, ...]:
+        """All edges a lidar sees, with an owner per edge: -1 fixed geometry, an obstacle's id,
+        or ROBOT_OWNER + a robot's index for the other robots of the world (not `seen_by`)."""
+        fixed = self._fixed_edges()
+        others = [r for r in enumerate(self.robots) if r[1][0] is not seen_by]
+        if not others:
+            return fixed
+        a_parts, b_parts, owners = [fixed[0]], [fixed[1]], [fixed[2]]
+        for index, (body, length, width, _sim) in others:
+            a, b = polygon_edges(oriented_box(*body.position, body.angle, length, width))
+            a_parts.append(a)
+            b_parts.append(b)
+            owners.append(np.full(len(a), ROBOT_OWNER + index, dtype=np.int64))
+        return np.concatenate(a_parts), np.concatenate(b_parts), np.concatenate(owners)
+
+    def _fixed_edges(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         if self._edges_cache is None:
             a_parts, b_parts = [self._static_a], [self._static_b]
             owners = [np.full(len(self._static_a), -1, dtype=np.int64)]

@@ -66,17 +66,22 @@ def goal_refusal(pose: dict[str, Any], frames: tuple[str, ...] = ("", "map")) ->
 
 
 class RobotNodes:
-    """A robot's nodes in one rclpy context, spun by one executor until `stop()`."""
+    """A robot's nodes in one rclpy context, spun by one executor until `stop()`. With a
+    `parent`, its nodes join the parent's context and are spun by the parent's executor (a
+    fleet's robots in one process); `domain_id` puts a context on a domain of its own."""
 
-    def __init__(self) -> None:
-        self.context = rclpy.Context()
+    def __init__(self, parent: RobotNodes | None = None, domain_id: int | None = None) -> None:
+        self.parent = parent
+        self.domain_id = domain_id
+        self.context = parent.context if parent else rclpy.Context()
         self.nodes: dict[str, Node] = {}
         self._executor: MultiThreadedExecutor | None = None
-        self._stopped = threading.Event()
+        self._stopped = parent._stopped if parent else threading.Event()
         self._goals_running = 0
 
     def init_context(self) -> None:
-        rclpy.init(context=self.context)
+        if self.parent is None:  # domain_id: ros2/rclpy humble rclpy/rclpy/__init__.py
+            rclpy.init(context=self.context, domain_id=self.domain_id)
 
     def add_node(self, name: str, key: str = "", **options: Any) -> Node:
         """A node by its full name ("/amcl", "/tb3_1/global_costmap/global_costmap"), kept
@@ -84,9 +89,13 @@ class RobotNodes:
         ns, _, base = name.rpartition("/")
         node = Node(base, namespace=ns or "/", context=self.context, **options)
         self.nodes[key or name] = node
+        if self.parent is not None:
+            self.parent.nodes[name] = node
         return node
 
     def start_executor(self) -> None:
+        if self.parent is not None:
+            return  # the parent spins its members' nodes
         self._executor = MultiThreadedExecutor(num_threads=4, context=self.context)
         for node in self.nodes.values():
             self._executor.add_node(node)
@@ -96,7 +105,7 @@ class RobotNodes:
         return self._stopped.is_set() or not self.context.ok()
 
     def goal_running(self) -> _GoalCount:
-        return _GoalCount(self)
+        return _GoalCount(self.parent or self)
 
     def spin(self) -> None:
         """Serve until `stop()` (from a signal handler or another thread); then a little longer,
@@ -115,11 +124,13 @@ class RobotNodes:
         self._stopped.set()
 
     def close_nodes(self) -> None:
+        if self.parent is not None:
+            return  # the parent's close ends its members' nodes
         if self._executor is not None:
             self._executor.shutdown(timeout_sec=1.0)
         for node in self.nodes.values():
             node.destroy_node()
-        if self.context.ok():
+        if self.parent is None and self.context.ok():
             rclpy.shutdown(context=self.context)
 
 

@@ -42,14 +42,31 @@ __all__ = ["QOS", "SimRobotNodes"]  # tests read QOS from here
 
 
 class SimRobotNodes(RobotNodes):
-    """The simulator at real time behind the catalog's ROS 2 nodes, in one rclpy context."""
+    """The simulator at real time behind the catalog's ROS 2 nodes, in one rclpy context.
 
-    def __init__(self, *, seed: int, speed: float, locations_db: Path):
-        super().__init__()
-        self.sim = Simulator(seed=seed)
+    One robot of a fleet (`fleet.py`) is given its `sim` (stepped by the fleet) and serves
+    every name under its `namespace` (/astibot_1/cmd_vel, node /astibot_1/astibot_base), in
+    its `parent`'s context or on a domain of its own."""
+
+    def __init__(
+        self,
+        *,
+        seed: int,
+        speed: float,
+        locations_db: Path,
+        sim: Simulator | None = None,
+        namespace: str = "",
+        parent: RobotNodes | None = None,
+        domain_id: int | None = None,
+    ):
+        super().__init__(parent, domain_id)
+        self.sim = sim or Simulator(seed=seed)
+        self.ns = namespace
         self.speed = speed  # sim seconds per wall second
         self.store = Store(locations_db)  # the robot's own named locations
-        self.backend = SimBackend(self.sim, self.store, realtime=True, speed=speed)
+        self.backend = SimBackend(
+            self.sim, self.store, realtime=True, speed=speed, stepped_elsewhere=sim is not None
+        )
         self.catalog = astibot_catalog()
         self.limits = {
             "max_linear_speed": self.catalog.params[("/astibot_base", "max_linear_speed")].value,
@@ -63,25 +80,28 @@ class SimRobotNodes(RobotNodes):
         for name in self.catalog.nodes:
             if name == "/astiop_agent":
                 continue  # astiop's own node: the locations services live on the navigator here
-            self.add_node(name)
+            self.add_node(self.ns + name, key=name)
         for spec in self.catalog.topics.values():
             if spec.publisher:
                 self._publish(spec.name, spec.type, spec.publisher, spec.rate_hz, spec.qos)
         self._publish("/map", MAP_TYPE, "/navigator", 0, "transient_local")
         base = self.nodes["/astibot_base"]
         base.create_subscription(
-            interface_class("geometry_msgs/msg/Twist"), "/cmd_vel", self._on_cmd_vel, RELIABLE
+            interface_class("geometry_msgs/msg/Twist"),
+            self.ns + "/cmd_vel",
+            self._on_cmd_vel,
+            RELIABLE,
         )
         for spec in self.catalog.services.values():
             node = self.nodes.get(spec.node) or self.nodes["/navigator"]
             node.create_service(
-                interface_class(spec.type), spec.name, self._service_handler(spec.name)
+                interface_class(spec.type), self.ns + spec.name, self._service_handler(spec.name)
             )
         nav = self.catalog.actions["/navigate_to_pose"]
         self._action = ActionServer(
             self.nodes[nav.node],
             interface_class(nav.type),
-            nav.name,
+            self.ns + nav.name,
             execute_callback=self._navigate,
             goal_callback=lambda _goal: GoalResponse.ACCEPT,
             cancel_callback=lambda _goal: CancelResponse.ACCEPT,
@@ -99,7 +119,7 @@ class SimRobotNodes(RobotNodes):
     # -- topics -----------------------------------------------------------------------------
     def _publish(self, name: str, type_: str, node: str, rate_hz: float, qos: str) -> None:
         cls = interface_class(type_)
-        pub = self.nodes[node].create_publisher(cls, name, QOS[qos])
+        pub = self.nodes[node].create_publisher(cls, self.ns + name, QOS[qos])
         self._publishers[name] = pub
 
         def send() -> None:

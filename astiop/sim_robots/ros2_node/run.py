@@ -13,7 +13,7 @@ from astiop.sim_robots.serving import (
     where,
 )
 
-__all__ = ["NodeSetupError", "check_imports", "serve"]
+__all__ = ["NodeSetupError", "check_imports", "serve", "serve_fleet"]
 
 
 def serve(seed: int, speed: float, say: Callable[[str], None]) -> None:
@@ -28,3 +28,29 @@ def serve(seed: int, speed: float, say: Callable[[str], None]) -> None:
             return f"ASTIbot simulator up as ROS 2 nodes ({nodes}) on {where()}; Ctrl-C stops it"
 
         serve_until_signal(robot, started, say)
+
+
+def serve_fleet(
+    names: list[str], *, seed: int, speed: float, domains: list[int] | None, say
+) -> None:
+    """N ASTIbots in one warehouse, each under /NAME on this domain, or on domains[i]."""
+    check_imports()
+    from astiop.sim_robots.ros2_node.fleet import SimFleetNodes
+
+    with tempfile.TemporaryDirectory(prefix="astiop-sim-fleet-") as folder:
+        fleet = SimFleetNodes(names, seed=seed, speed=speed, folder=Path(folder), domains=domains)
+
+        def started() -> str:
+            if domains:
+                placed = ", ".join(f"{n} on ROS_DOMAIN_ID={d}" for n, d in zip(names, domains))
+                scope = where().split(", ", 1)[1]
+                return (
+                    f"{len(names)} ASTIbots up as ROS 2 nodes: {placed}; {scope}; Ctrl-C stops them"
+                )
+            spaces = f"/{names[0]}" if len(names) == 1 else f"/{names[0]} … /{names[-1]}"
+            return (
+                f"{len(names)} ASTIbot{'s' if len(names) > 1 else ''} up as ROS 2 nodes under "
+                f"{spaces} in one warehouse on {where()}; Ctrl-C stops them"
+            )
+
+        serve_until_signal(fleet, started, say)

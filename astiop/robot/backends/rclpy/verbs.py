@@ -276,7 +276,7 @@ class RclpyVerbs(ServesVerbs):
         read = c.kind != "actuate"
         response = self.proc.ask(client, request, timeout, f"service {name}", again=read)
         lines.append(f"response:\n{response!r}\n")
-        if name == "/stop":
+        if c.local_name == "/stop":
             self.cancel_goals()
         return "\n".join(lines) + "\n", to_dict(response)
 

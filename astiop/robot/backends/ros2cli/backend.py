@@ -514,7 +514,7 @@ class Ros2Backend(RobotBackend):
             raise BackendError(failed[0].strip()[:300])
         if cmd.key == ("service", "call"):
             values = parse_response(run.out)
-            if cmd.name == "/stop":
+            if checked.local_name == "/stop":
                 self.cancel_goals()
             return run.out, values
         return run.out, None

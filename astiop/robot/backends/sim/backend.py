@@ -30,11 +30,15 @@ class SimBackend(SimVerbs, RobotBackend):
         *,
         realtime: bool = False,
         speed: float = 1.0,
+        stepped_elsewhere: bool = False,
     ):
+        """`realtime`: a runner thread steps the simulator (its own, or with
+        `stepped_elsewhere` its fleet's: `sim/fleet.py`); else waiting steps it."""
         self.sim = sim
         self.store = store
-        self.realtime = realtime
-        self._runner = SimRunner(sim, speed=speed) if realtime else None
+        self.realtime = realtime or stepped_elsewhere
+        own = realtime and not stepped_elsewhere
+        self._runner = SimRunner(sim, speed=speed) if own else None
         self.catalog: Catalog = astibot_catalog()
         self.params = {k: p.value for k, p in self.catalog.params.items()}
         self.inflight = InFlight()
