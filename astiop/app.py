@@ -23,6 +23,7 @@ from astiop.agent.models.specs import LLMEndpoint, open_endpoint
 from astiop.config import Settings
 from astiop.recording import RecordingError, SessionRecorder, default_path
 from astiop.robot.factory import make_robot_gateway, make_sim_gateway
+from astiop.robot.fleet_watch import FleetRow, FleetWatch, row_from
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.sampler import StateSampler
 from astiop.robot.state import RobotState, TopicStat
@@ -33,6 +34,7 @@ from astiop.screens.approvals import ApprovalDesk
 from astiop.screens.bench import BenchScreen
 from astiop.screens.chat import ChatScreen
 from astiop.screens.dashboard import DashboardScreen
+from astiop.screens.fleet import FleetScreen
 from astiop.screens.locations import LocationsScreen
 from astiop.screens.logs import LogsScreen
 from astiop.screens.messages import RobotStateSampled, TurnFinished
@@ -52,6 +54,7 @@ class AstiopApp(App):
         "locations": LocationsScreen,
         "teleop": TeleopScreen,
         "bench": BenchScreen,
+        "fleet": FleetScreen,
     }
     BINDINGS = [
         Binding("ctrl+e", "estop", "E-STOP", priority=True),
@@ -61,6 +64,7 @@ class AstiopApp(App):
         Binding("f4", "switch_mode('locations')", "Locations"),
         Binding("f5", "switch_mode('teleop')", "Teleop"),
         Binding("f6", "switch_mode('bench')", "Bench"),
+        Binding("f7", "switch_mode('fleet')", "Fleet"),
         Binding("ctrl+r", "release_estop", "Release e-stop", priority=True),
         Binding("ctrl+q", "quit", "Quit", priority=True),
         # a replay's clock; focused inputs and tables keep these keys
@@ -80,9 +84,11 @@ class AstiopApp(App):
         sample_hz: float = 10.0,
         confirm_timeout_s: float = 120.0,
         record: Path | None = None,
+        fleet: FleetWatch | None = None,
     ):
         super().__init__()
         self.services = services
+        self.fleet = fleet  # every robot of a fleet, watched; None: one robot
         self.record_path = record
         self.recorder: SessionRecorder | None = None
         self.sample_hz = sample_hz
@@ -108,6 +114,8 @@ class AstiopApp(App):
         self.topic_stats = gateway.topic_stats()
         self.switch_mode("dashboard")
         self._sampler.start()
+        if self.fleet is not None:
+            self.fleet.start()
         if self.services.gateway.playback is None:  # a replay moves no robot
             self._approvals.start()
         if self.record_path is not None:
@@ -149,6 +157,8 @@ class AstiopApp(App):
                 self._approvals.join(2.0)
             if self.recorder is not None:
                 self.recorder.stop()
+            if self.fleet is not None:
+                self.fleet.close()
         finally:
             try:
                 self.services.gateway.close()
@@ -184,8 +194,24 @@ class AstiopApp(App):
     def on_turn_finished(self, msg: TurnFinished) -> None:
         self.broadcast(lambda: TurnFinished(msg.result, msg.model))
 
+    @property
+    def current_robot(self) -> str:
+        """The robot Dashboard, Chat, Teleop and Locations act on, by its fleet name."""
+        return self.services.settings.robot.namespace.strip("/") or "this robot"
+
+    def fleet_rows(self) -> list[FleetRow]:
+        if self.fleet is not None:
+            return self.fleet.rows()
+        gateway = self.services.gateway
+        make = gateway.profile.make if gateway.profile else ""
+        lost = self.robot_state.lost_s
+        namespace = self.services.settings.robot.namespace
+        return [row_from(self.current_robot, namespace, make, self.robot_state, lost or 0.0)]
+
     def refresh_subtitle(self) -> None:
         robot = self.services.gateway.label
+        if self.fleet is not None:  # never the wrong robot: its name on every screen
+            robot = f"{self.current_robot} ({robot})"
         rec = "  ● REC" if self.recorder is not None else ""
         self.sub_title = f"robot: {robot}  model: {self.services.endpoint.spec.raw}{rec}"
 
@@ -334,8 +360,17 @@ class AstiopApp(App):
         self.run_worker(self._estop, thread=True, group="estop", exit_on_error=False)
 
     def _estop(self) -> None:
+        fleet: dict[str, list[str]] = {}
+        others = None
+        if self.fleet is not None:  # every robot of the fleet, each by its own gateway, at once
+            others = threading.Thread(target=lambda: fleet.update(self.fleet.estop_all()))
+            others.start()
         failures = self.services.gateway.estop()
         text = "E-STOP engaged: all motion stopped. ctrl+r releases it."
+        if others is not None:
+            others.join()
+            failures += [f"{name}: {'; '.join(f)}" for name, f in fleet.items() if f]
+            text = f"E-STOP engaged on {len(fleet)} robots. ctrl+r releases them."
         if failures:
             text += "\n" + "\n".join(failures)
         self.call_from_thread(self.notify, text, severity="error", title="E-STOP", markup=False)
@@ -350,10 +385,16 @@ class AstiopApp(App):
             if ok:
                 self.run_worker(self._release, thread=True, group="estop", exit_on_error=False)
 
-        self.push_screen(ConfirmModal("Release the e-stop? The robot may move again."), done)
+        question = "Release the e-stop? The robot may move again."
+        if self.fleet is not None:
+            names = ", ".join(name for name, _, _ in self.fleet.robots)
+            question = f"Release the e-stop of {names}? They may move again."
+        self.push_screen(ConfirmModal(question), done)
 
     def _release(self) -> None:
         failures = self.services.gateway.release_estop()
+        if self.fleet is not None:
+            failures += self.fleet.release_all()
         if failures:  # the latch let go; the robot's own stop did not
             text = "E-stop released here; the robot still holds:\n" + "\n".join(failures)
             self.call_from_thread(self.notify, text, severity="error", markup=False)
@@ -443,6 +484,7 @@ def make_app(
     sample_hz: float = 10.0,
     confirm_timeout_s: float = 120.0,
     record: Path | None = None,
+    fleet: FleetWatch | None = None,
 ) -> AstiopApp:
     """Build the console from its services; the CLI and the tests both come through here.
 
@@ -464,6 +506,7 @@ def make_app(
         sample_hz=sample_hz,
         confirm_timeout_s=confirm_timeout_s,
         record=record,
+        fleet=fleet,
     )
 
 

@@ -15,6 +15,7 @@ UI = ("astiop.app", "astiop.screens", "astiop.widgets", "astiop.cli.console")
 ROS = (
     "astiop.robot.backends.rclpy.",
     "astiop.sim_robots.ros2_node.node",
+    "astiop.sim_robots.ros2_node.fleet",
     "astiop.sim_robots.ros2_common",
     "astiop.sim_robots.turtlebot3.node",
     "astiop.sim_robots.turtlebot3.navigator",

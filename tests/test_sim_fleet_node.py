@@ -37,19 +37,20 @@ def astiop(db: Path, *args: str, env=None, timeout: float = 120) -> subprocess.C
     return subprocess.run([*cli, *args], capture_output=True, text=True, timeout=timeout, env=env)
 
 
-def test_three_astibots_in_one_warehouse_each_reached_by_its_name(tmp_path):
+def test_two_astibots_in_one_warehouse_each_reached_by_its_name(tmp_path):
     require_ros()
     from geometry_msgs.msg import Pose2D
 
     db = tmp_path / "fleet.db"
-    with fleet_node("--robots", "3") as node, ros_client("watcher") as client:
-        assert "3 ASTIbots up as ROS 2 nodes under /astibot_1 … /astibot_3" in "\n".join(node.lines)
-        poses = {i: client.collect(Pose2D, f"/astibot_{i}/robot_pose") for i in (1, 2, 3)}
+    # two robots: a fleet node costs ~14 % of a core per robot, and the suite runs beside it
+    with fleet_node("--robots", "2") as node, ros_client("watcher") as client:
+        assert "2 ASTIbots up as ROS 2 nodes under /astibot_1 … /astibot_2" in "\n".join(node.lines)
+        poses = {i: client.collect(Pose2D, f"/astibot_{i}/robot_pose") for i in (1, 2)}
         out = astiop(db, "--fleet", "auto", "fleet", "list", "--json")
         assert out.returncode == 0, out.stderr[-2000:]
         rows = {r["name"]: r for r in json.loads(out.stdout)}
-        assert set(rows) == {"astibot_1", "astibot_2", "astibot_3"}, rows
-        for i in (1, 2, 3):  # each on its own dock, 1 m apart along the west wall
+        assert set(rows) == {"astibot_1", "astibot_2"}, rows
+        for i in (1, 2):  # each on its own dock, 1 m apart along the west wall
             row = rows[f"astibot_{i}"]
             assert row["make"] == "astibot" and row["state"] == "charging", row
             assert abs(row["x_m"] - 1.15) < 0.05 and abs(row["y_m"] - (2.0 + i)) < 0.05, row
@@ -59,18 +60,20 @@ def test_three_astibots_in_one_warehouse_each_reached_by_its_name(tmp_path):
         assert out.returncode == 0, out.stdout + out.stderr[-2000:]
         assert "arrived: shipping" in out.stdout, out.stdout + out.stderr[-3000:]
         assert until(lambda: poses[2] and math.dist(_xy(poses[2]), SHIPPING) < 0.3, 10)
-        for i in (1, 3):  # the others never left their docks
-            assert math.dist(_xy(poses[i]), (1.15, 2.0 + i)) < 0.02, _xy(poses[i])
+        assert math.dist(_xy(poses[1]), (1.15, 3.0)) < 0.02, _xy(poses[1])  # never left its dock
 
         out = astiop(db, "--fleet", "auto", "estop", "--all")
         assert out.returncode == 0, out.stdout + out.stderr[-2000:]
-        for i in (1, 2, 3):
+        for i in (1, 2):
             assert f"astibot_{i}: E-STOP engaged" in out.stdout, out.stdout
         out = astiop(db, "--fleet", "auto", "--robot-name", "astibot_2", "chat", "-m", "rules",
                      "--yes", "go to the assembly station")  # fmt: skip
         assert "E-STOP" in out.stdout + out.stderr, out.stdout
         out = astiop(db, "--fleet", "auto", "estop", "--release", "--all", "--yes")
         assert out.returncode == 0, out.stdout + out.stderr[-2000:]
+        out = astiop(db, "--fleet", "auto", "fleet", "list", "--json")
+        states = {r["name"]: r["state"] for r in json.loads(out.stdout)}
+        assert states == {"astibot_1": "charging", "astibot_2": "idle"}, states  # let go
 
 
 def test_with_domains_each_robot_is_un_namespaced_on_a_domain_of_its_own(tmp_path):

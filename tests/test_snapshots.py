@@ -33,7 +33,7 @@ def showing(key: str):
     return run_before
 
 
-@pytest.mark.parametrize("key", ["f1", "f2", "f4", "f5", "f6"])
+@pytest.mark.parametrize("key", ["f1", "f2", "f4", "f5", "f6", "f7"])
 def test_screen_snapshots(snap_compare, tmp_path, key):
     app = console(tmp_path, sim=scene())
     assert snap_compare(app, terminal_size=SIZE, run_before=showing(key))

@@ -287,6 +287,15 @@ def test_a_robot_with_no_battery_reading_says_so_when_asked(monkeypatch, tmp_pat
         finally:
             gateway.close()
             store.close()
+        # `astiop chat` prints an answer given without the model (it came whole, not streamed)
+        cli = [sys.executable, "-m", "astiop", "--db", str(tmp_path / "cli.db"), "--robot",
+               "ros2", "--ros2-transport", "cli", "chat", "-m", "rules"]  # fmt: skip
+        with emulated_robot(missing=("/battery_status",)) as folder:
+            on_path(monkeypatch, folder)
+            out = subprocess.run([*cli, "what is the battery level?"], capture_output=True,
+                                 text=True, timeout=120)  # fmt: skip
+        assert out.returncode == 0, out.stderr[-2000:]
+        assert out.stdout.startswith("This robot publishes no battery state"), out.stdout
 
 
 TB3_SUITE = """\

@@ -160,13 +160,17 @@ class Agent:
         try:
             fallback = False
             # classified once: the planner narrows the tools by it, the gate holds plans to it
+            profile = self.gateway.profile  # on half a graph (a new process: astiop chat), a
+            if profile.pending() or profile.make == "unknown":  # role or the make is missing:
+                await asyncio.to_thread(self.gateway.confirm_missing)  # read it whole first
             intents = intent.classify(request, self.locations())
-            if said := roles.nothing_to_read(intents, self.gateway.profile):
-                result.answer = said  # asked only of readings this robot does not publish
-                return await self._finish(request, result, t0)
-            said = local_save.unknown_place(request, intents, self.gateway.profile, self.store)
-            if said:  # a place its map does not hold, on a robot that cannot look it up
-                result.answer = said
+            if said := await self._unless_discovered(
+                lambda: (
+                    roles.nothing_to_read(intents, self.gateway.profile)
+                    or local_save.unknown_place(request, intents, self.gateway.profile, self.store)
+                )
+            ):  # asked only of readings this robot does not publish, or of a place its map
+                result.answer = said  # does not hold on a robot that cannot look it up
                 return await self._finish(request, result, t0)
             place = local_save.asked(intents, self.gateway.profile)
             if place and self.store is not None:  # no save service: kept in astiop's store
@@ -216,6 +220,14 @@ class Agent:
             self.recorder.finish_now(result, status="error")
             raise
         return await self._finish(request, result, t0)
+
+    async def _unless_discovered(self, missing) -> str:
+        """`missing()`'s answer, said only once the robot's graph has been read whole."""
+        said = missing()
+        if said:  # a process still discovering the robot reads its graph again first
+            await asyncio.to_thread(self.gateway.confirm_missing)
+            said = missing()
+        return said
 
     async def _finish(self, request: str, result: TurnResult, t0: float) -> TurnResult:
         result.total_s = time.perf_counter() - t0

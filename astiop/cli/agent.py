@@ -104,9 +104,13 @@ def chat(
         replace_mission=replace,
     )
 
+    streamed = []  # whether the answer came as tokens (a model's, the rules'), or whole
+
     def on_event(kind: str, data) -> None:
         if as_json:
             return
+        if kind.startswith("answer"):
+            streamed.append(kind)
         if kind == "command":
             mark = "ran" if data.executed else "REJECTED"
             typer.echo(
@@ -157,6 +161,8 @@ def chat(
     if as_json:
         print_json({**result.as_json(), "follow_up": follow or None})
     else:
+        if not streamed and result.answer:  # answered without the model: said whole
+            typer.echo(result.answer, nl=False)
         typer.echo("")
         if follow:
             typer.echo(f"↳ {follow}")

@@ -8,6 +8,7 @@ from pathlib import Path
 import typer
 
 from astiop.cli.common import CliState
+from astiop.robot.fleet import is_fleet
 
 # `astiop serve`'s warm console: its services built (nothing running yet), waits for a tab
 SPARE = "ASTIOP_CONSOLE_SPARE"
@@ -40,13 +41,47 @@ def run_console(st: CliState, record: str | None = None) -> None:
     record_path = None
     if record is not None:
         record_path = Path(record).expanduser() if record else default_path(st.db_path.parent)
+    settings, fleet = st.settings, None
+    if is_fleet(st.fleet_settings):
+        settings, fleet = _fleet(st)
     try:
-        app = make_app(st.settings, st.store, record=record_path)
+        app = make_app(settings, st.store, record=record_path, fleet=fleet)
     except (SpecError, BackendError) as exc:
+        if fleet is not None:
+            fleet.close()
         fail(str(exc))
     if spare:  # built ahead (a ROS 2 robot discovered, the model loading): now its tab
         _wait_for_tab()
     app.run()
+
+
+def _fleet(st: CliState):
+    """The fleet's robots found (said as they are), the current one (--robot-name, else the
+    first), and a watch of every one of them."""
+    from functools import partial
+
+    from astiop.cli.common import fail
+    from astiop.robot.factory import make_robot_gateway
+    from astiop.robot.fleet import FleetError, find_robots, robot_settings
+    from astiop.robot.fleet_watch import FleetWatch
+
+    whole = st.fleet_settings
+    typer.echo("finding the fleet's robots…", err=True)
+    try:
+        robots = find_robots(whole, lambda r: typer.echo(f"  {r.name} ({r.namespace})", err=True))
+    except FleetError as exc:
+        fail(str(exc))
+    current = st.robot_name or robots[0].name
+    if current not in {r.name for r in robots}:
+        fail(f"no robot named '{current}' in the fleet (its robots: "
+             f"{', '.join(r.name for r in robots)})")  # fmt: skip
+    opens = [
+        (r.name, r.namespace,
+         partial(make_robot_gateway, robot_settings(whole, r.name), None, realtime=True,
+                 who="fleet"))
+        for r in robots
+    ]  # fmt: skip
+    return robot_settings(whole, current), FleetWatch(opens)
 
 
 def replay(

@@ -5,7 +5,6 @@ in threads of this process."""
 
 from __future__ import annotations
 
-import math
 import threading
 import time
 
@@ -15,51 +14,19 @@ from astiop.cli.common import fail, print_json, state
 
 app = typer.Typer(help="The robots of the fleet: their state; one E-STOP for all.")
 READ_S = 10.0  # a robot's first pose and battery, or it is said to be silent
+STATUS_S = 2.0  # then its state word (a robot with no status of its own: its goal status)
 
 
 def members(st, on_found=None) -> list:
     """The fleet's robots: the settings' list, or every robot namespace on the domain, read
     until the graph has settled; `on_found(robot)` is called as each is found (an E-STOP does
     not wait for the whole graph to stop the first robot)."""
-    from astiop.robot.backend import BackendError
-    from astiop.robot.factory import make_robot_gateway
-    from astiop.robot.fleet import discovered
-    from astiop.robot.gateway import SETTLED_S
+    from astiop.robot.fleet import FleetError, find_robots
 
-    on_found = on_found or (lambda _robot: None)
-    settings = st.fleet_settings
-    if settings.robot.backend != "ros2":
-        fail("a fleet is reached over ROS 2: add --robot ros2")
-    if settings.fleet.discover == "list":
-        if not settings.fleet.robots:
-            fail("no fleet: list its robots as [[fleet.robots]] in the settings, or --fleet auto")
-        for robot in settings.fleet.robots:
-            on_found(robot)
-        return list(settings.fleet.robots)
-    whole = settings.model_copy(
-        update={"robot": settings.robot.model_copy(update={"namespace": ""})}
-    )
     try:
-        gateway = make_robot_gateway(whole, None, who="fleet", discover=False)
-    except BackendError as exc:
-        fail(f"the ROS 2 graph could not be read: {exc}")
-    found: dict[str, object] = {}
-    try:
-        now = time.monotonic()
-        deadline, changed = now + settings.robot.ros2_timeout_s, now
-        while now < deadline and not (found and now - changed >= SETTLED_S):
-            gateway.backend.refresh()
-            for robot in discovered(gateway.catalog):
-                if robot.name not in found:
-                    found[robot.name], changed = robot, time.monotonic()
-                    on_found(robot)
-            time.sleep(0.2)
-            now = time.monotonic()
-    finally:
-        gateway.close()
-    if not found:
-        fail("no robot namespace on the ROS 2 domain (a velocity command and a pose under one)")
-    return list(found.values())
+        return find_robots(st.fleet_settings, on_found)
+    except FleetError as exc:
+        fail(str(exc))
 
 
 def each(robots: list, work) -> dict[str, object]:
@@ -83,6 +50,7 @@ def each(robots: list, work) -> dict[str, object]:
 def _read(settings, robot) -> dict:
     from astiop.robot.factory import make_robot_gateway
     from astiop.robot.fleet import robot_settings
+    from astiop.robot.fleet_watch import row_of
 
     gateway = make_robot_gateway(robot_settings(settings, robot.name), None, who="fleet")
     try:
@@ -91,20 +59,11 @@ def _read(settings, robot) -> dict:
         while time.monotonic() < deadline:
             st = gateway.state()
             if st.pose is not None and st.battery is not None:
-                break
+                deadline = min(deadline, time.monotonic() + STATUS_S)
+                if st.status is not None:
+                    break
             time.sleep(0.2)
-        st, profile = gateway.state(), gateway.profile
-        return {
-            "name": robot.name,
-            "namespace": robot.namespace,
-            "make": profile.make,
-            "state": st.state_word,
-            "battery_percent": round(st.battery.percentage * 100, 1) if st.battery else None,
-            "x_m": round(st.pose.x, 2) if st.pose else None,
-            "y_m": round(st.pose.y, 2) if st.pose else None,
-            "theta_deg": round(math.degrees(st.pose.theta), 1) if st.pose else None,
-            "speed_m_s": round(st.speed, 2) if st.speed is not None else None,
-        }
+        return row_of(robot.name, robot.namespace, gateway, None).as_json()
     finally:
         gateway.close()
 

@@ -94,6 +94,11 @@ class RobotBackend(ABC):
         """Read the robot's graph again; False if nothing was read."""
         return False
 
+    def discovering(self) -> bool:
+        """Whether this process may not have discovered the whole robot yet (a name missing
+        from its graph may only not have been heard of)."""
+        return False
+
     def robot_time(self) -> float | None:
         """Now on the clock the robot stamps its messages with (seconds), or None when it is
         not known here; a reading's age is measured on it."""

@@ -7,6 +7,9 @@ put in robot.namespace and robot.profile."""
 
 from __future__ import annotations
 
+import time
+from collections.abc import Callable
+
 from astiop.config import FleetRobot, Settings
 from astiop.ros2.catalog import Catalog
 from astiop.ros2.profile import ProfileSpec, match_profile
@@ -57,3 +60,51 @@ def namespaces(catalog: Catalog) -> list[str]:
 
 def discovered(catalog: Catalog) -> list[FleetRobot]:
     return [FleetRobot(name=ns.lstrip("/"), namespace=ns) for ns in namespaces(catalog)]
+
+
+def find_robots(
+    settings: Settings, on_found: Callable[[FleetRobot], None] | None = None
+) -> list[FleetRobot]:
+    """The fleet's robots: the settings' list, or every robot namespace on the domain, read
+    until the graph has settled (or robot.ros2_timeout_s); `on_found(robot)` as each is found."""
+    from astiop.robot.backend import BackendError
+    from astiop.robot.factory import make_robot_gateway
+    from astiop.robot.gateway import SETTLED_S
+
+    on_found = on_found or (lambda _robot: None)
+    if settings.robot.backend != "ros2":
+        raise FleetError("a fleet is reached over ROS 2: add --robot ros2")
+    if settings.fleet.discover == "list":
+        if not settings.fleet.robots:
+            raise FleetError(
+                "no fleet: list its robots as [[fleet.robots]] in the settings, or --fleet auto"
+            )
+        for robot in settings.fleet.robots:
+            on_found(robot)
+        return list(settings.fleet.robots)
+    whole = settings.model_copy(
+        update={"robot": settings.robot.model_copy(update={"namespace": ""})}
+    )
+    try:
+        gateway = make_robot_gateway(whole, None, who="fleet", discover=False)
+    except BackendError as exc:
+        raise FleetError(f"the ROS 2 graph could not be read: {exc}") from None
+    found: dict[str, FleetRobot] = {}
+    try:
+        now = time.monotonic()
+        deadline, changed = now + settings.robot.ros2_timeout_s, now
+        while now < deadline and not (found and now - changed >= SETTLED_S):
+            gateway.backend.refresh()
+            for robot in discovered(gateway.catalog):
+                if robot.name not in found:
+                    found[robot.name], changed = robot, time.monotonic()
+                    on_found(robot)
+            time.sleep(0.2)
+            now = time.monotonic()
+    finally:
+        gateway.close()
+    if not found:
+        raise FleetError(
+            "no robot namespace on the ROS 2 domain (a velocity command and a pose under one)"
+        )
+    return sorted(found.values(), key=lambda r: r.name)  # as found, and said, in a stable order

@@ -82,6 +82,13 @@ class RobotGateway:
         self.use_map()
         return self.profile
 
+    def confirm_missing(self) -> Profile:
+        """Before saying a robot lacks something: a process still discovering it reads its
+        graph until it has settled (a role missing from half a graph is a wrong answer)."""
+        if self.backend.discovering():
+            return self.settled_profile(self.timeout_s)
+        return self.profile
+
     def use_map(self) -> None:
         """The robot's map from its profile: the store's places are that map's, and goals are
         fenced by the profile's geofence, else by the extent of the robot's own map."""

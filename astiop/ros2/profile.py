@@ -151,6 +151,7 @@ class Match:
     name: str  # the full name on the robot's graph, namespace included
     type: str
     why: str  # "type …", "name …", "the profile file", or why nothing matched
+    announced: bool = True  # False: a profile file names it and the graph has not shown it yet
 
 
 @dataclass(frozen=True)
@@ -237,6 +238,10 @@ class Profile:
 
     def missing(self) -> list[str]:
         return [r for r in ROLE_NAMES if not self.has(r)]
+
+    def pending(self) -> list[str]:
+        """Roles a profile file names that the graph has not shown yet."""
+        return [r for r, m in self.matches.items() if not m.announced]
 
     def state_topics(self) -> list[str]:
         """The topics the live state is built from, where the robot has them (TF only for a
@@ -342,7 +347,7 @@ def _fixed(role: str, name: str, catalog: Catalog, entries: dict, source: str) -
         if name in table:
             return Match(role, kind, name, table[name], f"set by {source}")
     kind, typ = _BY_NAME[role].kinds[0]
-    return Match(role, kind, name, typ, f"set by {source} (not on the graph yet)")
+    return Match(role, kind, name, typ, f"set by {source} (not on the graph yet)", False)
 
 
 def recognise(catalog: Catalog) -> str:

@@ -22,6 +22,15 @@ from astiop.robot.safety import UNIT_QUATERNION_TOLERANCE
 GOAL_ABORT_S = 1.5  # at shutdown: how long running goals have to be aborted
 MAP_TYPE = "nav_msgs/msg/OccupancyGrid"
 
+try:  # rclpy's jazzy name; humble's: rclpy/rclpy/qos_event.py
+    from rclpy.event_handler import PublisherEventCallbacks
+except ImportError:  # pragma: no cover - humble
+    from rclpy.qos_event import PublisherEventCallbacks
+
+# No QoS event handlers of rclpy's own on a simulated robot's publishers: each is a waitable in
+# every executor wait, and with a fleet's hundreds of publishers they cost most of a core.
+QUIET_EVENTS = PublisherEventCallbacks(use_default_callbacks=False)
+
 RELIABLE = QoSProfile(depth=10)
 LATCHED = QoSProfile(
     depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE
@@ -67,8 +76,9 @@ def goal_refusal(pose: dict[str, Any], frames: tuple[str, ...] = ("", "map")) ->
 
 class RobotNodes:
     """A robot's nodes in one rclpy context, spun by one executor until `stop()`. With a
-    `parent`, its nodes join the parent's context and are spun by the parent's executor (a
-    fleet's robots in one process); `domain_id` puts a context on a domain of its own."""
+    `parent`, its nodes are made in the parent's context, which the parent ends (a fleet's
+    robots in one process, each spun by an executor of its own: one executor's wait set over
+    every robot's entities costs O(N²)); `domain_id` puts a context on a domain of its own."""
 
     def __init__(self, parent: RobotNodes | None = None, domain_id: int | None = None) -> None:
         self.parent = parent
@@ -89,13 +99,9 @@ class RobotNodes:
         ns, _, base = name.rpartition("/")
         node = Node(base, namespace=ns or "/", context=self.context, **options)
         self.nodes[key or name] = node
-        if self.parent is not None:
-            self.parent.nodes[name] = node
         return node
 
     def start_executor(self) -> None:
-        if self.parent is not None:
-            return  # the parent spins its members' nodes
         self._executor = MultiThreadedExecutor(num_threads=4, context=self.context)
         for node in self.nodes.values():
             self._executor.add_node(node)
@@ -124,8 +130,6 @@ class RobotNodes:
         self._stopped.set()
 
     def close_nodes(self) -> None:
-        if self.parent is not None:
-            return  # the parent's close ends its members' nodes
         if self._executor is not None:
             self._executor.shutdown(timeout_sec=1.0)
         for node in self.nodes.values():

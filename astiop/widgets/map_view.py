@@ -73,7 +73,7 @@ class _Name(NamedTuple):
     inside: bool = False
 
 
-def legend_items(geometry, markers: bool) -> list[tuple[int, str]]:
+def legend_items(geometry, markers: bool, what: str = "locations") -> list[tuple[int, str]]:
     """What the view draws, as (palette index, what it is): only what this geometry can show."""
     items = [(ROBOT, "robot"), (HEADING, "heading"), (PLAN, "path"), (LIDAR, "LiDAR hits")]
     items.append((OBSTACLE, "obstacles seen"))
@@ -82,12 +82,13 @@ def legend_items(geometry, markers: bool) -> list[tuple[int, str]]:
     elif isinstance(geometry, OccupancyGrid):
         items.append((WALL, "occupied (/map)"))
     if markers:
-        items.append((LABEL, "locations"))
+        items.append((LABEL, what))
     return items
 
 
 class WarehouseMapView(Widget):
     DEFAULT_CSS = "WarehouseMapView { height: 1fr; width: 1fr; min-height: 10; }"
+    markers_are = "locations"  # what the named markers are, in the legend (the Fleet's: robots)
 
     def __init__(self, geometry: WarehouseMap | OccupancyGrid | None, **kwargs):
         super().__init__(**kwargs)
@@ -155,7 +156,7 @@ class WarehouseMapView(Widget):
                 self._legend.append([Segment(note[:w], _LEGEND_TEXT)])
             line: list[Segment] = []
             used = 0
-            for value, what in legend_items(self.geometry, bool(self.locations)):
+            for value, what in legend_items(self.geometry, bool(self.locations), self.markers_are):
                 cells = len(what) + 4  # swatch, space, name, two spaces
                 if line and used + cells - 2 > w:
                     self._legend.append(line)

@@ -48,14 +48,9 @@ class SimFleetNodes:
             self.host.init_context()
         for robot in self.robots:
             robot.start()
-        if self.host is not None:
-            self.host.start_executor()
         self.runner.start()
 
     def spin(self) -> None:
-        if self.host is not None:
-            self.host.spin()
-            return
         threads = [threading.Thread(target=r.spin, daemon=True) for r in self.robots[1:]]
         for t in threads:
             t.start()
@@ -70,7 +65,7 @@ class SimFleetNodes:
 
     def close(self) -> None:
         self.runner.stop()
-        if self.host is not None:
-            self.host.close_nodes()  # every robot's nodes, then the context
         for robot in self.robots:
             robot.close()
+        if self.host is not None:
+            self.host.close_nodes()  # the shared context, once every robot's nodes are gone

@@ -27,6 +27,7 @@ from astiop.sim.simulator import GoalError, Simulator
 from astiop.sim_robots.ros2_common import (
     MAP_TYPE,
     QOS,
+    QUIET_EVENTS,
     RELIABLE,
     RobotNodes,
     duration,
@@ -119,7 +120,9 @@ class SimRobotNodes(RobotNodes):
     # -- topics -----------------------------------------------------------------------------
     def _publish(self, name: str, type_: str, node: str, rate_hz: float, qos: str) -> None:
         cls = interface_class(type_)
-        pub = self.nodes[node].create_publisher(cls, self.ns + name, QOS[qos])
+        pub = self.nodes[node].create_publisher(
+            cls, self.ns + name, QOS[qos], event_callbacks=QUIET_EVENTS
+        )
         self._publishers[name] = pub
 
         def send() -> None:

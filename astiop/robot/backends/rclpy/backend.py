@@ -128,6 +128,9 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         """The nodes discovered on the robot's domain (not this process's own)."""
         return [n for n, _ in self._lists["node"]]
 
+    def discovering(self) -> bool:
+        return time.monotonic() - self.t0 < DISCOVERY_YOUNG_S
+
     def refresh(self) -> bool:
         """Read the graph again, and the parameters when the nodes changed or 30 s passed."""
         with self._refresh_lock:
@@ -534,9 +537,10 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
 
     def release_estop(self, *, robot: bool = True) -> list[str]:
         self.inflight.release()
-        spec = self.catalog.services.get(RELEASE)
+        name = self._name("release", RELEASE)  # under the robot's namespace
+        spec = self.catalog.services.get(name)
         if spec is None or not robot:
             return []
         seq = self.events.seq  # a robot that latches its own stop lets go too
-        self._calls.call(RELEASE, spec.type, "release")
+        self._calls.call(name, spec.type, "release")
         return [e.message for e in self.events.since(seq) if e.kind == "estop"]

@@ -62,6 +62,7 @@ from astiop.ros2.validation import CANCEL_SUFFIX, Checked
 ARRAYS = {"/scan", "/plan", "/obstacles"}  # echoed in full: ros2 truncates at 128 items
 GRAPH_REFRESH_S = 30.0
 ZERO_PUB_S = 1.0  # an E-STOP's ten zero Twists at 10 Hz: a second on top of the start-up
+DISCOVERY_YOUNG_S = 10.0  # a process this young may not have the whole robot in its lists
 NO_GOAL_AFTER_S = 5.0  # a latched goal status echoed this long and none came: no goal yet
 
 
@@ -140,6 +141,10 @@ class Ros2Backend(RobotBackend):
         """`ros2 ARGV`; inside an actuating command's job, the E-STOP kills it."""
         job = self.inflight.current_job()
         return ros2_process.run(self.executable, argv, timeout, job=job, **kw)
+
+    def discovering(self) -> bool:
+        # a new process's first lists (the daemon's, or a fresh discovery) may be partial
+        return time.monotonic() - self.t0 < DISCOVERY_YOUNG_S
 
     def refresh(self) -> bool:
         """Read the graph again (a name was missing, or 30 s passed); False if it failed."""
@@ -438,16 +443,15 @@ class Ros2Backend(RobotBackend):
         self.inflight.release()
         if self._armed is not None:
             self._armed.arm()
-        spec = self.catalog.services.get(RELEASE)
+        name = self._name("release", RELEASE)  # under the robot's namespace
+        spec = self.catalog.services.get(name)
         if spec is None or not robot:
             return []
         # a robot that latches its own stop lets go too
-        run = self._run(["service", "call", RELEASE, spec.type, "{}"], self.timeout_s)
+        run = self._run(["service", "call", name, spec.type, "{}"], self.timeout_s)
         if run.returncode == 0 and not run.stopped and not _waited_for_service(run.out):
             return []
-        why = f"release {RELEASE}: " + (
-            run.err.strip()[-200:] or f"no answer in {self.timeout_s:g} s"
-        )
+        why = f"release {name}: " + (run.err.strip()[-200:] or f"no answer in {self.timeout_s:g} s")
         self.events.add("estop", "error", why)
         return [why]
 

@@ -1,0 +1,193 @@
+"""Every robot of a fleet watched at once: a gateway per robot, its state read off the caller's
+thread, one row per robot with what it reported and how long ago; the E-STOP of all of them in
+parallel. The console's Fleet screen and `astiop fleet list` read the same rows."""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from astiop.robot.gateway import RobotGateway
+from astiop.robot.state import RobotState
+
+STALE_S = 3.0  # a robot not heard for this long is stale: what it last said may no longer hold
+LOW_BATTERY = 0.2
+
+
+@dataclass(frozen=True)
+class FleetRow:
+    name: str
+    namespace: str
+    make: str = ""
+    state: str = "unknown"
+    battery: float | None = None  # 0..1
+    x: float | None = None
+    y: float | None = None
+    theta: float | None = None
+    speed: float | None = None
+    goal: str = ""
+    age_s: float | None = None  # since its state last changed on our side (None: never heard)
+    error: str = ""  # why it could not be reached, or how its E-STOP failed
+
+    @property
+    def stale(self) -> bool:
+        return self.age_s is None or self.age_s > STALE_S
+
+    @property
+    def low_battery(self) -> bool:
+        return self.battery is not None and self.battery < LOW_BATTERY
+
+    def as_json(self) -> dict:
+        return {
+            "name": self.name,
+            "namespace": self.namespace,
+            "make": self.make,
+            "state": self.state,
+            "battery_percent": None if self.battery is None else round(self.battery * 100, 1),
+            "x_m": None if self.x is None else round(self.x, 2),
+            "y_m": None if self.y is None else round(self.y, 2),
+            "theta_deg": None if self.theta is None else round(math.degrees(self.theta), 1),
+            "speed_m_s": None if self.speed is None else round(self.speed, 2),
+            "goal": self.goal,
+            **({"error": self.error} if self.error else {}),
+        }
+
+
+def row_of(name: str, namespace: str, gateway: RobotGateway, age_s: float | None) -> FleetRow:
+    make = gateway.profile.make if gateway.profile else ""
+    return row_from(name, namespace, make, gateway.state(), age_s)
+
+
+def row_from(name: str, namespace: str, make: str, st: RobotState, age_s: float | None):
+    pose = st.pose
+    return FleetRow(
+        name=name,
+        namespace=namespace,
+        make=make,
+        state=st.state_word,
+        battery=st.battery.percentage if st.battery else None,
+        x=pose.x if pose else None,
+        y=pose.y if pose else None,
+        theta=pose.theta if pose else None,
+        speed=st.speed,
+        goal=st.status.active_goal if st.status else "",
+        age_s=age_s,
+    )
+
+
+class FleetWatch:
+    """`robots`: (name, namespace, open) with `open()` making that robot's gateway. Each robot's
+    row is refreshed every `period_s` by a thread of its own (a robot slow to answer holds up
+    no other); `on_rows(rows)` is called from those threads."""
+
+    def __init__(
+        self,
+        robots: list[tuple[str, str, Callable[[], RobotGateway]]],
+        on_rows: Callable[[list[FleetRow]], None] = lambda _rows: None,
+        period_s: float = 0.5,
+    ):
+        self.robots = robots
+        self.on_rows = on_rows
+        self.period_s = period_s
+        self.gateways: dict[str, RobotGateway] = {}
+        self._rows = {name: FleetRow(name, ns) for name, ns, _ in robots}
+        self._heard: dict[str, tuple[object, float]] = {}  # last state seen, when it changed
+        self._lock = threading.Lock()
+        self._halt = threading.Event()
+        self._threads: list[threading.Thread] = []
+
+    def start(self) -> FleetWatch:
+        for name, ns, open_ in self.robots:
+            t = threading.Thread(
+                target=self._watch, args=(name, ns, open_), name=f"fleet-{name}", daemon=True
+            )
+            t.start()
+            self._threads.append(t)
+        return self
+
+    def rows(self) -> list[FleetRow]:
+        with self._lock:
+            return [self._rows[name] for name, _, _ in self.robots]
+
+    def _set(self, row: FleetRow) -> None:
+        with self._lock:
+            self._rows[row.name] = row
+        self.on_rows(self.rows())
+
+    def _watch(self, name: str, ns: str, open_) -> None:
+        try:
+            gateway = open_()
+            gateway.start()
+        except Exception as exc:  # noqa: BLE001 - one robot not reached is its own row
+            self._set(FleetRow(name, ns, error=f"not reached: {exc}"))
+            return
+        with self._lock:
+            self.gateways[name] = gateway
+        while not self._halt.is_set():
+            try:
+                self._set(row_of(name, ns, gateway, self._age(name, gateway)))
+            except Exception as exc:  # noqa: BLE001
+                self._set(FleetRow(name, ns, error=f"not read: {exc}"))
+            self._halt.wait(self.period_s)
+
+    def _age(self, name: str, gateway: RobotGateway) -> float | None:
+        """Seconds since this robot's state last changed (a live robot's readings change with
+        every message: its pose, its battery); None before it said anything."""
+        st = gateway.state()
+        if st.lost_s is not None:
+            return st.lost_s
+        said = (st.t, st.pose, st.battery)
+        if st.pose is None and st.battery is None and st.status is None:
+            return None
+        now = time.monotonic()
+        last = self._heard.get(name)
+        if last is None or last[0] != said:
+            self._heard[name] = (said, now)
+            return 0.0
+        return now - last[1]
+
+    def estop_all(self) -> dict[str, list[str]]:
+        """Every watched robot stopped at once, each by its own gateway; a robot not reached is
+        a failure of its own. The failures by robot name (empty: stopped)."""
+        results: dict[str, list[str]] = {}
+
+        def stop(name: str) -> None:
+            gateway = self.gateways.get(name)
+            if gateway is None:
+                results[name] = ["not reached: no connection to it"]
+                return
+            try:
+                results[name] = gateway.estop()
+            except Exception as exc:  # noqa: BLE001
+                results[name] = [str(exc)]
+
+        threads = [threading.Thread(target=stop, args=(n,)) for n, _, _ in self.robots]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        for name, failures in results.items():
+            if failures:
+                row = self._rows[name]
+                self._set(FleetRow(**{**row.__dict__, "error": "; ".join(failures)}))
+        return results
+
+    def release_all(self) -> list[str]:
+        """Each robot's own stop let go (/release, where it latches one); what failed, named."""
+        failures: list[str] = []
+        for name, gateway in list(self.gateways.items()):
+            try:
+                failures += [f"{name}: {f}" for f in gateway.release_estop()]
+            except Exception as exc:  # noqa: BLE001
+                failures.append(f"{name}: {exc}")
+        return failures
+
+    def close(self) -> None:
+        self._halt.set()
+        for t in self._threads:
+            t.join(timeout=2)
+        for gateway in list(self.gateways.values()):
+            gateway.close()
