@@ -197,16 +197,20 @@ class AstiopApp(App):
     @property
     def current_robot(self) -> str:
         """The robot Dashboard, Chat, Teleop and Locations act on, by its fleet name."""
-        return self.services.settings.robot.namespace.strip("/") or "this robot"
+        namespace = self.services.settings.robot.namespace
+        for name, ns, _ in self.fleet.robots if self.fleet is not None else ():
+            if ns == namespace:
+                return name
+        return namespace.strip("/") or "this robot"
 
     def fleet_rows(self) -> list[FleetRow]:
         if self.fleet is not None:
             return self.fleet.rows()
         gateway = self.services.gateway
         make = gateway.profile.make if gateway.profile else ""
-        lost = self.robot_state.lost_s
         namespace = self.services.settings.robot.namespace
-        return [row_from(self.current_robot, namespace, make, self.robot_state, lost or 0.0)]
+        st = self.robot_state
+        return [row_from(self.current_robot, namespace, make, st, st.lost_s or 0.0)]
 
     def refresh_subtitle(self) -> None:
         robot = self.services.gateway.label

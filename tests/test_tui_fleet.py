@@ -4,6 +4,8 @@ them (ctrl+r releasing all, after a question that names them)."""
 
 from __future__ import annotations
 
+import time
+
 from textual.widgets import DataTable, Static
 
 from astiop.app import make_app
@@ -87,3 +89,33 @@ async def test_every_robot_is_listed_filtered_sorted_and_stopped_at_once(tmp_pat
             await wait_for(pilot, lambda: all(r[1] == "charging" for r in _rows(app)))
     finally:
         runner.stop()
+
+
+def test_a_robot_not_reached_is_its_own_red_row_and_its_stop_a_failure(tmp_path):
+    settings = load_settings({}, env={}, path=tmp_path / "none.toml")
+    fleet = SimFleet(["near"])
+
+    def unreachable():
+        raise ConnectionError("no route to /far")
+
+    watch = FleetWatch(
+        [
+            ("near", "/near", lambda: _gateway(settings, fleet.robots[0])),
+            ("far", "/far", unreachable),
+        ],
+        period_s=0.05,
+    ).start()
+    try:
+        rows = {}
+        for _ in range(100):
+            rows = {r.name: r for r in watch.rows()}
+            if rows["far"].error and rows["near"].battery is not None:
+                break
+            time.sleep(0.05)
+        assert rows["far"].error == "not reached: no route to /far"
+        assert rows["near"].state == "idle" and not rows["near"].error
+        failures = watch.estop_all()
+        assert failures["near"] == [] and fleet.robots[0].e_stopped
+        assert failures["far"] == ["not reached: no connection to it"]
+    finally:
+        watch.close()

@@ -6,9 +6,8 @@ from __future__ import annotations
 
 import math
 import threading
-import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.state import RobotState
@@ -61,6 +60,16 @@ def row_of(name: str, namespace: str, gateway: RobotGateway, age_s: float | None
     return row_from(name, namespace, make, gateway.state(), age_s)
 
 
+def _age(st: RobotState) -> float | None:
+    """How long ago the robot was last heard: 0 while its readings come (a live backend keeps
+    only fresh ones), how long it has been silent once it is lost, None before it said anything."""
+    if st.lost_s is not None:
+        return st.lost_s
+    if st.pose is None and st.battery is None and st.status is None:
+        return None
+    return 0.0
+
+
 def row_from(name: str, namespace: str, make: str, st: RobotState, age_s: float | None):
     pose = st.pose
     return FleetRow(
@@ -94,7 +103,7 @@ class FleetWatch:
         self.period_s = period_s
         self.gateways: dict[str, RobotGateway] = {}
         self._rows = {name: FleetRow(name, ns) for name, ns, _ in robots}
-        self._heard: dict[str, tuple[object, float]] = {}  # last state seen, when it changed
+        self._failed: dict[str, str] = {}  # robots whose E-STOP failed, and how
         self._lock = threading.Lock()
         self._halt = threading.Event()
         self._threads: list[threading.Thread] = []
@@ -128,26 +137,13 @@ class FleetWatch:
             self.gateways[name] = gateway
         while not self._halt.is_set():
             try:
-                self._set(row_of(name, ns, gateway, self._age(name, gateway)))
+                st = gateway.state()
+                row = row_from(name, ns, gateway.profile.make, st, _age(st))
+                failed = self._failed.get(name)
+                self._set(replace(row, error=failed) if failed else row)
             except Exception as exc:  # noqa: BLE001
                 self._set(FleetRow(name, ns, error=f"not read: {exc}"))
             self._halt.wait(self.period_s)
-
-    def _age(self, name: str, gateway: RobotGateway) -> float | None:
-        """Seconds since this robot's state last changed (a live robot's readings change with
-        every message: its pose, its battery); None before it said anything."""
-        st = gateway.state()
-        if st.lost_s is not None:
-            return st.lost_s
-        said = (st.t, st.pose, st.battery)
-        if st.pose is None and st.battery is None and st.status is None:
-            return None
-        now = time.monotonic()
-        last = self._heard.get(name)
-        if last is None or last[0] != said:
-            self._heard[name] = (said, now)
-            return 0.0
-        return now - last[1]
 
     def estop_all(self) -> dict[str, list[str]]:
         """Every watched robot stopped at once, each by its own gateway; a robot not reached is
@@ -170,14 +166,15 @@ class FleetWatch:
         for t in threads:
             t.join()
         for name, failures in results.items():
-            if failures:
-                row = self._rows[name]
-                self._set(FleetRow(**{**row.__dict__, "error": "; ".join(failures)}))
+            if failures:  # red until released, whatever it reports meanwhile
+                self._failed[name] = "E-STOP failed: " + "; ".join(failures)
+                self._set(replace(self._rows[name], error=self._failed[name]))
         return results
 
     def release_all(self) -> list[str]:
         """Each robot's own stop let go (/release, where it latches one); what failed, named."""
         failures: list[str] = []
+        self._failed.clear()
         for name, gateway in list(self.gateways.items()):
             try:
                 failures += [f"{name}: {f}" for f in gateway.release_estop()]
