@@ -328,7 +328,9 @@ def test_hz_returns_after_two_windows_with_the_rate(monkeypatch):
         gateway = make_gateway(stream=False)
         try:
             r = gateway.run("ros2 topic hz /robot_pose", timeout=15)
-            assert r.values["windows"] == 2  # stopped after two windows, not at the bound
+            # stopped once two windows were read, not at the bound (on a loaded machine a third
+            # may be printed before the process is stopped: what it printed is reported)
+            assert 2 <= r.values["windows"] <= 3 and r.duration_s < 10, (r.values, r.duration_s)
             assert 5.0 < r.values["average_rate"] < 15.0  # /robot_pose is 10 Hz
         finally:
             gateway.close()
