@@ -37,9 +37,13 @@ def astiop(db: Path, *args: str, env=None, timeout: float = 120) -> subprocess.C
     return subprocess.run([*cli, *args], capture_output=True, text=True, timeout=timeout, env=env)
 
 
-def test_two_astibots_in_one_warehouse_each_reached_by_its_name(tmp_path):
+def test_two_astibots_in_one_warehouse_each_reached_by_its_name(tmp_path, monkeypatch):
     require_ros()
     from geometry_msgs.msg import Pose2D
+
+    # a domain of its own: a fleet node's many nodes must never be left in the worker's
+    # discovery data for the next test's robot (its /astibot_1/navigator is a "navigator")
+    monkeypatch.setenv("ROS_DOMAIN_ID", str((int(os.environ["ROS_DOMAIN_ID"]) + 25) % 102))
 
     db = tmp_path / "fleet.db"
     # two robots: a fleet node costs ~14 % of a core per robot, and the suite runs beside it
