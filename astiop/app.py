@@ -29,7 +29,7 @@ from astiop.robot.sampler import StateSampler
 from astiop.robot.state import RobotState, TopicStat
 from astiop.ros2.render import goto_command, sent_text
 from astiop.ros2.validation import Checked
-from astiop.screens import mission_commands
+from astiop.screens import control, mission_commands
 from astiop.screens.approvals import ApprovalDesk
 from astiop.screens.bench import BenchScreen
 from astiop.screens.chat import ChatScreen
@@ -65,6 +65,7 @@ class AstiopApp(App):
         Binding("f5", "switch_mode('teleop')", "Teleop"),
         Binding("f6", "switch_mode('bench')", "Bench"),
         Binding("f7", "switch_mode('fleet')", "Fleet"),
+        Binding("ctrl+t", "take_control", "Take control", show=False),
         Binding("ctrl+r", "release_estop", "Release e-stop", priority=True),
         Binding("ctrl+q", "quit", "Quit", priority=True),
         # a replay's clock; focused inputs and tables keep these keys
@@ -112,6 +113,7 @@ class AstiopApp(App):
         self.refresh_subtitle()
         gateway.start()
         self.topic_stats = gateway.topic_stats()
+        control.start(self)
         self.switch_mode("dashboard")
         self._sampler.start()
         if self.fleet is not None:
@@ -217,7 +219,8 @@ class AstiopApp(App):
         if self.fleet is not None:  # never the wrong robot: its name on every screen
             robot = f"{self.current_robot} ({robot})"
         rec = "  ● REC" if self.recorder is not None else ""
-        self.sub_title = f"robot: {robot}  model: {self.services.endpoint.spec.raw}{rec}"
+        held = control.words(self.services.gateway)
+        self.sub_title = f"robot: {robot}{held}  model: {self.services.endpoint.spec.raw}{rec}"
 
     # -- a replay's clock --------------------------------------------------------------------
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
@@ -395,6 +398,9 @@ class AstiopApp(App):
             question = f"Release the e-stop of {names}? They may move again."
         self.push_screen(ConfirmModal(question), done)
 
+    def action_take_control(self) -> None:
+        control.take_over(self)
+
     def _release(self) -> None:
         failures = self.services.gateway.release_estop()
         if self.fleet is not None:
@@ -408,8 +414,10 @@ class AstiopApp(App):
     def confirm_from_thread(self, checked: Checked, timeout_s: float | None = None) -> bool:
         """The gateway's confirmation hook, called from a worker thread: ask with a modal that
         shows the command as it will be sent (after clamping)."""
+        robot = checked.namespace.strip("/") or (self.current_robot if self.fleet else "")
+        on = f" on {robot}" if robot else ""
         return self._ask_from_thread(
-            f"Run this command? It moves the robot.\n\n{sent_text(checked)}", timeout_s
+            f"Run this command{on}? It moves the robot.\n\n{sent_text(checked)}", timeout_s
         )
 
     def confirm_mission_from_thread(self, steps, forever: bool = False) -> bool:

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import os
 import subprocess
 import sys
 import time
@@ -15,6 +16,8 @@ import pytest
 
 from astiop.config import ConfigError, load_settings
 from astiop.robot.fleet import FleetError, namespaces, robot_settings
+from astiop.robot.lease import Lease, lease_key
+from astiop.store import Store
 from tests.ros import SimNode, require_ros, ros_client
 
 pytestmark = [pytest.mark.slow, pytest.mark.ros]
@@ -117,6 +120,22 @@ def test_two_turtlebot3s_are_found_read_addressed_and_stopped_at_once(tmp_path):
         assert out.returncode != 0 and "E-STOP" in out.stdout + out.stderr, out
         out = astiop(db, "--fleet", "auto", "estop", "--release", "--all", "--yes")
         assert out.returncode == 0 and "released: tb3_1, tb3_2" in out.stdout, out
+
+        # another console controls tb3_2: this one moves it only once it takes control
+        holder = Lease(Store(db), lease_key("/tb3_2", os.environ["ROS_DOMAIN_ID"]), "tb3_2",
+                       "another console")  # fmt: skip
+        assert holder.take() is None
+        drive = ("--fleet", "auto", "--robot-name", "tb3_2", "exec", "ros2 topic pub --once "
+                 "/tb3_2/cmd_vel geometry_msgs/msg/TwistStamped '{twist: {linear: {x: 0.1}}}'",
+                 "--yes")  # fmt: skip
+        out = astiop(db, *drive)
+        assert out.returncode != 0, out
+        assert "tb3_2 is controlled by another console" in out.stdout + out.stderr, out
+        out = astiop(db, "--take", *drive)
+        assert out.returncode == 0, out.stdout + out.stderr[-2000:]
+        assert holder.holder() is None  # taken, then let go when that command ended
+        holder.release()
+        holder.store.close()
 
 
 def test_a_bad_robot_name_and_a_release_of_one_robot_are_said_in_one_line(tmp_path):

@@ -6,7 +6,7 @@ import asyncio
 
 import typer
 
-from astiop.cli.common import Ending, fail, interactive, print_json, state
+from astiop.cli.common import Ending, fail, interactive, print_json, state, take_control
 
 
 def chat(
@@ -62,6 +62,7 @@ def chat(
     except BackendError as exc:
         endpoint.close(wait_s=0)  # the model's process ends on its own
         fail(str(exc))
+    take_control(gateway, st)
 
     def ask(checked) -> bool:
         return typer.confirm(f"run '{checked.command.display()}' (it moves the robot)?", err=True)

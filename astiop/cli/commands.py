@@ -100,6 +100,12 @@ def main(
         help="auto: the fleet is every robot namespace on the ROS 2 domain; list: the "
         "settings' [[fleet.robots]] (fleet.discover).",
     ),
+    take: bool = typer.Option(
+        False,
+        "--take",
+        help="Take control of a shared robot from whoever holds it (its lease); without it a "
+        "robot another console controls is only watched.",
+    ),
     record: str | None = typer.Option(
         None,
         "--record",
@@ -125,7 +131,7 @@ def main(
         overrides.setdefault("robot", {})["profile"] = profile
     if fleet is not None:
         overrides.setdefault("fleet", {})["discover"] = fleet
-    ctx.obj = CliState(overrides=overrides, robot_name=robot_name)
+    ctx.obj = CliState(overrides=overrides, robot_name=robot_name, take=take)
     if ctx.invoked_subcommand is None:
         from astiop.cli.console import run_console
 

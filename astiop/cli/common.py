@@ -46,6 +46,7 @@ def print_json(data: Any) -> None:
 class CliState:
     overrides: dict[str, Any] = field(default_factory=dict)
     robot_name: str | None = None  # --robot-name: one robot of the fleet
+    take: bool = False  # --take: control of a shared robot taken over
     _settings: Settings | None = None
     _store: Store | None = None
 
@@ -95,6 +96,14 @@ class CliState:
             except OSError as exc:
                 fail(f"cannot open database {self.db_path}: {exc.strerror or exc}")
         return self._store
+
+
+def take_control(gateway, st: CliState) -> None:
+    """Control of a shared robot for this command (its lease; --take: from whoever holds it).
+    Refused, the command still reads; its motion commands are refused, saying who controls."""
+    refused = gateway.take_control(force=st.take)
+    if refused:
+        typer.echo(f"astiop: {refused}: nothing will move it from here (--take)", err=True)
 
 
 def state(ctx: typer.Context) -> CliState:

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import typer
 
-from astiop.cli.common import fail, state
+from astiop.cli.common import fail, state, take_control
 
 
 def parse_http(value: str) -> tuple[str, int]:
@@ -85,6 +85,8 @@ def mcp(
         gateway = make_robot_gateway(st.settings, st.store, realtime=True, who="astiop mcp")
     except BackendError as exc:
         fail(str(exc))
+    if not read_only:
+        take_control(gateway, st)
     policy = Policy(approve_actuation=approve_actuation, timeout_s=approval_timeout)
     server = AstiopMCP(RobotTools(gateway, st.store, policy), read_only=read_only)
     if read_only:

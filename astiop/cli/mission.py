@@ -9,7 +9,7 @@ from pathlib import Path
 
 import typer
 
-from astiop.cli.common import Ending, fail, print_json, state
+from astiop.cli.common import Ending, fail, print_json, state, take_control
 
 app = typer.Typer(help="List, show, pause, resume and cancel missions.", no_args_is_help=True)
 
@@ -136,6 +136,7 @@ def resume(
         gateway = make_robot_gateway(st.settings, st.store)
     except BackendError as exc:
         fail(str(exc))
+    take_control(gateway, st)
 
     def on_step(report) -> None:
         if not as_json:

@@ -6,7 +6,7 @@ from typing import TYPE_CHECKING
 
 import typer
 
-from astiop.cli.common import fail, interactive, print_json, state
+from astiop.cli.common import fail, interactive, print_json, state, take_control
 
 if TYPE_CHECKING:
     from astiop.ros2.validation import Checked
@@ -32,6 +32,8 @@ def exec_command(
     except BackendError as exc:
         fail(str(exc))
     review = gateway.review(command)
+    if review.checked.kind == "actuate" and not dry_run:
+        take_control(gateway, st)
     if dry_run:
         c = review.checked
         data = {

@@ -107,7 +107,7 @@ def make_robot_gateway(
                 fixed=fixed,
             )
             backend.label = f"ros2 via the CLI: {why}"
-        return RobotGateway(
+        gateway = RobotGateway(
             backend,
             make_safety(settings, store, backend.catalog.profile),
             settings.robot.ros2_timeout_s,
@@ -115,6 +115,20 @@ def make_robot_gateway(
             who=who,
             restore_latch=restore_latch,
         )
+        if store is not None:  # a robot on the graph is shared: one operator controls it
+            gateway.lease = robot_lease(settings, store, who)
+        return gateway
     return make_sim_gateway(
         settings, store, realtime=realtime, who=who, restore_latch=restore_latch
     )
+
+
+def robot_lease(settings: Settings, store: Store, who: str):
+    """The lease of the settings' ROS 2 robot: its namespace on this process's domain."""
+    import os
+
+    from astiop.robot.lease import Lease, lease_key
+
+    ns = settings.robot.namespace
+    key = lease_key(ns, os.environ.get("ROS_DOMAIN_ID", "0"))
+    return Lease(store, key, ns.strip("/") or "the robot", who)

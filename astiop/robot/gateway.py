@@ -54,6 +54,7 @@ class RobotGateway:
         self._journal_lock = threading.Lock()
         self._latch_lock = threading.Lock()
         self._latch_seen = self.latched
+        self.lease = None  # robot/lease.py: set where the robot is shared (ROS 2)
         self.use_map()
         if restore_latch and self._latch_seen and not backend.e_stopped:
             backend.estop()  # a restart keeps the E-STOP until it is released
@@ -156,7 +157,19 @@ class RobotGateway:
     def start(self) -> None:
         self.backend.start()
 
+    def take_control(self, force: bool = False) -> str | None:
+        """Take the lease of a shared robot (robot/lease.py); why it could not be (None: this
+        process controls it, or the robot is this process's own)."""
+        if self.lease is None:
+            return None
+        other = self.lease.take(force)
+        if other is None:
+            return None
+        return f"{self.lease.name} is controlled by {other.words}"
+
     def close(self) -> None:
+        if self.lease is not None:
+            self.lease.release()
         if self._watcher is not None:
             self._watcher.close()
         self.backend.close()
@@ -307,6 +320,9 @@ class RobotGateway:
         if not review.allowed:
             result.reason = review.reason
             return result
+        if self.lease is not None and (why := self.lease.refusal(checked)):
+            result.reason = why  # another operator controls this robot
+            return result
         if review.needs_confirmation:
             if confirm is None:
                 result.reason = "this command moves the robot and needs the operator's confirmation"
@@ -396,6 +412,9 @@ class RobotGateway:
             result.reason = self.read_only_reason
             return result
         if not review.allowed:
+            return result
+        if self.lease is not None and (why := self.lease.refusal(review.checked)):
+            result.reason = why
             return result
         if self._held_by_estop(review.checked):
             result.reason = ESTOP_REASON

@@ -18,6 +18,7 @@ from astiop.bounded import one_line
 from astiop.store.approvals import ApprovalTables
 from astiop.store.bench import BenchTables
 from astiop.store.journal import JournalTables
+from astiop.store.leases import LeaseTables
 from astiop.store.locations import LocationTables
 from astiop.store.missions import MissionTables
 from astiop.store.records import Location, LocationError, StoreError
@@ -65,7 +66,7 @@ def _read_only_uri(path: Path) -> str:
     return f"{path.as_uri()}?mode=ro"
 
 
-class Store(LocationTables, JournalTables, BenchTables, ApprovalTables, MissionTables):
+class Store(LocationTables, JournalTables, BenchTables, ApprovalTables, MissionTables, LeaseTables):
     """One connection per thread, all to the same file."""
 
     def __init__(self, path: Path | str, bounds: Rect | None = None):

@@ -244,6 +244,23 @@ def _migrate_v9(conn: sqlite3.Connection) -> None:
     )
 
 
+def _migrate_v10(conn: sqlite3.Connection) -> None:
+    # Who controls each shared robot (a lease, one holder at a time, renewed by a heartbeat);
+    # which robot of a fleet an event or a turn was about.
+    _run(
+        conn,
+        """
+        CREATE TABLE leases (
+            robot TEXT PRIMARY KEY, token TEXT NOT NULL, who TEXT NOT NULL,
+            host TEXT NOT NULL, pid INTEGER NOT NULL, taken_at REAL NOT NULL,
+            seen_at REAL NOT NULL, taken_from TEXT
+        );
+        ALTER TABLE events ADD COLUMN robot TEXT NOT NULL DEFAULT '';
+        ALTER TABLE interactions ADD COLUMN robot TEXT NOT NULL DEFAULT '';
+        """,
+    )
+
+
 # Ordered; the database's PRAGMA user_version counts how many have run. Each runs inside one
 # transaction (Store._run_migrations): on a plain connection, with execute only.
 MIGRATIONS = [
@@ -256,6 +273,7 @@ MIGRATIONS = [
     _migrate_v7,
     _migrate_v8,
     _migrate_v9,
+    _migrate_v10,
 ]
 SCHEMA_VERSION = len(MIGRATIONS)
 _OUR_TABLES = {
@@ -270,6 +288,7 @@ _OUR_TABLES = {
     "consoles",
     "missions",
     "mission_steps",
+    "leases",
 }
 
 

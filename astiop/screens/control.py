@@ -1,0 +1,71 @@
+"""The console's control of a shared robot (robot/lease.py): taken at start when no one holds
+it, else the robot is watched; ctrl+t takes it over, asked first; a console whose robot was
+taken over is told at once and watches from then on."""
+
+from __future__ import annotations
+
+from astiop.screens.modals import ConfirmModal
+
+
+def start(app) -> None:
+    """Take control of the current robot if it is free (off the app's thread: a store write)."""
+    lease = app.services.gateway.lease
+    if lease is None:
+        return
+
+    def lost(holder) -> None:  # the lease's heartbeat thread
+        by = holder.words if holder else "another console"
+        app.call_from_thread(_said, app, f"{lease.name} was taken over by {by}: you watch it now")
+
+    lease.on_lost = lost
+
+    def take() -> None:
+        refused = app.services.gateway.take_control()
+        if refused:
+            said = f"{refused}: you watch it; ctrl+t takes control"
+            app.call_from_thread(_said, app, said)
+        else:
+            app.call_from_thread(app.refresh_subtitle)
+
+    app.run_worker(take, thread=True, group="lease", exit_on_error=False)
+
+
+def _said(app, text: str) -> None:
+    app.notify(text, title="control", severity="warning", timeout=15, markup=False)
+    app.refresh_subtitle()
+
+
+def words(gateway) -> str:
+    """'' for a robot of this console's own; else whether it is controlled here."""
+    lease = gateway.lease
+    if lease is None:
+        return ""
+    return "  in control" if lease.held else "  WATCHING"
+
+
+def take_over(app) -> None:
+    """ctrl+t: control of the current robot taken from whoever has it, once the operator said."""
+    gateway = app.services.gateway
+    lease = gateway.lease
+    if lease is None:
+        app.notify("This robot is this console's own: there is no control to take.")
+        return
+    if lease.held:
+        app.notify(f"{lease.name} is controlled from here.")
+        return
+    holder = lease.other_holder()
+    by = f" from {holder.words}; they will be told" if holder else ""
+    question = f"Take control of {lease.name}{by}?"
+
+    def done(ok: bool | None) -> None:
+        if not ok:
+            return
+
+        def take() -> None:
+            gateway.take_control(force=True)
+            app.call_from_thread(app.notify, f"{lease.name} is controlled from here now.")
+            app.call_from_thread(app.refresh_subtitle)
+
+        app.run_worker(take, thread=True, group="lease", exit_on_error=False)
+
+    app.push_screen(ConfirmModal(question), done)
