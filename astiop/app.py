@@ -11,6 +11,7 @@ import contextlib
 import logging
 import threading
 from collections.abc import Iterable
+from dataclasses import replace
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -23,7 +24,7 @@ from astiop.agent.models.specs import LLMEndpoint, open_endpoint
 from astiop.config import Settings
 from astiop.recording import RecordingError, SessionRecorder, default_path
 from astiop.robot.factory import make_robot_gateway, make_sim_gateway
-from astiop.robot.fleet_watch import FleetRow, FleetWatch, row_from
+from astiop.robot.fleet_watch import FleetRow, FleetWatch, control_of, row_from
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.sampler import StateSampler
 from astiop.robot.state import RobotState, TopicStat
@@ -90,6 +91,8 @@ class AstiopApp(App):
         super().__init__()
         self.services = services
         self.fleet = fleet  # every robot of a fleet, watched; None: one robot
+        if fleet is not None:  # the current robot watched through the console's own gateway
+            fleet.adopt(self.current_robot, services.gateway)
         self.record_path = record
         self.recorder: SessionRecorder | None = None
         self.sample_hz = sample_hz
@@ -160,10 +163,11 @@ class AstiopApp(App):
             if self.recorder is not None:
                 self.recorder.stop()
             if self.fleet is not None:
-                self.fleet.close()
+                self.fleet.close()  # every robot's gateway, the current one's too
         finally:
             try:
-                self.services.gateway.close()
+                if self.fleet is None:
+                    self.services.gateway.close()
             finally:
                 logging.getLogger("astiop.robot").removeHandler(self._said)
                 self.services.endpoint.close()
@@ -212,7 +216,8 @@ class AstiopApp(App):
         make = gateway.profile.make if gateway.profile else ""
         namespace = self.services.settings.robot.namespace
         st = self.robot_state
-        return [row_from(self.current_robot, namespace, make, st, st.lost_s or 0.0)]
+        row = row_from(self.current_robot, namespace, make, st, st.lost_s or 0.0)
+        return [replace(row, control=control_of(gateway))]
 
     def refresh_subtitle(self) -> None:
         robot = self.services.gateway.label
@@ -370,14 +375,15 @@ class AstiopApp(App):
         fleet: dict[str, list[str]] = {}
         others = None
         if self.fleet is not None:  # every robot of the fleet, each by its own gateway, at once
-            others = threading.Thread(target=lambda: fleet.update(self.fleet.estop_all()))
+            current = self.current_robot
+            others = threading.Thread(target=lambda: fleet.update(self.fleet.estop_all(current)))
             others.start()
         failures = self.services.gateway.estop()
         text = "E-STOP engaged: all motion stopped. ctrl+r releases it."
         if others is not None:
             others.join()
             failures += [f"{name}: {'; '.join(f)}" for name, f in fleet.items() if f]
-            text = f"E-STOP engaged on {len(fleet)} robots. ctrl+r releases them."
+            text = f"E-STOP engaged on {len(fleet) + 1} robots. ctrl+r releases them."
         if failures:
             text += "\n" + "\n".join(failures)
         self.call_from_thread(self.notify, text, severity="error", title="E-STOP", markup=False)
@@ -404,17 +410,19 @@ class AstiopApp(App):
     def _release(self) -> None:
         failures = self.services.gateway.release_estop()
         if self.fleet is not None:
-            failures += self.fleet.release_all()
+            failures += self.fleet.release_all(self.current_robot)
         if failures:  # the latch let go; the robot's own stop did not
             text = "E-stop released here; the robot still holds:\n" + "\n".join(failures)
             self.call_from_thread(self.notify, text, severity="error", markup=False)
         else:
             self.call_from_thread(self.notify, "E-stop released.")
 
-    def confirm_from_thread(self, checked: Checked, timeout_s: float | None = None) -> bool:
+    def confirm_from_thread(
+        self, checked: Checked, timeout_s: float | None = None, robot: str = ""
+    ) -> bool:
         """The gateway's confirmation hook, called from a worker thread: ask with a modal that
-        shows the command as it will be sent (after clamping)."""
-        robot = checked.namespace.strip("/") or (self.current_robot if self.fleet else "")
+        shows the command as it will be sent (after clamping), naming the robot in a fleet."""
+        robot = robot or checked.namespace.strip("/") or (self.current_robot if self.fleet else "")
         on = f" on {robot}" if robot else ""
         return self._ask_from_thread(
             f"Run this command{on}? It moves the robot.\n\n{sent_text(checked)}", timeout_s

@@ -4,16 +4,19 @@ them (ctrl+r releasing all, after a question that names them)."""
 
 from __future__ import annotations
 
+import re
 import time
 
-from textual.widgets import DataTable, Static
+from textual.widgets import DataTable, Input, Static
 
 from astiop.app import make_app
 from astiop.config import load_settings
 from astiop.robot.backends.sim.backend import SimBackend
 from astiop.robot.factory import make_safety
+from astiop.robot.fleet import robot_settings
 from astiop.robot.fleet_watch import FleetWatch
 from astiop.robot.gateway import RobotGateway
+from astiop.robot.lease import Lease, lease_key
 from astiop.screens.modals import ConfirmModal
 from astiop.sim.fleet import SimFleet
 from astiop.sim.runner import SimRunner
@@ -23,25 +26,33 @@ from tests.tui_helpers import wait_for
 NAMES = ["astibot_1", "astibot_2", "astibot_3"]
 
 
-def _gateway(settings, sim, store=None) -> RobotGateway:
+def _gateway(settings, sim, store=None, name: str = "") -> RobotGateway:
     backend = SimBackend(sim, store, stepped_elsewhere=True)
-    return RobotGateway(backend, make_safety(settings, store), store=store, who="test")
+    gateway = RobotGateway(backend, make_safety(settings, store), store=store, who="test")
+    if name:  # shared, as a robot on a ROS 2 graph is: one console controls it
+        gateway.lease = Lease(store, lease_key(f"/{name}", 0), name, "console")
+    return gateway
 
 
 def fleet_console(tmp_path):
     settings = load_settings(
-        {"llm": {"model": "rules"}, "robot": {"namespace": "/astibot_2"}},
+        {
+            "llm": {"model": "rules"},
+            "robot": {"namespace": "/astibot_2"},
+            "fleet": {"discover": "auto"},
+        },
         env={},
         path=tmp_path / "none.toml",
     )
     fleet = SimFleet(NAMES)
     store = Store(tmp_path / "console.db")
     watch = FleetWatch(
-        [(n, f"/{n}", lambda sim=sim: _gateway(settings, sim)) for n, sim in
+        [(n, f"/{n}", lambda sim=sim, n=n: _gateway(settings, sim, store, n)) for n, sim in
          zip(NAMES, fleet.robots, strict=True)],
         period_s=0.1,
     )  # fmt: skip
-    gateway = _gateway(settings, fleet.robots[1], store)
+    watch.settings_for = lambda name: robot_settings(settings, name)
+    gateway = _gateway(settings, fleet.robots[1], store, "astibot_2")
     app = make_app(settings, store, gateway=gateway, sample_hz=10.0, fleet=watch)
     return app, fleet, SimRunner(fleet, speed=5.0)
 
@@ -59,9 +70,10 @@ async def test_every_robot_is_listed_filtered_sorted_and_stopped_at_once(tmp_pat
             assert "astibot_2" in app.sub_title  # the current robot, on every screen
             await pilot.press("f7")
             await wait_for(pilot, lambda: len(_rows(app)) == 3 and "%" in _rows(app)[2][2])
+            await wait_for(pilot, lambda: _rows(app)[1][7] == "this console")
             rows = _rows(app)
             assert [r[0].strip("▶ ") for r in rows] == NAMES
-            assert rows[1][0].startswith("▶") and rows[1][7] == "this console"
+            assert rows[1][0].startswith("▶") and rows[0][7] == "free"
             assert all(r[1] == "charging" for r in rows) and "3 robots: 3 charging" in (
                 app.screen.sub_title
             )
@@ -89,6 +101,70 @@ async def test_every_robot_is_listed_filtered_sorted_and_stopped_at_once(tmp_pat
             await wait_for(pilot, lambda: all(r[1] == "charging" for r in _rows(app)))
     finally:
         runner.stop()
+
+
+async def test_enter_makes_a_robot_current_and_chat_moves_the_robot_a_request_names(tmp_path):
+    app, fleet, runner = fleet_console(tmp_path)
+    other = Lease(Store(tmp_path / "console.db"), lease_key("/astibot_1", 0), "astibot_1",
+                  "astiop mcp")  # fmt: skip
+    assert other.take() is None  # another process controls astibot_1
+    runner.start()
+    try:
+        async with app.run_test(size=(150, 40)) as pilot:
+            await pilot.press("f7")
+            await wait_for(pilot, lambda: "astiop mcp" in _rows(app)[0][7])
+            await pilot.press("down", "down", "enter")  # astibot_3
+            await wait_for(pilot, lambda: app.current_robot == "astibot_3")
+            assert "astibot_3" in app.sub_title and app.services.settings.robot.namespace == (
+                "/astibot_3"
+            )
+            await wait_for(pilot, lambda: _rows(app)[2][7] == "this console")
+
+            await pilot.press("f2")
+            chat = app.screen
+            for robot, soc in zip(fleet.robots, (0.55, 0.7, 0.9), strict=True):
+                robot.battery.soc = soc
+            await wait_for(pilot, lambda: app.fleet.rows()[0].battery < 0.6)
+            await _ask(pilot, chat, "which robot has the lowest battery?")
+            said = await _answer(pilot, chat, "has the lowest battery")
+            m = re.match(r"astibot_1 has the lowest battery: (\d+) %\.", said)
+            assert m and 55 <= int(m[1]) <= fleet.robots[0].battery.soc * 100 + 0.5, said
+
+            await _ask(pilot, chat, "send astibot 2 to shipping")
+            await wait_for(pilot, lambda: isinstance(app.screen, ConfirmModal))
+            assert "Run this command on astibot_2?" in app.screen.question
+            await pilot.press("y")
+            await wait_for(pilot, lambda: fleet.robots[1].goal is not None)
+            assert fleet.robots[0].goal is None and fleet.robots[2].goal is None
+            said = await _answer(pilot, chat, "astibot_2: ")
+            assert "shipping" in said, said
+
+            # astibot_1 is another's: its motion is refused, saying who controls it
+            await _ask(pilot, chat, "send astibot 1 to shipping")
+            await wait_for(pilot, lambda: "controlled by astiop mcp" in " ".join(_said(chat)))
+            assert fleet.robots[0].goal is None
+    finally:
+        runner.stop()
+        other.release()
+        other.store.close()
+
+
+async def _ask(pilot, chat, text: str) -> None:
+    chat.query_one(Input).value = text
+    await pilot.press("enter")
+
+
+async def _answer(pilot, chat, part: str) -> str:
+    def found() -> str | None:
+        return next((str(w.render()) for w in chat.query(".answer") if part in str(w.render())),
+                    None)  # fmt: skip
+
+    await wait_for(pilot, found, what=f"an answer with {part!r}")
+    return found()
+
+
+def _said(chat) -> list[str]:
+    return [str(w.render()) for w in chat.query("Static")]
 
 
 def test_a_robot_not_reached_is_its_own_red_row_and_its_stop_a_failure(tmp_path):

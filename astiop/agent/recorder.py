@@ -27,6 +27,7 @@ class Recorder:
                 mode=result.mode,
                 prompt=result.prompt,
                 session=self.session,
+                robot=result.robot,
             )
 
     async def replies(self, result: TurnResult) -> None:

@@ -32,6 +32,7 @@ class TurnResult:
     outcome: str | None = None  # how that goal ended, once it has
     target: tuple[float, float] | None = None  # where that goal is, when known
     mission_id: int | None = None  # the mission this turn started (it runs on after the turn)
+    robot: str = ""  # which robot of a fleet the turn was about
 
     def as_json(self) -> dict[str, Any]:
         return {

@@ -68,6 +68,7 @@ class Agent:
         missions: MissionRunner | None = None,
         confirm_mission: mission_turn.ConfirmMission | None = None,
         replace_mission: mission_turn.ReplaceMission = None,
+        robot: str = "",
     ):
         if interpretation not in ("grounded", "raw"):
             raise ValueError(f"interpretation must be 'grounded' or 'raw', not '{interpretation}'")
@@ -93,6 +94,7 @@ class Agent:
         self._missions = missions
         self.confirm_mission = confirm_mission
         self.replace_mission = replace_mission  # a new mission while one runs: ask, or not
+        self.robot = robot  # its name in a fleet
 
     @property
     def missions(self) -> MissionRunner | None:
@@ -144,7 +146,10 @@ class Agent:
         return self._gate_reason(intent.classify(request, self.locations()), commands)
 
     def _gate_reason(self, intents: list[Intent], commands: list[str]) -> str | None:
-        actions = [(c, gate.action_of(self._review(c).checked)) for c in commands]
+        checks = [self._review(c).checked for c in commands]
+        if other := gate.other_robot(checks, self.gateway.catalog):
+            return other
+        actions = [(c, gate.action_of(ch)) for c, ch in zip(commands, checks, strict=True)]
         return gate.check(intents, actions, self.places())
 
     def _rules_plan(self, intents: list[Intent]) -> list[str]:
@@ -154,7 +159,7 @@ class Agent:
     async def turn(self, request: str, on_event: OnEvent | None = None) -> TurnResult:
         emit = on_event or (lambda kind, data: None)
         t0 = time.perf_counter()
-        result = TurnResult(self.model, self.mode, request)
+        result = TurnResult(self.model, self.mode, request, robot=self.robot)
         self._reviews, self._turn_places = {}, None  # this turn reads them afresh
         await self.recorder.start(result)
         try:

@@ -77,11 +77,13 @@ def _fleet(st: CliState):
              f"{', '.join(r.name for r in robots)})")  # fmt: skip
     opens = [
         (r.name, r.namespace,
-         partial(make_robot_gateway, robot_settings(whole, r.name), None, realtime=True,
-                 who="fleet"))
+         partial(make_robot_gateway, robot_settings(whole, r.name), st.store, realtime=True,
+                 who="console"))
         for r in robots
     ]  # fmt: skip
-    return robot_settings(whole, current), FleetWatch(opens)
+    watch = FleetWatch(opens)
+    watch.settings_for = partial(robot_settings, whole)
+    return robot_settings(whole, current), watch
 
 
 def replay(

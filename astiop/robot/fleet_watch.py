@@ -30,6 +30,7 @@ class FleetRow:
     goal: str = ""
     age_s: float | None = None  # since its state last changed on our side (None: never heard)
     error: str = ""  # why it could not be reached, or how its E-STOP failed
+    control: str = ""  # who controls it (its lease): "this console", a holder, "free"
 
     @property
     def stale(self) -> bool:
@@ -51,6 +52,7 @@ class FleetRow:
             "theta_deg": None if self.theta is None else round(math.degrees(self.theta), 1),
             "speed_m_s": None if self.speed is None else round(self.speed, 2),
             "goal": self.goal,
+            **({"control": self.control} if self.control else {}),
             **({"error": self.error} if self.error else {}),
         }
 
@@ -87,6 +89,20 @@ def row_from(name: str, namespace: str, make: str, st: RobotState, age_s: float 
     )
 
 
+def control_of(gateway: RobotGateway) -> str:
+    """Who controls the robot, by its lease: this console, another holder, or no one."""
+    lease = gateway.lease
+    if lease is None:
+        return ""
+    if lease.held:
+        return "this console"
+    try:
+        holder = lease.other_holder()
+    except Exception:  # noqa: BLE001 - a busy store: said as unknown
+        return "?"
+    return holder.words if holder else "free"
+
+
 class FleetWatch:
     """`robots`: (name, namespace, open) with `open()` making that robot's gateway. Each robot's
     row is refreshed every `period_s` by a thread of its own (a robot slow to answer holds up
@@ -102,11 +118,18 @@ class FleetWatch:
         self.on_rows = on_rows
         self.period_s = period_s
         self.gateways: dict[str, RobotGateway] = {}
+        self._given: dict[str, RobotGateway] = {}  # made and started by the caller
+        self.settings_for: Callable[[str], object] | None = None  # a robot's own settings
         self._rows = {name: FleetRow(name, ns) for name, ns, _ in robots}
         self._failed: dict[str, str] = {}  # robots whose E-STOP failed, and how
         self._lock = threading.Lock()
         self._halt = threading.Event()
         self._threads: list[threading.Thread] = []
+
+    def adopt(self, name: str, gateway: RobotGateway) -> None:
+        """Watch `name` through a gateway the caller made (the console's current robot): one
+        connection to it, not two. Closed with the others."""
+        self._given[name] = gateway
 
     def start(self) -> FleetWatch:
         for name, ns, open_ in self.robots:
@@ -128,8 +151,10 @@ class FleetWatch:
 
     def _watch(self, name: str, ns: str, open_) -> None:
         try:
-            gateway = open_()
-            gateway.start()
+            gateway = self._given.get(name)
+            if gateway is None:
+                gateway = open_()
+                gateway.start()
         except Exception as exc:  # noqa: BLE001 - one robot not reached is its own row
             self._set(FleetRow(name, ns, error=f"not reached: {exc}"))
             return
@@ -139,15 +164,17 @@ class FleetWatch:
             try:
                 st = gateway.state()
                 row = row_from(name, ns, gateway.profile.make, st, _age(st))
+                row = replace(row, control=control_of(gateway))
                 failed = self._failed.get(name)
                 self._set(replace(row, error=failed) if failed else row)
             except Exception as exc:  # noqa: BLE001
                 self._set(FleetRow(name, ns, error=f"not read: {exc}"))
             self._halt.wait(self.period_s)
 
-    def estop_all(self) -> dict[str, list[str]]:
+    def estop_all(self, skip: str = "") -> dict[str, list[str]]:
         """Every watched robot stopped at once, each by its own gateway; a robot not reached is
-        a failure of its own. The failures by robot name (empty: stopped)."""
+        a failure of its own. The failures by robot name (empty: stopped). `skip`: a robot the
+        caller stops itself (the console's current one, first)."""
         results: dict[str, list[str]] = {}
 
         def stop(name: str) -> None:
@@ -160,7 +187,8 @@ class FleetWatch:
             except Exception as exc:  # noqa: BLE001
                 results[name] = [str(exc)]
 
-        threads = [threading.Thread(target=stop, args=(n,)) for n, _, _ in self.robots]
+        names = [n for n, _, _ in self.robots if n != skip]
+        threads = [threading.Thread(target=stop, args=(n,)) for n in names]
         for t in threads:
             t.start()
         for t in threads:
@@ -171,20 +199,29 @@ class FleetWatch:
                 self._set(replace(self._rows[name], error=self._failed[name]))
         return results
 
-    def release_all(self) -> list[str]:
+    def release_all(self, skip: str = "") -> list[str]:
         """Each robot's own stop let go (/release, where it latches one); what failed, named."""
         failures: list[str] = []
         self._failed.clear()
         for name, gateway in list(self.gateways.items()):
+            if name == skip:
+                continue
             try:
                 failures += [f"{name}: {f}" for f in gateway.release_estop()]
             except Exception as exc:  # noqa: BLE001
                 failures.append(f"{name}: {exc}")
         return failures
 
+    def gateway_of(self, name: str) -> RobotGateway | None:
+        """The robot's gateway, once it was reached."""
+        with self._lock:
+            return self.gateways.get(name)
+
     def close(self) -> None:
         self._halt.set()
         for t in self._threads:
             t.join(timeout=2)
-        for gateway in list(self.gateways.values()):
+        for gateway in {
+            id(g): g for g in [*self.gateways.values(), *self._given.values()]
+        }.values():
             gateway.close()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+from functools import partial
 
 from rich.text import Text
 from textual import work
@@ -11,6 +12,7 @@ from textual.binding import Binding
 from textual.containers import VerticalScroll
 from textual.widgets import Collapsible, Footer, Header, Input, Static
 
+from astiop.agent.fleet_turn import FleetAgent
 from astiop.agent.models.embedded import EmbeddedModelError
 from astiop.agent.models.specs import SpecError, open_endpoint
 from astiop.agent.turn import Agent, TurnResult
@@ -116,19 +118,48 @@ class ChatScreen(ConsoleScreen):
 
     def on_mount(self) -> None:
         self._turn_lock = asyncio.Lock()
+        self._reply_mode: str | None = None  # /mode: for the agents made after it too
         services = self.services
-        self.agent = Agent(
-            services.gateway,
+        self.agent = self._agent_for(services.gateway)
+        fleet = self.app.fleet
+        if fleet is not None:  # a request names its robot, else it is the current one's
+            self.agent = FleetAgent(
+                self._robot_agent,
+                lambda: self.app.current_robot,
+                fleet.rows,
+                lambda: {loc.name: (loc.x, loc.y) for loc in services.store.list_locations()},
+                services.store,
+                session="console",
+            )
+        self.query_one(Input).focus()
+
+    def _agent_for(self, gateway, robot: str = "") -> Agent:
+        services = self.services
+        return Agent(
+            gateway,
             services.endpoint,
             services.store,
-            mode=services.settings.llm.mode,
+            mode=self._reply_mode or services.settings.llm.mode,
             max_tokens=services.settings.llm.max_tokens,
-            confirm=self.app.confirm_from_thread,
+            confirm=partial(self.app.confirm_from_thread, robot=robot),
             confirm_mission=self.app.confirm_mission_from_thread,
             replace_mission=self.app.replace_mission_from_thread,
             session="console",
+            robot=robot,
         )
-        self.query_one(Input).focus()
+
+    def _robot_agent(self, name: str) -> Agent:
+        """A robot of the fleet's own agent, made the first time a request is about it (its
+        control taken if no one holds it)."""
+        agents = self.__dict__.setdefault("_agents", {})
+        if name not in agents:
+            gateway = self.app.fleet.gateway_of(name)
+            if gateway is None:
+                raise LookupError(f"{name} is not reached yet: nothing was sent to it")
+            if gateway is not self.services.gateway:
+                gateway.take_control()  # a store write: moments; refused, its motion is too
+            agents[name] = self._agent_for(gateway, name)
+        return agents[name]
 
     def _log(self, widget) -> None:
         log = self.query_one("#chat-log", VerticalScroll)
@@ -153,6 +184,7 @@ class ChatScreen(ConsoleScreen):
             self.notify("/mode takes 'command' or 'tool'", severity="error", markup=False)
             return
         self.agent.switch(mode=mode)  # the conversation goes on
+        self._reply_mode = mode
         self.notify(f"reply mode: {mode}")
 
     def switch_model(self, spec: str) -> None:

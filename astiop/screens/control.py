@@ -69,3 +69,33 @@ def take_over(app) -> None:
         app.run_worker(take, thread=True, group="lease", exit_on_error=False)
 
     app.push_screen(ConfirmModal(question), done)
+
+
+def use_robot(app, name: str) -> None:
+    """Make `name` the current robot: Dashboard, Chat, Teleop and Locations act on it from now,
+    through the gateway the fleet already watches it with; control of it taken if free."""
+    from astiop.robot.sampler import StateSampler
+    from astiop.screens.messages import CurrentRobotChanged
+
+    if app.fleet is None or name == app.current_robot:
+        return
+    gateway = app.fleet.gateway_of(name)
+    if gateway is None:
+        app.notify(f"{name} is not reached yet: it stays {app.current_robot}", severity="error")
+        return
+    old = app._sampler
+    old.halt.set()  # its thread ends at its next tick; its robot stays watched by the fleet
+    services = app.services
+    services.gateway = gateway
+    services.settings = app.fleet.settings_for(name)
+    app.robot_state = gateway.state()
+    app.recent_events = gateway.events_since(0)[-50:]
+    last = app.recent_events[-1].seq if app.recent_events else 0
+    app._sampler = StateSampler(
+        gateway, app._state_sampled, app._sampler_failed, app.sample_hz, last
+    )
+    app._sampler.start()
+    start(app)
+    app.refresh_subtitle()
+    app.broadcast(lambda: CurrentRobotChanged(name))
+    app.notify(f"current robot: {name}", title="fleet")

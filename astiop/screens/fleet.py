@@ -14,6 +14,7 @@ from textual.containers import Horizontal
 from textual.widgets import DataTable, Footer, Header, Static
 
 from astiop.robot.fleet_watch import FleetRow
+from astiop.screens import control
 from astiop.screens.base import ConsoleScreen
 from astiop.widgets.map_view import Place, WarehouseMapView
 
@@ -81,6 +82,7 @@ class FleetScreen(ConsoleScreen):
     FleetScreen #fleet-map { width: 2fr; }
     """
     BINDINGS = [
+        Binding("enter", "use_robot", "Make current", show=True),
         Binding("s", "sort", "Sort"),
         Binding("f", "filter", "Filter"),
     ]
@@ -116,8 +118,7 @@ class FleetScreen(ConsoleScreen):
         cursor = table.cursor_row
         table.clear()
         for row in self.shown:
-            controller = "this console" if row.name == current else "watched"
-            table.add_row(*_cells(row, row.name == current, controller))
+            table.add_row(*_cells(row, row.name == current, row.control or "-"))
         if self.shown:
             table.move_cursor(row=min(cursor, len(self.shown) - 1))
         shown = "" if self.filter_by == "all" else f" ({len(self.shown)} {self.filter_by})"
@@ -130,6 +131,17 @@ class FleetScreen(ConsoleScreen):
         )
         places = [Place(r.name, r.x, r.y) for r in rows if r.x is not None]
         self.query_one(FleetMapView).set_locations(places)
+
+    def on_data_table_row_selected(self, event: DataTable.RowSelected) -> None:
+        self.action_use_robot()
+
+    def action_use_robot(self) -> None:
+        """The row under the cursor becomes the current robot."""
+        table = self.query_one(DataTable)
+        if not self.shown or table.cursor_row < 0:
+            return
+        control.use_robot(self.app, self.shown[min(table.cursor_row, len(self.shown) - 1)].name)
+        self.refresh_rows()
 
     def action_sort(self) -> None:
         self.sort_by = SORTS[(SORTS.index(self.sort_by) + 1) % len(SORTS)]

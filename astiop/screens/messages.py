@@ -39,3 +39,11 @@ class GoalEnded(Message, bubble=False):
         super().__init__()
         self.result = result
         self.text = text
+
+
+class CurrentRobotChanged(Message, bubble=False):
+    """The console acts on another robot of the fleet from now (the Fleet screen's enter)."""
+
+    def __init__(self, name: str):
+        super().__init__()
+        self.name = name

@@ -13,7 +13,9 @@ from astiop import latch
 
 class JournalTables:
     # -- interactions, commands, events --------------------------------------------
-    def start_interaction(self, *, model: str, mode: str, prompt: str, session: str = "") -> int:
+    def start_interaction(
+        self, *, model: str, mode: str, prompt: str, session: str = "", robot: str = ""
+    ) -> int:
         with self._tx():
             row = self.db["interactions"].insert(
                 {
@@ -24,6 +26,7 @@ class JournalTables:
                     "prompt": prompt,
                     "status": "running",
                     "pid": os.getpid(),
+                    "robot": robot,
                 }
             )
         return int(row.last_pk)
