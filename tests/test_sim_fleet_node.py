@@ -4,12 +4,14 @@ them sent by name while the others stay on their docks, and all stopped at once.
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import json
 import math
 import os
 import subprocess
 import sys
+import threading
 from pathlib import Path
 
 import pytest
@@ -78,6 +80,52 @@ def test_two_astibots_in_one_warehouse_each_reached_by_its_name(tmp_path, monkey
         out = astiop(db, "--fleet", "auto", "fleet", "list", "--json")
         states = {r["name"]: r["state"] for r in json.loads(out.stdout)}
         assert states == {"astibot_1": "charging", "astibot_2": "idle"}, states  # let go
+
+        # one MCP server for both: each tool names its robot; the approval names it too
+        asyncio.run(_mcp_sends_astibot_1(db))
+        assert until(lambda: math.dist(_xy(poses[1]), (1.15, 3.0)) > 0.5, 30), _xy(poses[1])
+
+
+async def _mcp_sends_astibot_1(db: Path) -> None:
+    from mcp import Client, StdioServerParameters
+    from mcp.types import Implementation
+
+    from astiop.store import Store
+
+    args = ["-m", "astiop", "--db", str(db), "--robot", "ros2", "--ros2-transport", "rclpy",
+            "--fleet", "auto", "mcp"]  # fmt: skip
+    server = StdioServerParameters(command=sys.executable, args=args, env=dict(os.environ))
+    store = Store(db)
+    console = threading.Event()
+
+    def approve() -> None:  # a console open on the database, answering for astibot_1 only
+        while not console.is_set():
+            store.console_heartbeat()
+            for row in store.pending_approvals():
+                store.decide_approval(row["id"], row["robot"] == "astibot_1", "test")
+            console.wait(0.2)
+
+    answering = threading.Thread(target=approve, daemon=True)
+    answering.start()
+    try:
+        async with Client(server, client_info=Implementation(name="pytest", version="1")) as c:
+            rows = [json.loads(i.text) for i in (await c.call_tool("fleet_status", {})).content]
+            assert sorted(r["name"] for r in rows) == ["astibot_1", "astibot_2"], rows
+            said = await c.call_tool("go_to_location", {"name": "inspection_zone_a"})
+            assert said.is_error and "name one (robot: astibot_1, astibot_2)" in (
+                said.content[0].text
+            )
+            said = await c.call_tool(
+                "go_to_location", {"name": "inspection_zone_a", "robot": "astibot_1"}
+            )
+            assert not said.is_error, said.content[0].text
+            assert "inspection_zone_a" in said.content[0].text
+        rows = store.db.conn.execute("SELECT robot, status FROM approvals").fetchall()
+        assert rows == [("astibot_1", "approved")], rows
+    finally:
+        console.set()
+        answering.join(5)
+        store.close()
 
 
 def test_with_domains_each_robot_is_un_namespaced_on_a_domain_of_its_own(tmp_path):

@@ -35,8 +35,11 @@ async def test_an_open_console_is_asked_and_its_answer_goes_back(tmp_path):
         )
         await pilot.press("y")
         await wait_for(pilot, lambda: server.approval(first)["status"] == "approved")
-        second = await asyncio.to_thread(server.request_approval, "cursor", GOTO, "", 30)
+        second = await asyncio.to_thread(
+            server.request_approval, "cursor", GOTO, "", 30, robot="astibot_4"
+        )
         await wait_for(pilot, lambda: asked(app) != "")
+        assert "moves astibot_4:" in str(app.screen.query_one("Static").render())  # a fleet's
         await pilot.press("n")
         await wait_for(pilot, lambda: server.approval(second)["status"] == "denied")
         assert app.services.gateway.backend.sim.goal is None, "the console itself sent nothing"

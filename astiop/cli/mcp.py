@@ -75,20 +75,25 @@ def mcp(
              "reaches it could ask the robot to move")  # fmt: skip
 
     from astiop.mcp.approval import Policy
+    from astiop.mcp.fleet_tools import FleetTools
     from astiop.mcp.server import AstiopMCP, serve_http, serve_stdio
     from astiop.mcp.tools import RobotTools
     from astiop.robot.backend import BackendError
     from astiop.robot.factory import make_robot_gateway
+    from astiop.robot.fleet import is_fleet
 
     st = state(ctx)
+    policy = Policy(approve_actuation=approve_actuation, timeout_s=approval_timeout)
+    robots = _robots(st) if is_fleet(st.fleet_settings) and st.robot_name is None else None
     try:
-        gateway = make_robot_gateway(st.settings, st.store, realtime=True, who="astiop mcp")
+        gateways = {name: make_robot_gateway(settings, st.store, realtime=True, who="astiop mcp")
+                    for name, settings in (robots or {"": st.settings}).items()}  # fmt: skip
     except BackendError as exc:
         fail(str(exc))
-    if not read_only:
-        take_control(gateway, st)
-    policy = Policy(approve_actuation=approve_actuation, timeout_s=approval_timeout)
-    server = AstiopMCP(RobotTools(gateway, st.store, policy), read_only=read_only)
+    if robots is None and not read_only:
+        take_control(gateways[""], st)  # a fleet's robots: each when first moved, if free
+    tools = {name: RobotTools(gw, st.store, policy) for name, gw in gateways.items()}
+    server = AstiopMCP(FleetTools(tools) if robots else tools[""], read_only=read_only)
     if read_only:
         mode = "read-only"
     elif approve_actuation:
@@ -96,12 +101,28 @@ def mcp(
     else:
         mode = "actuation needs a console's approval"
     where = f"http://{host}:{port}/mcp" if http else "stdio"
-    print(f"astiop mcp: serving on {where}; robot {gateway.kind}; {mode}", file=sys.stderr)
-    gateway.start()
+    what = f"{len(robots)} robots ({', '.join(robots)})" if robots else f"robot {gateways[''].kind}"
+    print(f"astiop mcp: serving on {where}; {what}; {mode}", file=sys.stderr)
+    for gateway in gateways.values():
+        gateway.start()
     try:
         if http is not None:
             serve_http(server, host, port, token)
         else:
             serve_stdio(server)
     finally:
-        gateway.close()
+        for gateway in gateways.values():
+            gateway.close()
+
+
+def _robots(st) -> dict:
+    """The fleet's robots found, each name with its own settings (said on stderr as found)."""
+    from astiop.robot.fleet import FleetError, find_robots, robot_settings
+
+    whole = st.fleet_settings
+    print("astiop mcp: finding the fleet's robots…", file=sys.stderr)
+    try:
+        found = find_robots(whole, lambda r: print(f"  {r.name} ({r.namespace})", file=sys.stderr))
+    except FleetError as exc:
+        fail(str(exc))
+    return {r.name: robot_settings(whole, r.name) for r in found}

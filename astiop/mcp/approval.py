@@ -51,6 +51,7 @@ def clear(
     text: str,
     client: str,
     what: str,
+    robot: str = "",
 ) -> Clearance:
     """Review `text` and, for an actuation, obtain its approval; `what` is the tool call as
     the person will see it."""
@@ -73,7 +74,9 @@ def clear(
     detail = f"MCP client '{client}' asks: {what}"
     if checked.notes:
         detail += "\n" + "\n".join(f"note: {n}" for n in checked.notes)
-    request = store.request_approval(client, sent_text(checked), detail, policy.timeout_s)
+    request = store.request_approval(
+        client, sent_text(checked), detail, policy.timeout_s, robot=robot
+    )
     status = wait_for_decision(store, request, policy.timeout_s)
     if status == "approved":
         return Clearance(review, approved_by="console")

@@ -135,7 +135,9 @@ class MissionTools:
         if replaces:
             detail += f"\n{replaces}"
         what = f"mission: {plan}" + (f" ({replaces.rstrip('.')})" if replaces else "")
-        request = self.store.request_approval(call.client, what, detail, self.policy.timeout_s)
+        request = self.store.request_approval(
+            call.client, what, detail, self.policy.timeout_s, robot=self.name
+        )
         status = wait_for_decision(self.store, request, self.policy.timeout_s)
         if status == "denied":
             raise Refused("denied by the operator")

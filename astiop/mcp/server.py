@@ -19,6 +19,7 @@ from pydantic import ValidationError
 
 from astiop import __version__
 from astiop.bounded import escape_controls, one_line
+from astiop.mcp.fleet_tools import FleetTools
 from astiop.mcp.tools import CALL, TOOL_CLASSES, Call, Refused, RobotTools
 from astiop.ros2.interfaces import InterfaceError, interface_show
 
@@ -29,6 +30,9 @@ INSTRUCTIONS = (
     "and robot_state reports how it ended. stop and estop always work."
 )
 DESCRIPTIONS = {
+    "fleet_status": "Every robot this server reaches: name, state, battery, pose, speed, goal "
+    "and who controls it, as each last reported. Every other tool takes robot: one of these "
+    "names (left out: the only robot).",
     "robot_state": "The robot's pose, battery, status and faults as it last reported them, "
     "each with age_s (seconds since that report); and the last goal's outcome.",
     "list_locations": "The named locations: name, x and y (m, map frame), theta_deg, description.",
@@ -101,18 +105,21 @@ def reason_of(name: str, exc: BaseException) -> str:
 
 
 class AstiopMCP(MCPServer):
-    def __init__(self, robot: RobotTools, read_only: bool = False):
+    def __init__(self, robot: RobotTools | FleetTools, read_only: bool = False):
         super().__init__(
             "astiop", instructions=INSTRUCTIONS, version=__version__, log_level="WARNING"
         )
-        self.robot = robot
+        if isinstance(robot, RobotTools):  # one robot: a fleet of one, named for its namespace
+            robot = FleetTools({robot.gateway.profile.namespace.strip("/") or "robot": robot})
+        self.fleet = robot
+        self.robot = robot.first  # the store's audit trail, and the resources' robot
         self.read_only = read_only
         self._slots = threading.BoundedSemaphore(MAX_CALLS)
         for name, cls in TOOL_CLASSES.items():
             if read_only and cls != "read":
                 continue
             self.add_tool(
-                getattr(robot, name),
+                robot.fleet_status if name == "fleet_status" else robot.tool(name),
                 name=name,
                 description=DESCRIPTIONS[name],
                 annotations=ToolAnnotations(

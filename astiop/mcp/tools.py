@@ -13,7 +13,7 @@ from astiop.agent import goals
 from astiop.agent.intent import Intent
 from astiop.agent.rules import command_for, nav_action, plan_intents
 from astiop.bounded import MAX_COMMAND_CHARS, has_controls, one_line, preview
-from astiop.mcp.approval import Policy, clear
+from astiop.mcp.approval import Policy, clear, needs_approval
 from astiop.mcp.audit import CALL, AuditTrail, Call
 from astiop.mcp.mission_tools import MissionTools
 from astiop.robot.backend import Execution
@@ -28,6 +28,7 @@ __all__ = ["CALL", "TOOL_CLASSES", "Call", "Refused", "RobotTools"]
 # are not registered with --read-only. A test holds it complete.
 TOOL_CLASSES: dict[str, str] = {
     "robot_state": "read",
+    "fleet_status": "read",
     "list_locations": "read",
     "read_topic": "read",
     "ros2_query": "read",
@@ -78,6 +79,7 @@ class RobotTools(MissionTools):
         self.policy = policy
         self.audit = AuditTrail(store)
         self.last_goal: dict[str, str] = {}
+        self.name = ""  # the robot's name in a fleet (approvals say it)
         self._actuating = threading.Lock()  # one actuation at a time (stop and estop excepted)
 
     # -- reads ----------------------------------------------------------------------------
@@ -290,7 +292,12 @@ class RobotTools(MissionTools):
 
     def _clearance(self, text: str):
         call = CALL.get()
-        cl = clear(self.gateway, self.store, self.policy, text, call.client, call.what)
+        lease = self.gateway.lease
+        if lease is not None and not lease.held and needs_approval(self.gateway.review(text)):
+            self.gateway.take_control()  # taken if no one holds it; else refused below, named
+        cl = clear(
+            self.gateway, self.store, self.policy, text, call.client, call.what, robot=self.name
+        )
         if not cl.cleared:
             ex = Execution(text, cl.review.checked.valid, cl.refusal, cl.review.checked.kind)
             self._record(ex)

@@ -48,9 +48,10 @@ class ApprovalDesk(threading.Thread):
     def _ask(self, request: dict) -> None:  # the UI thread
         left = max(0.0, request["expires_at"] - time.time())
         detail = f"\n{request['detail']}" if request["detail"] else ""
+        robot = request.get("robot") or "the robot"  # a fleet's robot, by its name
         modal = ConfirmModal(
             f"{request['client']} (an outside agent, through MCP) asks to run a command that "
-            f"moves the robot:\n\n{request['command']}{detail}\n\n"
+            f"moves {robot}:\n\n{request['command']}{detail}\n\n"
             f"Allow it? Without an answer in {left:.0f} s it is refused."
         )
 

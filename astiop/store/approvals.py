@@ -32,13 +32,15 @@ class ApprovalTables:
         ).fetchone()
         return bool(row and row[0])
 
-    def request_approval(self, client: str, command: str, detail: str, timeout_s: float) -> int:
+    def request_approval(
+        self, client: str, command: str, detail: str, timeout_s: float, robot: str = ""
+    ) -> int:
         now = time.time()
         with self._tx():
             cur = self.db.conn.execute(
-                "INSERT INTO approvals (client, command, detail, requested_at, expires_at) "
-                "VALUES (?, ?, ?, ?, ?)",
-                [client, command, detail, now, now + timeout_s],
+                "INSERT INTO approvals (client, command, detail, requested_at, expires_at, "
+                "robot) VALUES (?, ?, ?, ?, ?, ?)",
+                [client, command, detail, now, now + timeout_s, robot],
             )
             return int(cur.lastrowid)
 

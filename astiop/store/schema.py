@@ -246,7 +246,7 @@ def _migrate_v9(conn: sqlite3.Connection) -> None:
 
 def _migrate_v10(conn: sqlite3.Connection) -> None:
     # Who controls each shared robot (a lease, one holder at a time, renewed by a heartbeat);
-    # which robot of a fleet an event or a turn was about.
+    # which robot of a fleet an event, a turn or an approval was about.
     _run(
         conn,
         """
@@ -257,6 +257,7 @@ def _migrate_v10(conn: sqlite3.Connection) -> None:
         );
         ALTER TABLE events ADD COLUMN robot TEXT NOT NULL DEFAULT '';
         ALTER TABLE interactions ADD COLUMN robot TEXT NOT NULL DEFAULT '';
+        ALTER TABLE approvals ADD COLUMN robot TEXT NOT NULL DEFAULT '';
         """,
     )
 
