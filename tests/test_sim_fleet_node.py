@@ -81,9 +81,41 @@ def test_two_astibots_in_one_warehouse_each_reached_by_its_name(tmp_path, monkey
         states = {r["name"]: r["state"] for r in json.loads(out.stdout)}
         assert states == {"astibot_1": "charging", "astibot_2": "idle"}, states  # let go
 
+        # a console on another machine (its own database) controls astibot_2: heard on the
+        # robot's graph, this machine's command is refused until it takes control
+        _controlled_from_another_machine(tmp_path, db)
+
         # one MCP server for both: each tool names its robot; the approval names it too
         asyncio.run(_mcp_sends_astibot_1(db))
         assert until(lambda: math.dist(_xy(poses[1]), (1.15, 3.0)) > 0.5, 30), _xy(poses[1])
+
+
+def _controlled_from_another_machine(tmp_path: Path, db: Path) -> None:
+    from astiop.robot.backends.rclpy.control_topic import ControlTopic
+    from astiop.robot.backends.rclpy.node import RosProcess
+    from astiop.robot.lease import Lease, lease_key
+    from astiop.store import Store
+
+    there = RosProcess()  # another participant on the domain, as another machine's would be
+    holder = Lease(Store(tmp_path / "elsewhere.db"), lease_key("/astibot_2", 0), "astibot_2",
+                   "console", channel=lambda: ControlTopic(there, "/astibot_2"))  # fmt: skip
+    lost = threading.Event()
+    holder.on_lost = lambda _by: lost.set()
+    drive = ("--fleet", "auto", "--robot-name", "astibot_2", "exec", "ros2 topic pub --once "
+             "/astibot_2/cmd_vel geometry_msgs/msg/Twist '{linear: {x: 0.05}}'", "--yes")  # fmt: skip
+    try:
+        assert holder.take() is None
+        out = astiop(db, *drive)
+        said = out.stdout + out.stderr
+        assert out.returncode != 0 and "astibot_2 is controlled by console (pid" in said, said
+        out = astiop(db, "--take", *drive)
+        assert out.returncode == 0, out.stdout + out.stderr[-2000:]
+        assert lost.wait(10), "the holder on the other machine was never told"
+        assert not holder.held
+    finally:
+        holder.release()
+        holder.store.close()
+        there.close()
 
 
 async def _mcp_sends_astibot_1(db: Path) -> None:

@@ -94,6 +94,11 @@ class RobotBackend(ABC):
         """Read the robot's graph again; False if nothing was read."""
         return False
 
+    def control_channel(self, namespace: str):
+        """Where the robot's lease is announced on its graph (robot/lease.py), for a robot that
+        other machines reach too; None: the store alone holds it."""
+        return None
+
     def discovering(self) -> bool:
         """Whether this process may not have discovered the whole robot yet (a name missing
         from its graph may only not have been heard of)."""

@@ -116,19 +116,21 @@ def make_robot_gateway(
             restore_latch=restore_latch,
         )
         if store is not None:  # a robot on the graph is shared: one operator controls it
-            gateway.lease = robot_lease(settings, store, who)
+            gateway.lease = robot_lease(settings, store, who, backend)
         return gateway
     return make_sim_gateway(
         settings, store, realtime=realtime, who=who, restore_latch=restore_latch
     )
 
 
-def robot_lease(settings: Settings, store: Store, who: str):
-    """The lease of the settings' ROS 2 robot: its namespace on this process's domain."""
+def robot_lease(settings: Settings, store: Store, who: str, backend):
+    """The lease of the settings' ROS 2 robot: its namespace on this process's domain, announced
+    on the robot's graph where the transport can."""
     import os
 
     from astiop.robot.lease import Lease, lease_key
 
     ns = settings.robot.namespace
     key = lease_key(ns, os.environ.get("ROS_DOMAIN_ID", "0"))
-    return Lease(store, key, ns.strip("/") or "the robot", who)
+    name = ns.strip("/") or "the robot"
+    return Lease(store, key, name, who, channel=lambda: backend.control_channel(ns))

@@ -1,10 +1,13 @@
 """One operator in control of a shared robot: the lease. A console (or the MCP server, or a
-one-shot command) takes a robot's lease to actuate it; another process on the same database
-sees it held and actuates nothing until it takes it over. The gateway asks the lease before any
-motion; a stop (zero velocity, /stop, a goal's cancel) needs none: anyone may stop any robot.
+one-shot command) takes a robot's lease to actuate it; another process sees it held and
+actuates nothing until it takes it over. The gateway asks the lease before any motion; a stop
+(zero velocity, /stop, a goal's cancel) needs none: anyone may stop any robot.
 
-Only a robot reached over ROS 2 is shared: the in-process simulator is each console's own.
-The lease is keyed by the robot's namespace ("/" un-namespaced) and domain."""
+It holds between processes on one machine through the store (one row per robot, taken in one
+write), and between machines on one ROS 2 domain through the robot's graph where the transport
+can announce it (rclpy: backends/rclpy/control_topic.py). Of two holders the latest take wins:
+a takeover is a take made later. Only a robot reached over ROS 2 is shared: the in-process
+simulator is each console's own. A robot is keyed by its namespace and domain."""
 
 from __future__ import annotations
 
@@ -12,8 +15,11 @@ import contextlib
 import os
 import socket
 import threading
+import time
 import uuid
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 from astiop.robot.safety import always_allowed
 from astiop.ros2.validation import Checked
@@ -28,6 +34,7 @@ class Holder:
     host: str
     pid: int
     taken_at: float
+    token: str = ""
 
     @property
     def words(self) -> str:
@@ -35,7 +42,10 @@ class Holder:
 
 
 def _holder(row: dict) -> Holder:
-    return Holder(row["who"], row["host"], int(row["pid"]), float(row["taken_at"]))
+    return Holder(
+        str(row["who"]), str(row["host"]), int(row["pid"]), float(row["taken_at"]),
+        str(row.get("token", "")),
+    )  # fmt: skip
 
 
 def is_stop(checked: Checked) -> bool:
@@ -58,14 +68,25 @@ def lease_key(namespace: str, domain: int | str | None) -> str:
 class Lease:
     """This process's hold on one robot: `take()` (refused while another live holder has it,
     unless `force`), `refusal(checked)` for the gateway, a heartbeat that renews it and notices
-    when another process took it over (`on_lost(holder)`, from the heartbeat's thread)."""
+    when another process took it over (`on_lost(holder)`, from the heartbeat's thread).
+    `channel()`: the robot's graph to announce it on (None: the store alone)."""
 
-    def __init__(self, store: Store, robot: str, name: str, who: str = "astiop"):
+    def __init__(
+        self,
+        store: Store,
+        robot: str,
+        name: str,
+        who: str = "astiop",
+        channel: Callable[[], Any] | None = None,
+    ):
         self.store, self.robot, self.name, self.who = store, robot, name, who
         self.token = uuid.uuid4().hex
         self.host, self.pid = socket.gethostname(), os.getpid()
-        self.on_lost = lambda holder: None
+        self.on_lost: Callable[[Holder | None], None] = lambda holder: None
+        self._open_channel = channel
+        self._channel: Any = None
         self._held = False
+        self._taken_at = 0.0
         self._halt = threading.Event()
         self._thread: threading.Thread | None = None
 
@@ -73,35 +94,77 @@ class Lease:
     def held(self) -> bool:
         return self._held
 
+    @property
+    def channel(self) -> Any:
+        """The robot's graph, opened the first time it is needed."""
+        if self._channel is None and self._open_channel is not None:
+            self._channel = self._open_channel()
+            self._open_channel = None
+        return self._channel
+
+    def _remote(self, released: bool = False) -> list[Holder]:
+        """Live holders announced on the robot's graph, other than this one, latest first
+        (`released`: with those that let go since)."""
+        channel = self.channel
+        words = channel.holders(released) if channel is not None else []
+        return [_holder(w) for w in words if w.get("token") != self.token]
+
     def holder(self) -> Holder | None:
-        """Who controls the robot now (None: no one)."""
+        """Who controls the robot now (None: no one): the latest live take."""
         row = self.store.lease(self.robot)
-        return _holder(row) if row else None
+        found = [_holder(row)] if row else []
+        found += self._remote()
+        return max(found, key=lambda h: (h.taken_at, h.token)) if found else None
 
     def other_holder(self) -> Holder | None:
-        row = self.store.lease(self.robot)
-        return _holder(row) if row and row["token"] != self.token else None
+        holder = self.holder()
+        return holder if holder is not None and holder.token != self.token else None
 
     def take(self, force: bool = False) -> Holder | None:
         """Take control; the live holder that refused it (None: taken)."""
+        if not force and (remote := self._remote()):
+            return remote[0]
         refused = self.store.take_lease(
             self.robot, self.token, self.who, self.host, self.pid, force
         )
         self._held = refused is None
         if self._held:
+            self._taken_at = time.time()
+            self._announce()
             self._start_heartbeat()
         return _holder(refused) if refused else None
+
+    def _announce(self, released: bool = False) -> None:
+        channel = self.channel
+        if channel is None:
+            return
+        with contextlib.suppress(Exception):  # the store still holds it on this machine
+            channel.announce({
+                "token": self.token, "who": self.who, "host": self.host, "pid": self.pid,
+                "taken_at": self._taken_at, "released": released,
+            })  # fmt: skip
+
+    def _overtaken(self) -> Holder | None:
+        """A holder elsewhere that took the robot after this process did (and may have let go
+        of it since: control was taken from this process all the same)."""
+        later = [
+            h
+            for h in self._remote(released=True)
+            if (h.taken_at, h.token) > (self._taken_at, self.token)
+        ]
+        return later[0] if later else None
 
     def refusal(self, checked: Checked) -> str | None:
         """Why this actuation may not run here (None: it may)."""
         if checked.kind != "actuate" or is_stop(checked):
             return None
         row = self.store.lease(self.robot)  # a read: another may have taken it a moment ago
-        if self._held and row is not None and row["token"] == self.token:
+        ours = self._held and row is not None and row["token"] == self.token
+        if ours and self._overtaken() is None:
             return None
         self._held = False
-        if row is not None and row["token"] != self.token:
-            other = _holder(row)
+        other = self.other_holder()
+        if other is not None:
             return (
                 f"{self.name} is controlled by {other.words}: take control of it first "
                 "(the console's ctrl+t, or --take)"
@@ -120,14 +183,25 @@ class Lease:
                 kept = self.store.renew_lease(self.robot, self.token)
             except Exception:  # noqa: BLE001 - a busy store: tried again at the next beat
                 continue
-            if not kept and self._held:
+            overtaken = self._overtaken()
+            if kept and overtaken is None:
+                self._announce()
+                continue
+            if self._held:
                 self._held = False
-                self.on_lost(self.other_holder())
-                return
+                if kept:  # taken on another machine: the store's row is let go here
+                    with contextlib.suppress(Exception):
+                        self.store.release_lease(self.robot, self.token)
+                self.on_lost(overtaken or self.other_holder())
+            return
 
     def release(self) -> None:
         self._halt.set()
         if self._held:
             self._held = False
+            self._announce(released=True)
             with contextlib.suppress(Exception):  # it expires by itself
                 self.store.release_lease(self.robot, self.token)
+        if self._channel is not None:
+            with contextlib.suppress(Exception):
+                self._channel.close()

@@ -128,6 +128,13 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         """The nodes discovered on the robot's domain (not this process's own)."""
         return [n for n, _ in self._lists["node"]]
 
+    def control_channel(self, namespace: str):
+        from astiop.robot.backends.rclpy.control_topic import ControlTopic
+
+        topic = ControlTopic(self.proc, namespace)
+        topic.settle()
+        return topic
+
     def discovering(self) -> bool:
         return time.monotonic() - self.t0 < DISCOVERY_YOUNG_S
 
