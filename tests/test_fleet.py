@@ -121,6 +121,16 @@ def test_two_turtlebot3s_are_found_read_addressed_and_stopped_at_once(tmp_path):
         out = astiop(db, "--fleet", "auto", "estop", "--release", "--all", "--yes")
         assert out.returncode == 0 and "released: tb3_1, tb3_2" in out.stdout, out
 
+        # one robot's E-STOP latches that robot alone
+        out = astiop(db, "--fleet", "auto", "--robot-name", "tb3_1", "estop")
+        assert out.returncode == 0, out.stdout + out.stderr[-2000:]
+        store = Store(db)
+        assert store.latched_robots() == ["/tb3_1"] and store.estop_latch() is None
+        out = astiop(db, "--fleet", "auto", "--robot-name", "tb3_1", "exec",
+                     "ros2 topic pub --once /tb3_1/cmd_vel geometry_msgs/msg/TwistStamped "
+                     "'{twist: {linear: {x: 0.1}}}'", "--yes")  # fmt: skip
+        assert out.returncode != 0 and "E-STOP" in out.stdout + out.stderr, out
+
         # another console controls tb3_2: this one moves it only once it takes control
         holder = Lease(Store(db), lease_key("/tb3_2", os.environ["ROS_DOMAIN_ID"]), "tb3_2",
                        "another console")  # fmt: skip
@@ -136,13 +146,25 @@ def test_two_turtlebot3s_are_found_read_addressed_and_stopped_at_once(tmp_path):
         assert holder.holder() is None  # taken, then let go when that command ended
         holder.release()
         holder.store.close()
+        out = astiop(db, "--fleet", "auto", "--robot-name", "tb3_1", "estop", "--release", "--yes")
+        assert out.returncode == 0 and "E-STOP released (tb3_1)" in out.stdout, out
+        assert store.latched_robots() == []
+        store.close()
 
 
-def test_a_bad_robot_name_and_a_release_of_one_robot_are_said_in_one_line(tmp_path):
+def test_a_bad_robot_name_and_one_robot_released_from_every_robots_stop(tmp_path):
     db = tmp_path / "f.db"
     out = astiop(db, "--fleet", "auto", "--robot-name", "a/b", "robot", "profile")
     assert out.returncode == 2 and "'a/b' is no robot name" in out.stderr, out.stderr
+    store = Store(db)
+    store.latch_estop("estop --all")  # every robot's: one of them is not let go alone
     out = astiop(db, "--fleet", "auto", "--robot-name", "tb3_1", "estop", "--release", "--yes")
-    assert out.returncode == 2 and "release it with --release --all" in out.stderr, out.stderr
+    assert (
+        out.returncode == 2
+        and ("the E-STOP of every robot on this database holds tb3_1: astiop estop --release --all")
+        in out.stderr
+    ), out.stderr
+    assert store.estop_latch() is not None
+    store.close()
     out = astiop(db, "--fleet", "auto", "--robot-name", "tb3_1", "estop", "--all")
     assert out.returncode == 2 and "leave out --robot-name" in out.stderr, out.stderr

@@ -28,7 +28,8 @@ NAMES = ["astibot_1", "astibot_2", "astibot_3"]
 
 def _gateway(settings, sim, store=None, name: str = "") -> RobotGateway:
     backend = SimBackend(sim, store, stepped_elsewhere=True)
-    gateway = RobotGateway(backend, make_safety(settings, store), store=store, who="test")
+    gateway = RobotGateway(backend, make_safety(settings, store), store=store, who="test",
+                           latch_key=f"/{name}" if name else "")  # fmt: skip
     if name:  # shared, as a robot on a ROS 2 graph is: one console controls it
         gateway.lease = Lease(store, lease_key(f"/{name}", 0), name, "console")
     return gateway
@@ -91,7 +92,9 @@ async def test_every_robot_is_listed_filtered_sorted_and_stopped_at_once(tmp_pat
             await pilot.press("ctrl+e")
             await wait_for(pilot, lambda: all(r.e_stopped for r in fleet.robots))
             await wait_for(pilot, lambda: all(r[1] == "e_stopped" for r in _rows(app)))
-            assert app.services.store.estop_latch() is not None
+            store = app.services.store  # each robot latched on its own
+            assert store.latched_robots() == [f"/{n}" for n in NAMES]
+            assert store.estop_latch() is None
 
             await pilot.press("ctrl+r")
             await wait_for(pilot, lambda: isinstance(app.screen, ConfirmModal))
@@ -138,6 +141,21 @@ async def test_enter_makes_a_robot_current_and_chat_moves_the_robot_a_request_na
             assert fleet.robots[0].goal is None and fleet.robots[2].goal is None
             said = await _answer(pilot, chat, "astibot_2: ")
             assert "shipping" in said, said
+
+            # one robot stopped from the Fleet screen: the others still move
+            await pilot.press("f7")
+            await wait_for(pilot, lambda: _rows(app)[2][0].startswith("▶"))
+            await pilot.press("x")  # the cursor is on astibot_3
+            await wait_for(pilot, lambda: fleet.robots[2].e_stopped)
+            assert app.services.store.latched_robots() == ["/astibot_3"]
+            assert not fleet.robots[0].e_stopped and not fleet.robots[1].e_stopped
+            await pilot.press("r")
+            await wait_for(pilot, lambda: isinstance(app.screen, ConfirmModal))
+            assert app.screen.question.startswith("Release the E-STOP of astibot_3?")
+            await pilot.press("y")
+            await wait_for(pilot, lambda: not fleet.robots[2].e_stopped)
+            assert app.services.store.latched_robots() == []
+            await pilot.press("f2")
 
             # astibot_1 is another's: its motion is refused, saying who controls it
             await _ask(pilot, chat, "send astibot 1 to shipping")

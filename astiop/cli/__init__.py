@@ -48,9 +48,10 @@ def _serves_a_local_model(args: list[str]) -> bool:
 
 
 def _stops_the_robot(args: list[str]) -> bool:
-    """`astiop estop`, not its --release nor its help."""
+    """`astiop estop` of every robot on the database: not its --release nor its help, nor the
+    stop of one robot of a fleet (its own latch, written once its namespace is known)."""
     command, _ = _command_and_model(args)
-    asks = {"--release", "--help", "-h"}
+    asks = {"--release", "--help", "-h", "--robot-name", "--namespace"}
     return command == "estop" and not asks & {a.split("=", 1)[0] for a in args}
 
 

@@ -122,6 +122,7 @@ def estop(
     database then refuses motion until it is released. --robot-name NAME stops one robot of
     the fleet, --all every one."""
     from astiop.robot.factory import make_robot_gateway
+    from astiop.robot.gateway import HELD_FOR_ALL
 
     st = state(ctx)
     if every and st.robot_name is not None:
@@ -136,13 +137,13 @@ def estop(
 
         release_all(st, yes)
         return
-    if release and st.robot_name is not None:
-        fail(
-            "the E-STOP is latched for every robot on this database (a latch per robot is "
-            "not built yet): release it with --release --all"
-        )
+    ns = st.settings.robot.namespace  # a namespaced robot latches its own E-STOP
+    if release and ns and st.robot_name is not None and st.store.estop_latch() is not None:
+        fail(HELD_FOR_ALL.replace("still holds it", f"holds {st.robot_name}"))
     if release:
-        latch = st.store.estop_latch()
+        own = bool(ns) and st.store.robot_latch(ns) is not None
+        latch = st.store.estop_latch() if st.robot_name is None else None
+        latch = latch or (st.store.robot_latch(ns) if ns else None)
         live = st.settings.robot.backend == "ros2"  # its own stop may hold it (a bare /stop)
         if latch is None and not live:
             typer.echo("the E-STOP is not engaged")
@@ -153,8 +154,11 @@ def estop(
             if not typer.confirm("release the E-STOP (the robot may move again)?", err=True):
                 fail("not released", code=1)
         if latch is not None:
-            st.store.release_estop("estop --release")
-            typer.echo("E-STOP released")
+            if st.robot_name is None:
+                st.store.release_estop("estop --release")
+            if own:
+                st.store.release_robot(ns)
+            typer.echo(f"E-STOP released{f' ({st.robot_name})' if st.robot_name else ''}")
         else:
             typer.echo("the E-STOP is not latched in the database")
         if live:
@@ -167,7 +171,10 @@ def estop(
             st.settings, st.store, who="estop", discover=False, restore_latch=False
         )
     except BackendError as exc:
-        st.store.latch_estop("estop")  # no robot reached: still hold every other process
+        if ns:  # no robot reached: still hold every other process
+            st.store.latch_robot(ns, "estop")
+        else:
+            st.store.latch_estop("estop")
         fail(f"E-STOP latched in the database, but the robot was not reached: {exc}", code=1)
     failures = gateway.estop()
     # the zero-Twist burst and /stop go out before this process exits

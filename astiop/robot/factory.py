@@ -114,6 +114,7 @@ def make_robot_gateway(
             store=store,
             who=who,
             restore_latch=restore_latch,
+            latch_key=settings.robot.namespace,  # a fleet's robot: a latch of its own
         )
         if store is not None:  # a robot on the graph is shared: one operator controls it
             gateway.lease = robot_lease(settings, store, who, backend)

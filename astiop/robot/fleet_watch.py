@@ -176,41 +176,45 @@ class FleetWatch:
         a failure of its own. The failures by robot name (empty: stopped). `skip`: a robot the
         caller stops itself (the console's current one, first)."""
         results: dict[str, list[str]] = {}
-
-        def stop(name: str) -> None:
-            gateway = self.gateways.get(name)
-            if gateway is None:
-                results[name] = ["not reached: no connection to it"]
-                return
-            try:
-                results[name] = gateway.estop()
-            except Exception as exc:  # noqa: BLE001
-                results[name] = [str(exc)]
-
         names = [n for n, _, _ in self.robots if n != skip]
-        threads = [threading.Thread(target=stop, args=(n,)) for n in names]
+        threads = [
+            threading.Thread(target=lambda n=n: results.__setitem__(n, self.estop(n)))
+            for n in names
+        ]
         for t in threads:
             t.start()
         for t in threads:
             t.join()
-        for name, failures in results.items():
-            if failures:  # red until released, whatever it reports meanwhile
-                self._failed[name] = "E-STOP failed: " + "; ".join(failures)
-                self._set(replace(self._rows[name], error=self._failed[name]))
         return results
 
-    def release_all(self, skip: str = "") -> list[str]:
-        """Each robot's own stop let go (/release, where it latches one); what failed, named."""
-        failures: list[str] = []
-        self._failed.clear()
-        for name, gateway in list(self.gateways.items()):
-            if name == skip:
-                continue
-            try:
-                failures += [f"{name}: {f}" for f in gateway.release_estop()]
-            except Exception as exc:  # noqa: BLE001
-                failures.append(f"{name}: {exc}")
+    def estop(self, name: str) -> list[str]:
+        """One robot stopped and latched; its failures (a robot not reached is one), its row
+        red until it is released, whatever it reports meanwhile."""
+        gateway = self.gateway_of(name)
+        try:
+            failures = gateway.estop() if gateway else ["not reached: no connection to it"]
+        except Exception as exc:  # noqa: BLE001
+            failures = [str(exc)]
+        if failures:
+            self._failed[name] = "E-STOP failed: " + "; ".join(failures)
+            self._set(replace(self._rows[name], error=self._failed[name]))
         return failures
+
+    def release(self, name: str) -> list[str]:
+        """One robot's latch and its own stop (/release, where it latches one) let go."""
+        self._failed.pop(name, None)
+        gateway = self.gateway_of(name)
+        if gateway is None:
+            return ["not reached: no connection to it"]
+        try:
+            return gateway.release_estop()
+        except Exception as exc:  # noqa: BLE001
+            return [str(exc)]
+
+    def release_all(self, skip: str = "") -> list[str]:
+        """Each robot's release; what failed, named."""
+        names = [n for n, _, _ in self.robots if n != skip]
+        return [f"{n}: {f}" for n in names for f in self.release(n)]
 
     def gateway_of(self, name: str) -> RobotGateway | None:
         """The robot's gateway, once it was reached."""

@@ -27,6 +27,9 @@ Confirm = Callable[[Checked], bool]
 log = logging.getLogger("astiop.robot")
 MAX_STAMP_AGE_S = 86400.0  # a stamp older than a day is on another clock, not a day-old reading
 SETTLED_S = 2.0  # a robot graph unchanged this long has been read whole
+HELD_FOR_ALL = (
+    "the E-STOP of every robot on this database still holds it: astiop estop --release --all"
+)
 ESTOP_REASON = "the E-STOP is engaged: no motion command runs until the operator releases it"
 
 
@@ -40,6 +43,7 @@ class RobotGateway:
         store: Store | None = None,
         who: str = "astiop",
         restore_latch: bool = True,
+        latch_key: str = "",
     ):
         """`restore_latch=False`: a latched E-STOP is not sent again here (`astiop estop`
         sends it at once itself: twice, every step went out twice)."""
@@ -53,6 +57,7 @@ class RobotGateway:
         self._store_errors: set[str] = set()
         self._journal_lock = threading.Lock()
         self._latch_lock = threading.Lock()
+        self.latch_key = latch_key  # a namespaced robot latches its own E-STOP (a fleet's)
         self._latch_seen = self.latched
         self.lease = None  # robot/lease.py: set where the robot is shared (ROS 2)
         self.use_map()
@@ -122,7 +127,12 @@ class RobotGateway:
     # -- E-STOP -----------------------------------------------------------------------------
     @property
     def latched(self) -> bool:
-        return self.store is not None and self.store.estop_latch() is not None
+        """The store's latch: every robot's, or this robot's own."""
+        store = self.store
+        if store is None:
+            return False
+        own = self.latch_key and store.robot_latch(self.latch_key) is not None
+        return bool(own) or store.estop_latch() is not None
 
     @property
     def e_stopped(self) -> bool:
@@ -134,7 +144,10 @@ class RobotGateway:
         if self.store is not None:
             try:
                 with self._latch_lock:  # the sampler's follow_latch must not undo it
-                    self.store.latch_estop(self.who)
+                    if self.latch_key:
+                        self.store.latch_robot(self.latch_key, self.who)
+                    else:
+                        self.store.latch_estop(self.who)
                     self._latch_seen = True
             except Exception as exc:  # noqa: BLE001 - reported, the stop itself went out
                 failures.append(f"the E-STOP is not latched for other processes: {exc}")
@@ -146,10 +159,16 @@ class RobotGateway:
         return self.backend.settle_estop(timeout_s)
 
     def release_estop(self) -> list[str]:
-        """Release the latch for every process, then this process's robot; the failures."""
+        """Release the latch for every process, then this process's robot; the failures. A
+        fleet's robot releases its own latch; one on every robot still holds it."""
         if self.store is not None:
             with self._latch_lock:
-                self.store.release_estop(self.who)
+                if self.latch_key:
+                    self.store.release_robot(self.latch_key)
+                    if self.store.estop_latch() is not None:
+                        return [HELD_FOR_ALL]
+                else:
+                    self.store.release_estop(self.who)
                 self._latch_seen = False
         return self.backend.release_estop()
 

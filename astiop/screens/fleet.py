@@ -16,6 +16,7 @@ from textual.widgets import DataTable, Footer, Header, Static
 from astiop.robot.fleet_watch import FleetRow
 from astiop.screens import control
 from astiop.screens.base import ConsoleScreen
+from astiop.screens.modals import ConfirmModal
 from astiop.widgets.map_view import Place, WarehouseMapView
 
 SORTS = ("name", "battery", "state", "age")
@@ -83,6 +84,8 @@ class FleetScreen(ConsoleScreen):
     """
     BINDINGS = [
         Binding("enter", "use_robot", "Make current", show=True),
+        Binding("x", "stop_one", "E-STOP this robot"),
+        Binding("r", "release_one", "Release it"),
         Binding("s", "sort", "Sort"),
         Binding("f", "filter", "Filter"),
     ]
@@ -150,3 +153,45 @@ class FleetScreen(ConsoleScreen):
     def action_filter(self) -> None:
         self.filter_by = FILTERS[(FILTERS.index(self.filter_by) + 1) % len(FILTERS)]
         self.refresh_rows()
+
+    def _selected(self) -> str | None:
+        table = self.query_one(DataTable)
+        if not self.shown or table.cursor_row < 0:
+            return None
+        return self.shown[min(table.cursor_row, len(self.shown) - 1)].name
+
+    def action_stop_one(self) -> None:
+        """x: the robot under the cursor stopped and latched (no question: a stop)."""
+        name, fleet = self._selected(), self.app.fleet  # type: ignore[attr-defined]
+        if name is None or fleet is None:
+            return
+
+        def stop() -> None:
+            failures = fleet.estop(name)
+            said = f"E-STOP engaged on {name}." + "".join(f"\n{f}" for f in failures)
+            self.app.call_from_thread(
+                self.app.notify, said, severity="error", title="E-STOP", markup=False
+            )
+
+        self.run_worker(stop, thread=True, group="estop", exit_on_error=False)
+
+    def action_release_one(self) -> None:
+        """r: the robot under the cursor released, once the operator said so."""
+        name, fleet = self._selected(), self.app.fleet  # type: ignore[attr-defined]
+        if name is None or fleet is None:
+            return
+
+        def release() -> None:
+            failures = fleet.release(name)
+            said = f"{name}: " + ("; ".join(failures) if failures else "E-STOP released.")
+            self.app.call_from_thread(
+                self.app.notify, said, severity="error" if failures else "information",
+                markup=False,
+            )  # fmt: skip
+
+        def done(ok: bool | None) -> None:
+            if ok:
+                self.run_worker(release, thread=True, group="estop", exit_on_error=False)
+
+        question = f"Release the E-STOP of {name}? It may move again."
+        self.app.push_screen(ConfirmModal(question), done)

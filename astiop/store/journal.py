@@ -112,6 +112,28 @@ class JournalTables:
             return {"by": row[1], "at": row[2]}
         return None
 
+    def robot_latch(self, robot: str) -> dict[str, Any] | None:
+        """One robot's own latch while engaged (a fleet's robot, by its namespace), else None."""
+        row = self.db.conn.execute(
+            "SELECT engaged_by, engaged_at FROM robot_estops WHERE robot = ?", [robot]
+        ).fetchone()
+        return {"by": row[0], "at": row[1]} if row else None
+
+    def latched_robots(self) -> list[str]:
+        return [r[0] for r in self.db.conn.execute("SELECT robot FROM robot_estops ORDER BY 1")]
+
+    def latch_robot(self, robot: str, who: str) -> None:
+        with self._tx():
+            self.db.conn.execute(
+                "INSERT OR IGNORE INTO robot_estops (robot, engaged_by, engaged_at) "
+                "VALUES (?, ?, ?)",
+                [robot, who, time.time()],
+            )
+
+    def release_robot(self, robot: str) -> None:
+        with self._tx():
+            self.db.conn.execute("DELETE FROM robot_estops WHERE robot = ?", [robot])
+
     def latch_version(self) -> int:
         """SQLite's data_version on this thread's connection: it changes when another
         connection commits, so a watcher reads the latch only then (a few µs a look)."""

@@ -245,7 +245,7 @@ def _migrate_v9(conn: sqlite3.Connection) -> None:
 
 
 def _migrate_v10(conn: sqlite3.Connection) -> None:
-    # Who controls each shared robot (a lease, one holder at a time, renewed by a heartbeat);
+    # The E-STOP of one robot of a fleet (a row while latched); who controls each shared robot (a lease, one holder at a time, renewed by a heartbeat);
     # which robot of a fleet an event, a turn or an approval was about.
     _run(
         conn,
@@ -254,6 +254,9 @@ def _migrate_v10(conn: sqlite3.Connection) -> None:
             robot TEXT PRIMARY KEY, token TEXT NOT NULL, who TEXT NOT NULL,
             host TEXT NOT NULL, pid INTEGER NOT NULL, taken_at REAL NOT NULL,
             seen_at REAL NOT NULL, taken_from TEXT
+        );
+        CREATE TABLE robot_estops (
+            robot TEXT PRIMARY KEY, engaged_by TEXT NOT NULL, engaged_at REAL NOT NULL
         );
         ALTER TABLE events ADD COLUMN robot TEXT NOT NULL DEFAULT '';
         ALTER TABLE interactions ADD COLUMN robot TEXT NOT NULL DEFAULT '';
@@ -290,6 +293,7 @@ _OUR_TABLES = {
     "missions",
     "mission_steps",
     "leases",
+    "robot_estops",
 }
 
 
