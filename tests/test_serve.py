@@ -293,6 +293,14 @@ async def test_every_tab_sees_one_shared_simulated_robot_and_its_estop(tmp_path)
             await read_until(second, two, r"pose\s+x\s+1\.15 m", timeout=60)
             await send_keys(first, "\x1bOQ")  # F2: Chat
             await read_until(first, one, r"Ask the robot")
+            # both tabs are consoles of one robot: the one that took control first drives it;
+            # the other takes it over (ctrl+t, asked), as an operator would
+            await read_until(first, one, r"in control|WATCHING", timeout=30)
+            if one.has("WATCHING"):
+                await send_keys(first, "\x14")
+                await read_until(first, one, r"Take control of the robot from console")
+                await send_keys(first, "y")
+                await read_until(second, two, r"WATCHING", timeout=30)  # and that one is told
             await send_keys(first, "go to shipping\r")
             await read_until(first, one, r"Run this command\? It moves the robot", timeout=60)
             await send_keys(first, "y")

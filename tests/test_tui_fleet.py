@@ -7,7 +7,7 @@ from __future__ import annotations
 import re
 import time
 
-from textual.widgets import DataTable, Input, Static
+from textual.widgets import DataTable, Input, Select, Static
 
 from astiop.app import make_app
 from astiop.config import load_settings
@@ -161,6 +161,15 @@ async def test_enter_makes_a_robot_current_and_chat_moves_the_robot_a_request_na
             await _ask(pilot, chat, "send astibot 1 to shipping")
             await wait_for(pilot, lambda: "controlled by astiop mcp" in " ".join(_said(chat)))
             assert fleet.robots[0].goal is None
+
+            # Logs: each turn and event with its robot, filtered by robot
+            await pilot.press("f3")
+            logs = app.screen
+            await wait_for(pilot, lambda: len(logs.query_one("#logs-robot", Select)._options) > 2)
+            logs.query_one("#logs-robot", Select).value = "astibot_2"
+            await wait_for(pilot, lambda: logs.shown and all(r["robot"] == "astibot_2"
+                                                             for r in logs.shown))  # fmt: skip
+            assert any(r["summary"] == "send the robot to shipping" for r in logs.shown)
     finally:
         runner.stop()
         other.release()

@@ -226,7 +226,7 @@ class RobotGateway:
                 if new:
                     self._journaled = new[-1].seq
             if new:
-                failed = self.store.keep_robot_events(new)  # never raises
+                failed = self.store.keep_robot_events(new, self.latch_key.strip("/"))
                 if failed:
                     self._say_store_error(failed)
         return events

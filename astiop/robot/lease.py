@@ -155,7 +155,8 @@ class Lease:
         return later[0] if later else None
 
     def refusal(self, checked: Checked) -> str | None:
-        """Why this actuation may not run here (None: it may)."""
+        """Why this actuation may not run here (None: it may). A robot no one controls is
+        taken here by the first motion sent to it."""
         if checked.kind != "actuate" or is_stop(checked):
             return None
         row = self.store.lease(self.robot)  # a read: another may have taken it a moment ago
@@ -163,13 +164,13 @@ class Lease:
         if ours and self._overtaken() is None:
             return None
         self._held = False
-        other = self.other_holder()
-        if other is not None:
-            return (
-                f"{self.name} is controlled by {other.words}: take control of it first "
-                "(the console's ctrl+t, or --take)"
-            )
-        return f"{self.name} is not controlled from here: take control of it first"
+        other = self.take()
+        if other is None:
+            return None
+        return (
+            f"{self.name} is controlled by {other.words}: take control of it first "
+            "(the console's ctrl+t, or --take)"
+        )
 
     def _start_heartbeat(self) -> None:
         if self._thread is None or not self._thread.is_alive():

@@ -52,6 +52,7 @@ class LogsScreen(ConsoleScreen):
             yield Select(KINDS, value="all", allow_blank=False, id="logs-kind")
             yield Select(VALIDITY, value="any", allow_blank=False, id="logs-valid")
             yield Select([("any model", "any")], value="any", allow_blank=False, id="logs-model")
+            yield Select([("any robot", "any")], value="any", allow_blank=False, id="logs-robot")
         with Horizontal(id="logs-body"):
             yield DataTable(id="logs-table", cursor_type="row", zebra_stripes=True)
             yield VerticalScroll(Static(id="logs-detail-text", markup=False), id="logs-detail")
@@ -74,6 +75,7 @@ class LogsScreen(ConsoleScreen):
             rows.append(
                 {
                     "kind": "interaction",
+                    "robot": it.get("robot") or "",
                     "t": it["started_at"],
                     "model": it["model"],
                     "valid": all(c["valid"] for c in cmds) if cmds else None,
@@ -86,6 +88,7 @@ class LogsScreen(ConsoleScreen):
             rows.append(
                 {
                     "kind": "event",
+                    "robot": ev.get("robot") or "",
                     "t": ev["t"],
                     "model": "",
                     "valid": None,
@@ -104,6 +107,11 @@ class LogsScreen(ConsoleScreen):
         current = select.value
         select.set_options([("any model", "any")] + [(m, m) for m in models])
         select.value = current if current in models else "any"
+        robots = sorted({r["robot"] for r in rows if r["robot"]})  # a fleet's, by name
+        select = self.query_one("#logs-robot", Select)
+        current = select.value
+        select.set_options([("any robot", "any")] + [(name, name) for name in robots])
+        select.value = current if current in robots else "any"
         self._filter()
 
     def on_input_changed(self) -> None:
@@ -116,10 +124,13 @@ class LogsScreen(ConsoleScreen):
         kind = self.query_one("#logs-kind", Select).value
         valid = self.query_one("#logs-valid", Select).value
         model = self.query_one("#logs-model", Select).value
+        robot = self.query_one("#logs-robot", Select).value
         text = self.query_one("#logs-search", Input).value.lower().strip()
         if kind != "all" and r["kind"] != kind:
             return False
         if model != "any" and r["model"] != model:
+            return False
+        if robot != "any" and r["robot"] != robot:
             return False
         if valid == "valid" and r["valid"] is not True:
             return False
@@ -142,7 +153,7 @@ class LogsScreen(ConsoleScreen):
             # stored text is data, never markup: "[/scan]" prints as typed
             table.add_row(
                 _when(r["t"]),
-                r["kind"],
+                r["kind"] if not r["robot"] else f"{r['kind']} · {r['robot']}",
                 Text(escape_controls(r["model"])),
                 valid,
                 Text(escape_controls(r["summary"][:80])),

@@ -58,13 +58,13 @@ class JournalTables:
                 }
             )
 
-    def keep_robot_events(self, events) -> str | None:
+    def keep_robot_events(self, events, robot: str = "") -> str | None:
         """The robot's events (RobotEvent), in one write. It never raises: the record must
         never stop what is watching the robot (the console, `astiop record`); why it failed,
         for the caller to say."""
         rows = [
             {"t": time.time(), "sim_t": e.t, "kind": e.kind, "severity": e.severity,
-             "message": e.message}
+             "message": e.message, "robot": robot}
             for e in events
         ]  # fmt: skip
         if rows:
