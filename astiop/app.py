@@ -516,7 +516,10 @@ def make_app(
         if settings.robot.backend == "sim":
             gateway = make_sim_gateway(settings, store, realtime=realtime, sim=sim, who="console")
         else:
-            gateway = make_robot_gateway(settings, store, realtime=True, who="console")
+            # a fleet's robots were found on a settled graph: nothing more to wait for
+            gateway = make_robot_gateway(
+                settings, store, realtime=True, who="console", discover=fleet is None
+            )
     endpoint = endpoint or open_endpoint(
         settings.llm.model,
         threads=settings.llm.threads,

@@ -136,11 +136,11 @@ def measure(n: int, domain: int, window: float, env: dict) -> dict:
     listed, asked = None, False
     while time.monotonic() - t0 < 120:
         screen = tmux("capture-pane", "-p", "-t", session)
-        if not asked and "F7" in screen:  # the console is up: its Fleet screen
+        if not asked and "model:" in screen:  # the console is up: its Fleet screen
             tmux("send-keys", "-t", session, "F7")
             asked = True
         rows = [ln for ln in screen.splitlines() if "astibot_" in ln and "%" in ln]
-        if f"{n} robots:" in screen and len(rows) >= n:
+        if f"{n} robot{'s' * (n != 1)}:" in screen and len(rows) >= n:
             listed = time.monotonic() - t0
             break
         time.sleep(0.1)

@@ -78,7 +78,7 @@ def _fleet(st: CliState):
     opens = [
         (r.name, r.namespace,
          partial(make_robot_gateway, robot_settings(whole, r.name), st.store, realtime=True,
-                 who="console"))
+                 who="console", discover=False))
         for r in robots
     ]  # fmt: skip
     watch = FleetWatch(opens)

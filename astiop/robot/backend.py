@@ -81,6 +81,7 @@ class RobotBackend(ABC):
     read_only: str = ""  # why commands are refused, when they are
     refreshed_at: float = 0.0  # time.monotonic() of the last read of the robot's graph
     refresh_every_s: float = 5.0  # a missing name reads the graph again at most this often
+    params_wanted: bool = True  # the nodes' parameters read with the graph (finding a fleet: no)
     inflight: InFlight  # what this process has running that moves the robot
 
     def actuating(self, checked: Checked):

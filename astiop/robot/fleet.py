@@ -89,6 +89,7 @@ def find_robots(
         gateway = make_robot_gateway(whole, None, who="fleet", discover=False)
     except BackendError as exc:
         raise FleetError(f"the ROS 2 graph could not be read: {exc}") from None
+    gateway.backend.params_wanted = False  # namespaces are found from the names alone
     found: dict[str, FleetRobot] = {}
     try:
         now = time.monotonic()

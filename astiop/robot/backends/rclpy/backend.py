@@ -149,7 +149,12 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         # parameters of the nodes that serve them (other astiop processes do not), read for a
         # node when it appears, and for all of them every 30 s
         served = {n for n, _ in lists["service"]}
-        nodes = [n for n, _ in lists["node"] if f"{n}/list_parameters" in served]
+        ns = self._fixed.namespace  # a fleet's robot: its own nodes', not every robot's
+        nodes = [
+            n for n, _ in lists["node"]
+            if f"{n}/list_parameters" in served and self.params_wanted
+            and (not ns or n.startswith(ns + "/"))
+        ]  # fmt: skip
         stale = time.monotonic() - self.refreshed_at > PARAMS_REFRESH_S
         new = nodes if stale else [n for n in nodes if n not in self._params_of]
         if new:
