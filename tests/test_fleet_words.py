@@ -64,7 +64,7 @@ def test_fleet_questions_are_answered_from_what_each_robot_reported():
     kind = fleet_question("Which robot has the lowest battery?")
     said = fleet_answer(kind, rows())
     # astibot_5 reads 5 % but was last heard 12 s ago: stale, not the answer
-    assert said.startswith("astibot_4 has the lowest battery: 50 %."), said
+    assert said.startswith("astibot_4 has the lowest battery: 50.0 %."), said
     assert "astibot_5: stale, last heard 12 s ago" in said and "5 %" not in said
     said = fleet_answer(fleet_question("where are all the robots?"), rows())
     assert "astibot_2 at x 3.90 m, y 1.10 m (navigating)" in said

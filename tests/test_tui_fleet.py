@@ -130,8 +130,8 @@ async def test_enter_makes_a_robot_current_and_chat_moves_the_robot_a_request_na
             await wait_for(pilot, lambda: app.fleet.rows()[0].battery < 0.6)
             await _ask(pilot, chat, "which robot has the lowest battery?")
             said = await _answer(pilot, chat, "has the lowest battery")
-            m = re.match(r"astibot_1 has the lowest battery: (\d+) %\.", said)
-            assert m and 55 <= int(m[1]) <= fleet.robots[0].battery.soc * 100 + 0.5, said
+            m = re.match(r"astibot_1 has the lowest battery: (\d+\.\d) %\.", said)
+            assert m and 55 <= float(m[1]) <= fleet.robots[0].battery.soc * 100 + 0.05, said
 
             await _ask(pilot, chat, "send astibot 2 to shipping")
             await wait_for(pilot, lambda: isinstance(app.screen, ConfirmModal))

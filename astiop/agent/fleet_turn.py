@@ -61,7 +61,7 @@ class FleetAgent:
         name = to.name if to else self.current()
         said = to.request if to else request
         emit = on_event or (lambda kind, data: None)
-        emit("status", f"{name}: {to.how}" if to else f"{name} (the current robot)")
+        emit("status", f"to {name} ({to.how})" if to else f"to {name} (the current robot)")
         try:
             agent = self.agent_for(name)
         except LookupError as exc:  # not reached: said, never guessed at

@@ -25,7 +25,7 @@ _NUMBER = r"(?:number\s+|no\.?\s*|#\s*)?(\d+|" + "|".join(NUMBERS) + r")\b"
 class Addressed:
     name: str  # the robot
     request: str  # the request as said to that robot ("send the robot to shipping")
-    how: str  # how it was picked, said to the operator
+    how: str  # how it was picked, said to the operator ("as named", "the one at shipping")
 
 
 class FleetWordsError(ValueError):
@@ -98,7 +98,7 @@ def addressed(
         name, m = found[0]
         said = request[: m.start()] + "the robot" + request[m.end() :]
         said = re.sub(r"\bthe\s+the robot", "the robot", said, flags=re.IGNORECASE)
-        return Addressed(name, said, f"{name}, as named")
+        return Addressed(name, said, "as named")
     choice = re.search(
         r"\bthe\s+(nearest|closest)\s+(idle\s+|free\s+|available\s+)?robot\b", request, re.I
     )
@@ -113,8 +113,8 @@ def addressed(
             raise FleetWordsError(f"no {which} of the fleet has reported its pose just now")
         best = min(fits, key=lambda r: _dist(r, places[place]))
         said = request[: choice.start()] + "the robot" + request[choice.end() :]
-        how = f"{best.name}, the nearest {'idle ' if idle else ''}robot to {place} "
-        return Addressed(best.name, said, how + f"({_dist(best, places[place]):.1f} m)")
+        how = f"the nearest {'idle ' if idle else ''}robot to {place}"
+        return Addressed(best.name, said, how + f", {_dist(best, places[place]):.1f} m away")
     at = re.search(r"\bthe\s+(one|robot)\s+(at|near|by)\s+(the\s+)?", request, re.I)
     if at:
         rest = request[at.end() :].lower().replace(" ", "_")
@@ -126,7 +126,7 @@ def addressed(
                 raise FleetWordsError(f"{n} at {place} now: name the robot")
             end = at.end() + len(place)
             return Addressed(near[0].name, request[: at.start()] + "the robot" + request[end:],
-                             f"{near[0].name}, the one at {place}")  # fmt: skip
+                             f"the one at {place}")  # fmt: skip
     return None
 
 
@@ -173,7 +173,7 @@ def _where(row: FleetRow) -> str:
 def _battery(row: FleetRow) -> str:
     if row.battery is None:
         return f"{row.name}: no battery reading"
-    return f"{row.name} {row.battery * 100:.0f} %"
+    return f"{row.name} {row.battery * 100:.1f} %"
 
 
 def fleet_answer(kind: str, rows: Sequence[FleetRow]) -> str:
@@ -190,7 +190,7 @@ def fleet_answer(kind: str, rows: Sequence[FleetRow]) -> str:
             return "No robot of the fleet has reported its battery just now." + tail
         best, word = (read[0], "lowest") if kind == "lowest_battery" else (read[-1], "highest")
         others = ", ".join(_battery(r) for r in read)
-        head = f"{best.name} has the {word} battery: {best.battery * 100:.0f} %."
+        head = f"{best.name} has the {word} battery: {best.battery * 100:.1f} %."
         return f"{head} All reported: {others}." + tail
     if kind == "positions":
         lines = [_where(r) for r in fresh]
