@@ -408,8 +408,8 @@ class AstiopApp(App):
         control.take_over(self)
 
     def _release(self) -> None:
-        if self.fleet is not None:  # every robot's: the latch of them all goes too
-            self.services.store.release_estop("console")
+        # the latch of every robot goes too: this console's robots are all it holds
+        self.services.store.release_estop("console")
         failures = self.services.gateway.release_estop()
         if self.fleet is not None:
             failures += self.fleet.release_all(self.current_robot)

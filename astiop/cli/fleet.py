@@ -162,7 +162,9 @@ def release_all(st, yes: bool) -> None:
     settings = st.fleet_settings
 
     def release(robot) -> list[str]:
-        gateway = make_robot_gateway(robot_settings(settings, robot.name), st.store, who="release")
+        # released, not restored: a latch sent again now could reach the robot after /release
+        gateway = make_robot_gateway(robot_settings(settings, robot.name), st.store,
+                                     who="release", restore_latch=False)  # fmt: skip
         try:
             return gateway.release_estop()
         finally:

@@ -90,7 +90,9 @@ def _release_robot(st) -> None:
     from astiop.robot.factory import make_robot_gateway
 
     try:
-        gateway = make_robot_gateway(st.settings, st.store, who="estop --release")
+        gateway = make_robot_gateway(
+            st.settings, st.store, who="estop --release", restore_latch=False
+        )
     except BackendError as exc:
         fail(f"the robot was not reached to release its own stop: {exc}", code=1)
     try:

@@ -130,11 +130,11 @@ class Lease:
         self._held = refused is None
         if self._held:
             self._taken_at = time.time()
-            self._announce()
+            self._announce(acked_s=1.0 if force else 0.0)  # a takeover reaches the one it took from
             self._start_heartbeat()
         return _holder(refused) if refused else None
 
-    def _announce(self, released: bool = False) -> None:
+    def _announce(self, released: bool = False, acked_s: float = 0.0) -> None:
         channel = self.channel
         if channel is None:
             return
@@ -142,7 +142,7 @@ class Lease:
             channel.announce({
                 "token": self.token, "who": self.who, "host": self.host, "pid": self.pid,
                 "taken_at": self._taken_at, "released": released,
-            })  # fmt: skip
+            }, acked_s)  # fmt: skip
 
     def _overtaken(self) -> Holder | None:
         """A holder elsewhere that took the robot after this process did (and may have let go
@@ -200,7 +200,7 @@ class Lease:
         self._halt.set()
         if self._held:
             self._held = False
-            self._announce(released=True)
+            self._announce(released=True, acked_s=0.5)
             with contextlib.suppress(Exception):  # it expires by itself
                 self.store.release_lease(self.robot, self.token)
         if self._channel is not None:

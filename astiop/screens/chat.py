@@ -150,14 +150,12 @@ class ChatScreen(ConsoleScreen):
 
     def _robot_agent(self, name: str) -> Agent:
         """A robot of the fleet's own agent, made the first time a request is about it (its
-        control taken if no one holds it)."""
+        first motion takes its control if no one holds it)."""
         agents = self.__dict__.setdefault("_agents", {})
         if name not in agents:
             gateway = self.app.fleet.gateway_of(name)
             if gateway is None:
                 raise LookupError(f"{name} is not reached yet: nothing was sent to it")
-            if gateway is not self.services.gateway:
-                gateway.take_control()  # a store write: moments; refused, its motion is too
             agents[name] = self._agent_for(gateway, name)
         return agents[name]
 

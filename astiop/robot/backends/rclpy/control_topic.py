@@ -16,6 +16,7 @@ import threading
 import time
 from typing import Any
 
+from rclpy.duration import Duration
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import String
 
@@ -42,13 +43,16 @@ class ControlTopic:
 
     def settle(self, timeout_s: float = 2.0) -> None:
         """Until every other writer on the topic has been heard (their last words come at once,
-        transient-local), or `timeout_s`: a take must not miss a holder that is there."""
+        transient-local) and every reader known matches this writer, or `timeout_s`: a take must
+        not miss a holder that is there, nor a holder miss the take."""
         deadline = time.monotonic() + timeout_s
+        node = self.proc.node
         while time.monotonic() < deadline:
-            others = self.proc.node.count_publishers(self.name) - 1
+            others = node.count_publishers(self.name) - 1
             with self._lock:
                 heard = len(self._heard)
-            if heard >= others:
+            readers = node.count_subscribers(self.name)
+            if heard >= others and self._pub.get_subscription_count() >= readers:
                 return
             time.sleep(0.05)
 
@@ -61,8 +65,12 @@ class ControlTopic:
         with self._lock:
             self._heard[token] = (time.monotonic(), word)
 
-    def announce(self, word: dict[str, Any]) -> None:
+    def announce(self, word: dict[str, Any], acked_s: float = 0.0) -> None:
+        """Say it; with `acked_s`, wait that long at most for every reader to have it (a word
+        said just before this process ends: a takeover, a release)."""
         self._pub.publish(String(data=json.dumps(word)))
+        if acked_s > 0:  # ros2/rclpy humble rclpy/rclpy/publisher.py: wait_for_all_acked
+            self._pub.wait_for_all_acked(Duration(nanoseconds=int(acked_s * 1e9)))
 
     def holders(self, released: bool = False) -> list[dict[str, Any]]:
         """Every holder heard within the lease's time that has not let go (`released`: and
