@@ -32,8 +32,8 @@ def exec_command(
     except BackendError as exc:
         fail(str(exc))
     review = gateway.review(command)
-    if review.checked.kind == "actuate" and not dry_run:
-        take_control(gateway, st)
+    if not dry_run and (st.take or review.checked.kind == "actuate"):
+        take_control(gateway, st)  # --take: even where a half-read graph left the command unknown
     if dry_run:
         c = review.checked
         data = {
