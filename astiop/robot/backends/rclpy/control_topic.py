@@ -41,18 +41,21 @@ class ControlTopic:
         self._pub = node.create_publisher(String, self.name, QOS)
         self._sub = node.create_subscription(String, self.name, self._receive, QOS)
 
-    def settle(self, timeout_s: float = 2.0) -> None:
+    def settle(self, timeout_s: float = 5.0, least_s: float = 0.5) -> None:
         """Until every other writer on the topic has been heard (their last words come at once,
-        transient-local) and every reader known matches this writer, or `timeout_s`: a take must
-        not miss a holder that is there, nor a holder miss the take."""
-        deadline = time.monotonic() + timeout_s
+        transient-local) and every reader known matches this writer, and at least `least_s`
+        (a writer's endpoint may be discovered a moment after its process), or `timeout_s`: a
+        take must not miss a holder that is there, nor a holder miss the take."""
+        t0 = time.monotonic()
+        deadline = t0 + timeout_s
         node = self.proc.node
         while time.monotonic() < deadline:
             others = node.count_publishers(self.name) - 1
             with self._lock:
                 heard = len(self._heard)
             readers = node.count_subscribers(self.name)
-            if heard >= others and self._pub.get_subscription_count() >= readers:
+            matched = self._pub.get_subscription_count() >= readers
+            if heard >= others and matched and time.monotonic() - t0 >= least_s:
                 return
             time.sleep(0.05)
 
