@@ -100,6 +100,8 @@ class Lease:
         if self._channel is None and self._open_channel is not None:
             self._channel = self._open_channel()
             self._open_channel = None
+            if not self._held:  # every writer says a word: a take waits for no silent one
+                self._announce(released=True)
         return self._channel
 
     def _remote(self, released: bool = False) -> list[Holder]:
