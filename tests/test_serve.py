@@ -300,8 +300,10 @@ async def test_every_tab_sees_one_shared_simulated_robot_and_its_estop(tmp_path)
                 await send_keys(first, "\x14")
                 await read_until(first, one, r"Take control of the robot from console")
                 await send_keys(first, "y")
+                await read_until(first, one, r"in control", timeout=30)
                 await read_until(second, two, r"WATCHING", timeout=30)  # and that one is told
             await send_keys(first, "go to shipping\r")
+            await read_until(first, one, r"you: go to shipping")
             await read_until(first, one, r"Run this command\? It moves the robot", timeout=60)
             await send_keys(first, "y")
             # the robot the first tab sent away is the one the second tab shows

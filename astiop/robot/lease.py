@@ -86,6 +86,7 @@ class Lease:
         self._open_channel = channel
         self._channel: Any = None
         self._held = False
+        self.tried = False  # a take was answered (held or refused) at least once
         self._taken_at = 0.0
         self._halt = threading.Event()
         self._thread: threading.Thread | None = None
@@ -124,17 +125,21 @@ class Lease:
 
     def take(self, force: bool = False) -> Holder | None:
         """Take control; the live holder that refused it (None: taken)."""
-        if not force and (remote := self._remote()):
-            return remote[0]
-        refused = self.store.take_lease(
-            self.robot, self.token, self.who, self.host, self.pid, force
-        )
-        self._held = refused is None
-        if self._held:
-            self._taken_at = time.time()
-            self._announce(acked_s=1.0 if force else 0.0)  # a takeover reaches the one it took from
-            self._start_heartbeat()
-        return _holder(refused) if refused else None
+        try:
+            if not force and (remote := self._remote()):
+                return remote[0]
+            refused = self.store.take_lease(
+                self.robot, self.token, self.who, self.host, self.pid, force
+            )
+            self._held = refused is None
+            if self._held:
+                self._taken_at = time.time()
+                # a takeover reaches the one it took from
+                self._announce(acked_s=1.0 if force else 0.0)
+                self._start_heartbeat()
+            return _holder(refused) if refused else None
+        finally:
+            self.tried = True
 
     def _announce(self, released: bool = False, acked_s: float = 0.0) -> None:
         channel = self.channel

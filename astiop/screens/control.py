@@ -20,12 +20,13 @@ def start(app) -> None:
     lease.on_lost = lost
 
     def take() -> None:
-        refused = app.services.gateway.take_control()
+        try:
+            refused = app.services.gateway.take_control()
+        finally:  # the header says how it ended, even by an error
+            app.call_from_thread(app.refresh_subtitle)
         if refused:
             said = f"{refused}: you watch it; ctrl+t takes control"
             app.call_from_thread(_said, app, said)
-        else:
-            app.call_from_thread(app.refresh_subtitle)
 
     app.run_worker(take, thread=True, group="lease", exit_on_error=False)
 
@@ -36,11 +37,14 @@ def _said(app, text: str) -> None:
 
 
 def words(gateway) -> str:
-    """'' for a robot of this console's own; else whether it is controlled here."""
+    """'' for a robot of this console's own; else whether it is controlled here (before the
+    first take is answered, that it is being taken: never WATCHING for a moment)."""
     lease = gateway.lease
     if lease is None:
         return ""
-    return "  in control" if lease.held else "  WATCHING"
+    if lease.held:
+        return "  in control"
+    return "  WATCHING" if lease.tried else "  taking control…"
 
 
 def take_over(app) -> None:
