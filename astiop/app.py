@@ -303,7 +303,15 @@ class AstiopApp(App):
         path = path or default_path(store.path.parent)
         try:
             said = partial(self.notify, severity="error", title="recording", markup=False)
-            recorder = SessionRecorder(path, self.services.gateway, store, on_error=said)
+            fleet = self.fleet
+            recorder = SessionRecorder(
+                path,
+                self.services.gateway,
+                store,
+                on_error=said,
+                fleet=[(name, ns) for name, ns, _ in fleet.robots] if fleet else None,
+                gateway_of=fleet.gateway_of if fleet else None,
+            )
             self.recorder = recorder.start()
         except RecordingError as exc:
             self.notify(str(exc), severity="error", title="recording", markup=False)

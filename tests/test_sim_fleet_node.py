@@ -68,6 +68,7 @@ def test_two_astibots_in_one_warehouse_each_reached_by_its_name(tmp_path, monkey
         assert "arrived: shipping" in out.stdout, out.stdout + out.stderr[-3000:]
         assert until(lambda: poses[2] and math.dist(_xy(poses[2]), SHIPPING) < 0.3, 10)
         assert math.dist(_xy(poses[1]), (1.15, 3.0)) < 0.02, _xy(poses[1])  # never left its dock
+        _recorded_and_replayed(db, tmp_path / "fleet.mcap")
 
         out = astiop(db, "--fleet", "auto", "estop", "--all")
         assert out.returncode == 0, out.stdout + out.stderr[-2000:]
@@ -89,6 +90,23 @@ def test_two_astibots_in_one_warehouse_each_reached_by_its_name(tmp_path, monkey
         # one MCP server for both: each tool names its robot; the approval names it too
         asyncio.run(_mcp_sends_astibot_1(db))
         assert until(lambda: math.dist(_xy(poses[1]), (1.15, 3.0)) > 0.5, 30), _xy(poses[1])
+
+
+def _recorded_and_replayed(db: Path, path: Path) -> None:
+    """Every robot's topics in one recording, under its namespace; replayed, each where it was."""
+    from astiop.recording.reader import Recording, fleet_of
+    from astiop.robot.backends.replay.backend import open_fleet_replay
+
+    out = astiop(db, "--fleet", "auto", "record", "--duration", "2", str(path), "--json")
+    assert out.returncode == 0, out.stdout + out.stderr[-2000:]
+    counts = json.loads(out.stdout)["messages"]
+    for i in (1, 2):
+        assert counts.get(f"/astibot_{i}/odom", 0) > 5, counts
+    recording = Recording(path)
+    robots = open_fleet_replay(recording, fleet_of(recording), paused=True)
+    robots[0].playback.seek(recording.duration_s)
+    poses = [(b.state().pose.x, b.state().pose.y) for b in robots]
+    assert math.dist(poses[0], (1.15, 3.0)) < 0.05 and math.dist(poses[1], SHIPPING) < 0.3, poses
 
 
 def _another_machine(tmp_path: Path):

@@ -43,7 +43,7 @@ def run_console(st: CliState, record: str | None = None) -> None:
         record_path = Path(record).expanduser() if record else default_path(st.db_path.parent)
     settings, fleet = st.settings, None
     if is_fleet(st.fleet_settings):
-        settings, fleet = _fleet(st)
+        settings, fleet = open_fleet(st)
     try:
         app = make_app(settings, st.store, record=record_path, fleet=fleet)
     except (SpecError, BackendError) as exc:
@@ -55,9 +55,9 @@ def run_console(st: CliState, record: str | None = None) -> None:
     app.run()
 
 
-def _fleet(st: CliState):
-    """The fleet's robots found (said as they are), the current one (--robot-name, else the
-    first), and a watch of every one of them."""
+def open_fleet(st: CliState, who: str = "console"):
+    """The fleet's robots found (said as they are), the current one's settings (--robot-name,
+    else the first), and a watch of every one of them (not started)."""
     from functools import partial
 
     from astiop.cli.common import fail
@@ -78,7 +78,7 @@ def _fleet(st: CliState):
     opens = [
         (r.name, r.namespace,
          partial(make_robot_gateway, robot_settings(whole, r.name), st.store, realtime=True,
-                 who="console", discover=False))
+                 who=who, discover=False))
         for r in robots
     ]  # fmt: skip
     watch = FleetWatch(opens)
@@ -102,6 +102,7 @@ def replay(
     from astiop.app import make_app
     from astiop.cli.common import fail, state
     from astiop.recording import RecordingError
+    from astiop.recording.reader import Recording, fleet_of
     from astiop.robot.backend import BackendError
     from astiop.robot.backends.replay.backend import SPEEDS, open_replay
     from astiop.robot.gateway import RobotGateway
@@ -117,10 +118,41 @@ def replay(
         store = Store(Path(tmp) / "replay.db")
         store.copy_locations_from(st.store)
         try:
-            backend = open_replay(file, store=store, speed=speed, paused=paused)
-            gateway = RobotGateway(backend, store=store, who="replay")
-            app = make_app(st.settings, store, gateway=gateway)
+            recording = Recording(file)
+            robots = fleet_of(recording)
+            if robots:  # a fleet's session: the fleet replayed, its first robot current
+                settings, fleet = replayed_fleet(
+                    st.settings, recording, robots, store, speed, paused
+                )
+                gateway = fleet.robots[0][2]()
+            else:
+                backend = open_replay(file, store=store, speed=speed, paused=paused)
+                settings, fleet = st.settings, None
+                gateway = RobotGateway(backend, store=store, who="replay")
+            app = make_app(settings, store, gateway=gateway, fleet=fleet)
         except (RecordingError, SpecError, BackendError) as exc:
             fail(str(exc))
         app.run()
         store.close()
+
+
+def replayed_fleet(settings, recording, robots, store, speed: float, paused: bool):
+    """The settings of the fleet's first robot, and a watch of every recorded robot."""
+    from astiop.robot.backends.replay.backend import open_fleet_replay
+    from astiop.robot.fleet_watch import FleetWatch
+    from astiop.robot.gateway import RobotGateway
+
+    backends = open_fleet_replay(recording, robots, store=store, speed=speed, paused=paused)
+
+    def settings_for(name: str):
+        ns = dict(robots)[name]
+        return settings.model_copy(
+            update={"robot": settings.robot.model_copy(update={"namespace": ns})}
+        )
+
+    gateways = [RobotGateway(b, store=store, who="replay") for b in backends]
+    watch = FleetWatch(
+        [(name, ns, lambda g=g: g) for (name, ns), g in zip(robots, gateways, strict=True)]
+    )
+    watch.settings_for = settings_for
+    return settings_for(robots[0][0]), watch

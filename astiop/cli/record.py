@@ -48,22 +48,42 @@ def record(
     for name, value in (("--duration", duration), ("--scan-hz", scan_hz)):
         if value is not None and not (math.isfinite(value) and 0 < value <= 86400):
             fail(f"{name} must be a positive number")
+    from astiop.cli.console import open_fleet
     from astiop.robot.backend import BackendError
     from astiop.robot.factory import make_robot_gateway
+    from astiop.robot.fleet import is_fleet
 
     st = state(ctx)
     path = file or default_path(st.db_path.parent)
     for name in goto:
         st.store.require_location(name)  # a one-line error before anything starts
+    settings, fleet = st.settings, None
+    if is_fleet(st.fleet_settings):  # every robot recorded; --goto drives the current one
+        settings, fleet = open_fleet(st, who="astiop record")
     try:
-        gateway = make_robot_gateway(st.settings, st.store, realtime=True, who="astiop record")
+        gateway = make_robot_gateway(
+            settings, st.store, realtime=True, who="astiop record", discover=fleet is None
+        )
         gateway.start()
     except BackendError as exc:
+        if fleet is not None:
+            fleet.close()
         fail(str(exc))
+    if fleet is not None:
+        current = next(n for n, ns, _ in fleet.robots if ns == settings.robot.namespace)
+        fleet.adopt(current, gateway)
+        fleet.start()
     try:
-        recorder = SessionRecorder(path, gateway, st.store, scan_hz=scan_hz).start()
+        recorder = SessionRecorder(
+            path,
+            gateway,
+            st.store,
+            scan_hz=scan_hz,
+            fleet=[(n, ns) for n, ns, _ in fleet.robots] if fleet else None,
+            gateway_of=fleet.gateway_of if fleet else None,
+        ).start()
     except RecordingError as exc:
-        gateway.close()
+        _close(gateway, fleet)
         fail(str(exc))
     t0 = time.monotonic()
     limit = duration if duration is not None else (600.0 * len(goto) if goto else 10.0)
@@ -94,20 +114,27 @@ def record(
     except RecordingError as exc:
         with contextlib.suppress(RecordingError):
             recorder.stop()
-        gateway.close()
+        _close(gateway, fleet)
         fail(str(exc))
     progress()
     try:
         counts = recorder.stop()
     except RecordingError as exc:
-        gateway.close()
+        _close(gateway, fleet)
         fail(str(exc))
-    gateway.close()
+    _close(gateway, fleet)
     if not as_json:
         typer.echo("", err=True)
         for line in outcomes:
             typer.echo(line)
     _report(path, summary(path) if counts else counts, as_json)
+
+
+def _close(gateway, fleet) -> None:
+    if fleet is not None:
+        fleet.close()  # the current robot's gateway with the others
+    else:
+        gateway.close()
 
 
 def _drive_to(gateway, name: str, deadline: float, progress, target) -> str:

@@ -153,3 +153,34 @@ class Recording:
 
     def counts(self) -> dict[str, int]:
         return {topic: len(ch.times) for topic, ch in self.channels.items()}
+
+
+def fleet_of(recording: Recording) -> list[tuple[str, str]]:
+    """A fleet session's robots, (name, namespace); [] for one robot's."""
+    try:
+        robots = json.loads(recording.metadata.get("fleet", "[]"))
+        return [(str(name), str(ns)) for name, ns in robots]
+    except (ValueError, TypeError):
+        return []
+
+
+class RobotView(Recording):
+    """One robot of a fleet recording, read as if it were the whole recording: its topics by
+    their names inside its namespace ("/astibot_2/odom" as "/odom"), its own events; the store's
+    records (the turns, the missions) with the first robot only (`shared`), never twice."""
+
+    def __init__(self, recording: Recording, namespace: str, shared: bool):
+        # read already: the recording's channels seen through the namespace, nothing re-read
+        self.recording, self.namespace = recording, namespace
+        self.path, self.metadata, self.cut = recording.path, recording.metadata, recording.cut
+        self.start_ns, self.end_ns = recording.start_ns, recording.end_ns
+        inside = len(namespace)
+        self.channels = {
+            topic[inside:]: ch
+            for topic, ch in recording.channels.items()
+            if topic.startswith(namespace + "/")
+        }
+        if shared:
+            for topic in ("/astiop/interactions", "/astiop/mission"):
+                if topic in recording.channels:
+                    self.channels[topic] = recording.channels[topic]

@@ -54,17 +54,25 @@ def ros2msg(type_name: str, distro: str | None = None) -> str:
     return "\n".join(text) + "\n"
 
 
-def session_metadata(gateway) -> dict[str, str]:
+def session_metadata(gateway, fleet: list[tuple[str, str]] | None = None) -> dict[str, str]:
     """Which robot, and the two clocks at the start: the robot's and the wall's, so a sim-time
-    recording can be placed in wall time (export)."""
+    recording can be placed in wall time (export); a fleet's robots, [[name, namespace], …]."""
     from astiop.ros2.grammar import current_distro
 
-    return {
+    meta = {
         "backend": gateway.kind,
         "distro": current_distro(),
         "robot_t0": repr(gateway.state().t),
         "wall_t0": repr(time.time()),
     }
+    if fleet:
+        meta["fleet"] = json.dumps([list(robot) for robot in fleet])
+    return meta
+
+
+def events_topic(namespace: str) -> str:
+    """A robot's events: a fleet robot's under its namespace (Foxglove shows them apart)."""
+    return f"{namespace}/astiop/events"
 
 
 JSON_SCHEMAS = {
@@ -98,6 +106,10 @@ JSON_SCHEMAS = {
 class SessionRecorder:
     """Polls the gateway (never the simulator) and the store while it runs, in its own thread.
 
+    A fleet's session (`fleet`: its robots, (name, namespace), and `gateway_of(name)`, None for
+    a robot not reached yet) records every robot: its topics by their full names, under its
+    namespace, and its events on `<namespace>/astiop/events`.
+
     A poll that fails is said once (`on_error`, called from the recording's thread, and a line
     on stderr) and the recording goes on; `stop()` finishes the file whatever the polls did."""
 
@@ -110,6 +122,8 @@ class SessionRecorder:
         scan_hz: float | None = None,
         flush_s: float = FLUSH_S,
         on_error: Callable[[str], None] | None = None,
+        fleet: list[tuple[str, str]] | None = None,
+        gateway_of: Callable[[str], Any] | None = None,
     ):
         from mcap_ros2._dynamic import serialize_dynamic  # the encoder its Writer uses
 
@@ -126,14 +140,18 @@ class SessionRecorder:
             raise RecordingError(f"cannot write {self.path}: {exc.strerror or exc}") from None
         self._writer = Writer(self._file)
         self._writer.start(profile="ros2", library="astiop")
-        self._writer.add_metadata("astiop", session_metadata(gateway))
+        self._writer.add_metadata("astiop", session_metadata(gateway, fleet))
+        self._fleet = fleet or []
+        self._gateway_of = gateway_of or (lambda _name: None)
         self._channels: dict[str, tuple[int, Any]] = {}  # topic -> (channel id, encoder)
         self._last: dict[str, int] = {}  # topic -> last stamp written (ns)
         self.counts: dict[str, int] = {}
         self.failures = 0  # polls (or messages) that could not be written
         self._on_error = on_error
         self._said: set[str] = set()
-        self._event_seq = gateway.state().event_seq if gateway else 0
+        self._event_seq: dict[str, int] = {}  # per robot (its namespace): the last event seen
+        for ns, gw in self._robots() if gateway else ():
+            self._event_seq[ns] = gw.state().event_seq
         # The agent's turns: those after _turns_after, and those seen running (a turn ends when
         # it ends, not in the order the turns started), so each is written once, when it ends.
         self._turns_after, self._turns_running = self._interaction_marks()
@@ -198,23 +216,23 @@ class SessionRecorder:
         """Write what is new since the last poll; close a chunk every flush_s. The robot and the
         store are read before the writer is locked: a call that hangs never holds up stop(),
         and a call that fails leaves everything to the next poll."""
-        robot_now = self.gateway.state().t  # the clock the topics are logged on
-        topics = self.gateway.catalog.topics
-        names = self.gateway.catalog.recorded_topics()
-        times = self.gateway.message_times(names)  # published, or received on a robot
-        messages = self.gateway.messages(names)
-        events = self.gateway.events_since(self._event_seq)
+        robots = [self._read(ns, gw) for ns, gw in self._robots()]
+        robot_now = robots[0][1]  # the clock the store's records are logged on
         turns = self._interactions()
         mission_records = self._missions.poll()
         with self._lock:
             if self._finished:
                 return
-            for topic, message in messages.items():
-                self._topic_message(topic, topics[topic].type, message, times, robot_now)
-            for ev in events:
-                data = {"kind": ev.kind, "severity": ev.severity, "message": ev.message}
-                self._json("/astiop/events", data, int((ev.t or robot_now) * 1e9))
-                self._event_seq = max(self._event_seq, ev.seq)
+            for gateway, now, messages, times, events, ns in robots:
+                topics = gateway.catalog.topics
+                for topic, message in messages.items():
+                    kept = _under(ns, topic)
+                    stamp = times.get(topic, now)
+                    self._topic_message(gateway, topic, kept, topics[topic].type, message, stamp)
+                for ev in events:
+                    data = {"kind": ev.kind, "severity": ev.severity, "message": ev.message}
+                    self._json(events_topic(ns), data, int((ev.t or now) * 1e9), "/astiop/events")
+                    self._event_seq[ns] = max(self._event_seq.get(ns, 0), ev.seq)
             for turn in turns:
                 self._interaction(turn, int(robot_now * 1e9))
             for record in mission_records:
@@ -224,23 +242,44 @@ class SessionRecorder:
                 self._file.flush()
                 self._flushed = time.monotonic()
 
-    def _topic_message(self, topic, type_name, message, times, robot_now) -> None:
-        stamp = int(times.get(topic, robot_now) * 1e9)
-        last = self._last.get(topic)
+    def _robots(self) -> list[tuple[str, Any]]:
+        """(namespace, gateway) of every robot recorded: the gateway's alone, or the fleet's
+        reached so far (the current robot's first: its clock logs the store's records)."""
+        if not self._fleet:
+            return [("", self.gateway)]
+        reached = [(ns, self._gateway_of(name)) for name, ns in self._fleet]
+        current = [(ns, gw) for ns, gw in reached if gw is self.gateway] or [("", self.gateway)]
+        others = [(ns, gw) for ns, gw in reached if gw is not None and gw is not self.gateway]
+        return current + others
+
+    def _read(self, ns: str, gateway) -> tuple:
+        """One robot's new messages and events, read before the writer is locked."""
+        if ns not in self._event_seq:  # a robot reached after the recording began: from now
+            self._event_seq[ns] = gateway.state().event_seq
+        now = gateway.state().t
+        names = gateway.catalog.recorded_topics()
+        times = gateway.message_times(names)  # published, or received on a robot
+        messages = gateway.messages(names)
+        return gateway, now, messages, times, gateway.events_since(self._event_seq[ns]), ns
+
+    def _topic_message(self, gateway, topic, kept, type_name, message, t) -> None:
+        """`topic` as the gateway names it, `kept` as it is recorded (under its namespace)."""
+        stamp = int(t * 1e9)
+        last = self._last.get(kept)
         if last is not None and stamp <= last:
             return  # nothing new on this topic
-        scan = self.gateway.catalog.profile.name("scan") if self.gateway.catalog.profile else None
+        scan = gateway.catalog.profile.name("scan") if gateway.catalog.profile else None
         if (
             topic == (scan or "/scan")
             and last is not None
             and stamp - last < self.scan_period * 1e9
         ):
             return
-        self._last[topic] = stamp  # a message that cannot be encoded is passed over, once
+        self._last[kept] = stamp  # a message that cannot be encoded is passed over, once
         try:
-            self._ros2(topic, type_name, message, stamp)
+            self._ros2(kept, type_name, message, stamp)
         except Exception as exc:  # the encoder's: a message that does not fit its type
-            self._failed(f"writing {topic}", exc)
+            self._failed(f"writing {kept}", exc)
 
     # -- writing ------------------------------------------------------------------------
     def _channel(self, topic: str, type_name: str) -> tuple[int, Any]:
@@ -258,9 +297,9 @@ class SessionRecorder:
         self._writer.add_message(channel_id, stamp, data, stamp)
         self.counts[topic] = self.counts.get(topic, 0) + 1
 
-    def _json(self, topic: str, data: dict, t_ns: int) -> None:
+    def _json(self, topic: str, data: dict, t_ns: int, kind: str = "") -> None:
         if topic not in self._channels:
-            schema = json.dumps(JSON_SCHEMAS[topic]).encode()
+            schema = json.dumps(JSON_SCHEMAS[kind or topic]).encode()
             schema_id = self._writer.register_schema(topic.split("/")[-1], "jsonschema", schema)
             self._channels[topic] = (self._writer.register_channel(topic, "json", schema_id), None)
         channel_id = self._channels[topic][0]
@@ -288,6 +327,13 @@ class SessionRecorder:
             self._json("/astiop/interactions", turn, t_ns)
             self._turns_running.discard(turn["id"])
         self._turns_after = max(self._turns_after, turn["id"])
+
+
+def _under(namespace: str, topic: str) -> str:
+    """A fleet robot's topic under its namespace (a robot of this process names it without)."""
+    if not namespace or topic.startswith(namespace + "/"):
+        return topic
+    return namespace + topic
 
 
 def _finite_floats(value: Any) -> Any:

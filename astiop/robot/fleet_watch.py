@@ -217,9 +217,9 @@ class FleetWatch:
         return [f"{n}: {f}" for n in names for f in self.release(n)]
 
     def gateway_of(self, name: str) -> RobotGateway | None:
-        """The robot's gateway, once it was reached."""
+        """The robot's gateway, once it was reached (the caller's own at once)."""
         with self._lock:
-            return self.gateways.get(name)
+            return self.gateways.get(name) or self._given.get(name)
 
     def close(self) -> None:
         self._halt.set()

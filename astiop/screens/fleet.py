@@ -104,8 +104,7 @@ class FleetScreen(ConsoleScreen):
             yield FleetMapView(self.services.gateway.map_geometry(), id="fleet-map")
         yield Footer()
 
-    def on_mount(self) -> None:
-        super().on_mount()
+    def on_mount(self) -> None:  # ConsoleScreen's runs too (Textual calls each class's own)
         self.query_one(DataTable).add_columns(
             "robot", "state", "battery", "x, y (m)", "speed", "goal", "heard", "control"
         )

@@ -166,7 +166,7 @@ class JournalTables:
         also = f" OR id IN ({','.join('?' * len(ids))})" if ids else ""
         rows = list(
             self.db.query(  # no ORDER BY: with it SQLite scans the table, without it looks up
-                "SELECT id, prompt, model, mode, answer, grounding, total_s, status "
+                "SELECT id, prompt, model, mode, answer, grounding, total_s, status, robot "
                 f"FROM interactions WHERE id > ?{also}",
                 [after_id, *ids],
             )
@@ -185,9 +185,10 @@ class JournalTables:
 
     def add_recorded_interaction(self, turn: dict[str, Any], started_at: float) -> int:
         """A turn read back from a recording (replay), with its commands."""
-        keys = ("prompt", "model", "mode", "answer", "grounding", "total_s", "status")
+        keys = ("prompt", "model", "mode", "answer", "grounding", "total_s", "status", "robot")
         with self._tx():
             row = {k: turn.get(k) for k in keys}
+            row["robot"] = str(row["robot"] or "")
             row.update(session="replay", started_at=started_at, prompt=str(row["prompt"] or ""))
             row.update(model=str(row["model"] or ""), mode=str(row["mode"] or ""))
             interaction_id = int(self.db["interactions"].insert(row).last_pk)

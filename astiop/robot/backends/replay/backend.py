@@ -11,7 +11,7 @@ import time
 from dataclasses import replace
 from typing import Any
 
-from astiop.recording.reader import Recording
+from astiop.recording.reader import Recording, RobotView
 from astiop.robot.backend import BackendError, RobotBackend
 from astiop.robot.backends.live_catalog import describe_graph, nothing_listed
 from astiop.robot.inflight import InFlight
@@ -114,13 +114,25 @@ class ReplayBackend(RobotBackend):
     capabilities: frozenset[str] = frozenset()  # no commands, no teleop
     read_only = READ_ONLY
 
-    def __init__(self, recording: Recording, *, store=None, speed: float = 1.0, paused=False):
+    def __init__(
+        self,
+        recording: Recording,
+        *,
+        store=None,
+        speed: float = 1.0,
+        paused=False,
+        playback: Playback | None = None,
+    ):
         self.recording = recording
         self.label = f"replay of {recording.path.name}"
         self.store = store  # a throwaway store: the recorded turns appear in it as they happen
         self.catalog: Catalog = recorded_catalog(recording)
         self.inflight = InFlight()  # stays empty: a replay never actuates
-        self.playback = Playback(recording.start_ns, recording.end_ns, speed, not paused)
+        # a fleet's robots share one clock: the first one's, which starts it
+        self._own_clock = playback is None
+        self.playback = playback or Playback(
+            recording.start_ns, recording.end_ns, speed, not paused
+        )
         self._turns = recording.channels.get("/astiop/interactions")
         self._turns_shown = 0
         self._map_index = -1  # which recorded /map message self._map was decoded from
@@ -162,7 +174,8 @@ class ReplayBackend(RobotBackend):
 
     # -- lifecycle, e-stop: there is no robot to stop ---------------------------------------
     def start(self) -> None:
-        self.playback.seek(0.0)  # the clock starts when the console does, not at loading
+        if self._own_clock:
+            self.playback.seek(0.0)  # the clock starts when the console does, not at loading
 
     def close(self) -> None:
         pass
@@ -255,3 +268,20 @@ class ReplayBackend(RobotBackend):
 
 def open_replay(path, *, store=None, speed: float = 1.0, paused: bool = False) -> ReplayBackend:
     return ReplayBackend(Recording(path), store=store, speed=speed, paused=paused)
+
+
+def open_fleet_replay(
+    recording: Recording, robots: list[tuple[str, str]], *, store=None, speed=1.0, paused=False
+) -> list[ReplayBackend]:
+    """A fleet session's robots, in `robots`' order, each seen inside its namespace, on one
+    clock (the first robot's) and with the session's turns and missions once (the first's)."""
+    first = ReplayBackend(
+        RobotView(recording, robots[0][1], shared=True), store=store, speed=speed, paused=paused
+    )
+    others = [
+        ReplayBackend(RobotView(recording, ns, shared=False), playback=first.playback)
+        for _, ns in robots[1:]
+    ]
+    for backend, (name, _) in zip([first, *others], robots, strict=True):
+        backend.label = f"replay of {recording.path.name}, {name}"
+    return [first, *others]
