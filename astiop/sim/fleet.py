@@ -120,7 +120,7 @@ class SimFleet:
             for _ in range(n):
                 for robot in self.robots:
                     robot._before_physics()
-                self.world.space.step(self.dt)
+                self.world.step(self.dt)
                 for robot in self.robots:
                     robot._after_physics()
         for observe in self.after_step:

@@ -54,33 +54,40 @@ def detect(
     px = x + ranges[beams] * np.cos(world_angles)
     py = y + ranges[beams] * np.sin(world_angles)
     # split where beams are not adjacent or points are far apart
-    breaks = [0]
-    for i in range(1, len(beams)):
-        gap = math.hypot(px[i] - px[i - 1], py[i] - py[i - 1])
-        if beams[i] - beams[i - 1] > 2 or gap > CLUSTER_GAP_M:
-            breaks.append(i)
+    gaps = np.hypot(np.diff(px), np.diff(py))
+    breaks = [0, *(np.nonzero((np.diff(beams) > 2) | (gaps > CLUSTER_GAP_M))[0] + 1).tolist()]
     groups = [list(range(s, e)) for s, e in zip(breaks, breaks[1:] + [len(beams)])]
     # the scan wraps around at the back of the robot
     if len(groups) > 1 and beams[0] == 0 and beams[-1] == n - 1:
         first, last = groups[0], groups[-1]
         if math.hypot(px[first[0]] - px[last[-1]], py[first[0]] - py[last[-1]]) <= CLUSTER_GAP_M:
             groups = [last + first] + groups[1:-1]
+    order = np.concatenate([np.asarray(g, dtype=np.int64) for g in groups])
+    counts = np.array([len(g) for g in groups])
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    gx, gy, r = px[order], py[order], ranges[beams[order]]
+    group = np.repeat(np.arange(len(groups)), counts)
+    # per group at once: the nearest point (lexsort: by group, then range), centre, bbox
+    nearest = order[np.lexsort((r, group))[starts]]
+    cx, cy = np.add.reduceat(gx, starts) / counts, np.add.reduceat(gy, starts) / counts
+    x0, x1 = np.minimum.reduceat(gx, starts), np.maximum.reduceat(gx, starts)
+    y0, y1 = np.minimum.reduceat(gy, starts), np.maximum.reduceat(gy, starts)
+    ranks = robots[beams[order]] if robots is not None else np.full(len(order), -1)
     found = []
-    for g in groups:
-        gx, gy = px[g], py[g]
-        size = max(float(np.hypot(gx[:, None] - gx, gy[:, None] - gy).max()), 0.1)
-        nearest = g[int(np.argmin(ranges[beams[g]]))]
-        ranks = robots[beams[g]] if robots is not None else np.array([-1])
-        robot = int(np.bincount(ranks[ranks >= 0]).argmax()) if (ranks >= 0).mean() > 0.5 else -1
+    for k, (s, c) in enumerate(zip(starts.tolist(), counts.tolist(), strict=True)):
+        px_k, py_k = gx[s : s + c], gy[s : s + c]
+        size = max(float(np.hypot(px_k[:, None] - px_k, py_k[:, None] - py_k).max()), 0.1)
+        rk = ranks[s : s + c]
+        robot = int(np.bincount(rk[rk >= 0]).argmax()) if (rk >= 0).sum() * 2 > c else -1
         found.append(
             DetectedObstacle(
                 kind="robot" if robot >= 0 else classify(size),
-                distance=float(ranges[beams[nearest]]),
-                bearing=float(angles[beams[nearest]]),
-                x=float(gx.mean()),
-                y=float(gy.mean()),
+                distance=float(ranges[beams[nearest[k]]]),
+                bearing=float(angles[beams[nearest[k]]]),
+                x=float(cx[k]),
+                y=float(cy[k]),
                 size=size,
-                bbox=(float(gx.min()), float(gy.min()), float(gx.max()), float(gy.max())),
+                bbox=(float(x0[k]), float(y0[k]), float(x1[k]), float(y1[k])),
                 robot=robot,
             )
         )

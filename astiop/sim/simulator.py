@@ -396,7 +396,7 @@ class Simulator(NavigationMixin):
 
     def _substep(self) -> None:
         self._before_physics()
-        self.world.space.step(self.dt)
+        self.world.step(self.dt)
         self._after_physics()
 
     def _before_physics(self) -> None:

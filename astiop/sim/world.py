@@ -70,6 +70,12 @@ class World:
         self._ids = itertools.count(1)
         self._edges_cache: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self.robots: list[tuple[pymunk.Body, float, float, object]] = []  # … length, width, sim
+        self.steps = 0  # physics steps so far: the robots' edges are computed once per step
+        self._robot_edges: tuple[int, np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    def step(self, dt: float) -> None:
+        self.space.step(dt)
+        self.steps += 1
 
     def add_robot(self, pose, mass: float, length: float, width: float, sim: object = None):
         """The robot's box body, led by a kinematic body through two joints with bounded force
@@ -132,16 +138,34 @@ class World:
         """All edges a lidar sees, with an owner per edge: -1 fixed geometry, an obstacle's id,
         or ROBOT_OWNER + a robot's index for the other robots of the world (not `seen_by`)."""
         fixed = self._fixed_edges()
-        others = [r for r in enumerate(self.robots) if r[1][0] is not seen_by]
-        if not others:
+        if len(self.robots) < 2 and (not self.robots or self.robots[0][0] is seen_by):
             return fixed
-        a_parts, b_parts, owners = [fixed[0]], [fixed[1]], [fixed[2]]
-        for index, (body, length, width, _sim) in others:
-            a, b = polygon_edges(oriented_box(*body.position, body.angle, length, width))
-            a_parts.append(a)
-            b_parts.append(b)
-            owners.append(np.full(len(a), ROBOT_OWNER + index, dtype=np.int64))
-        return np.concatenate(a_parts), np.concatenate(b_parts), np.concatenate(owners)
+        a, b, owners = self._every_robots_edges()
+        keep = owners != ROBOT_OWNER + self.robot_rank(seen_by) if seen_by else slice(None)
+        return (
+            np.concatenate([fixed[0], a[keep]]),
+            np.concatenate([fixed[1], b[keep]]),
+            np.concatenate([fixed[2], owners[keep]]),
+        )
+
+    def _every_robots_edges(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Every robot's box edges as they are at this step, computed at once (a fleet's robots
+        all scan the same step: once, not once per robot)."""
+        if self._robot_edges is None or self._robot_edges[0] != self.steps:
+            n = len(self.robots)
+            pose = np.array([(*r[0].position, r[0].angle) for r in self.robots])
+            half = np.array([(r[1] / 2, r[2] / 2) for r in self.robots])
+            corners = np.array([(-1, -1), (1, -1), (1, 1), (-1, 1)], dtype=float)  # CCW
+            local = corners[None, :, :] * half[:, None, :]  # (n, 4, 2)
+            c, s = np.cos(pose[:, 2])[:, None], np.sin(pose[:, 2])[:, None]
+            x = local[..., 0] * c - local[..., 1] * s + pose[:, 0:1]
+            y = local[..., 0] * s + local[..., 1] * c + pose[:, 1:2]
+            pts = np.stack([x, y], axis=-1)  # (n, 4, 2): oriented_box's corners, at once
+            a = pts.reshape(-1, 2)
+            b = pts[:, [1, 2, 3, 0]].reshape(-1, 2)
+            owners = np.repeat(ROBOT_OWNER + np.arange(n, dtype=np.int64), 4)
+            self._robot_edges = (self.steps, a, b, owners)
+        return self._robot_edges[1:]
 
     def _fixed_edges(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         if self._edges_cache is None:

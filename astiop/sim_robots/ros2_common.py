@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import threading
 import time
+from collections.abc import Callable
 from typing import Any
 
 import rclpy
@@ -20,6 +21,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profi
 from astiop.robot.safety import UNIT_QUATERNION_TOLERANCE
 
 GOAL_ABORT_S = 1.5  # at shutdown: how long running goals have to be aborted
+SPIN_S = 0.25  # an idle executor wakes this often to see whether it should stop
 MAP_TYPE = "nav_msgs/msg/OccupancyGrid"
 
 try:  # rclpy's jazzy name; humble's: rclpy/rclpy/qos_event.py
@@ -74,6 +76,50 @@ def goal_refusal(pose: dict[str, Any], frames: tuple[str, ...] = ("", "map")) ->
     return ""
 
 
+class Schedule:
+    """Periodic sends (a topic at its rate) on one thread of their own, off every executor: an
+    executor woken by a timer rebuilds its wait set over every entity of its nodes (O(entities)
+    in Python), and a fleet's hundreds of timers kept its executors busy doing only that."""
+
+    def __init__(self) -> None:
+        self._entries: list[list[Any]] = []  # [next due (monotonic), period, send]
+        self._lock = threading.Lock()
+        self._thread: threading.Thread | None = None
+        self._halt = threading.Event()
+
+    def every(self, period_s: float, send: Callable[[], None]) -> None:
+        with self._lock:
+            self._entries.append([time.monotonic() + period_s, period_s, send])
+
+    def start(self) -> None:
+        with self._lock:
+            if self._thread is None:
+                self._thread = threading.Thread(target=self._run, name="publish", daemon=True)
+                self._thread.start()
+
+    def stop(self) -> None:
+        self._halt.set()
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join(timeout=2.0)
+
+    def _run(self) -> None:
+        while not self._halt.is_set():
+            now = time.monotonic()
+            with self._lock:
+                due = [e for e in self._entries if e[0] <= now]
+                for e in due:  # a late tick is not caught up: the next is a period away
+                    e[0] = e[0] + e[1] if e[0] + e[1] > now else now + e[1]
+                soonest = min((e[0] for e in self._entries), default=now + 0.1)
+            for e in due:
+                try:
+                    e[2]()
+                except Exception:  # noqa: BLE001 - a context shut down under it, at the end
+                    if self._halt.is_set():
+                        return
+                    raise
+            self._halt.wait(max(soonest - time.monotonic(), 0.0005))
+
+
 class RobotNodes:
     """A robot's nodes in one rclpy context, spun by one executor until `stop()`. With a
     `parent`, its nodes are made in the parent's context, which the parent ends (a fleet's
@@ -86,6 +132,7 @@ class RobotNodes:
         self.context = parent.context if parent else rclpy.Context()
         self.nodes: dict[str, Node] = {}
         self._executor: MultiThreadedExecutor | None = None
+        self.schedule = parent.schedule if parent else Schedule()  # a fleet's: one thread
         self._stopped = parent._stopped if parent else threading.Event()
         self._goals_running = 0
 
@@ -105,6 +152,7 @@ class RobotNodes:
         self._executor = MultiThreadedExecutor(num_threads=4, context=self.context)
         for node in self.nodes.values():
             self._executor.add_node(node)
+        self.schedule.start()
 
     @property
     def stopping(self) -> bool:
@@ -118,7 +166,7 @@ class RobotNodes:
         so a goal still running is aborted and its client told so before the nodes go."""
         assert self._executor is not None
         while not self._stopped.is_set() and self.context.ok():
-            self._executor.spin_once(timeout_sec=0.1)
+            self._executor.spin_once(timeout_sec=SPIN_S)
         deadline = time.monotonic() + GOAL_ABORT_S
         while self._goals_running and time.monotonic() < deadline and self.context.ok():
             self._executor.spin_once(timeout_sec=0.05)
@@ -126,10 +174,17 @@ class RobotNodes:
         while time.monotonic() < end and self.context.ok():
             self._executor.spin_once(timeout_sec=0.05)
 
+    def every(self, period_s: float, send: Callable[[], None]) -> None:
+        """`send()` every period_s (wall time) from the schedule's thread, not an executor's."""
+        self.schedule.every(period_s, send)
+
     def stop(self) -> None:
         self._stopped.set()
+        if self._executor is not None:
+            self._executor.wake()  # now, not at its next timeout
 
     def close_nodes(self) -> None:
+        self.schedule.stop()  # nothing published on a node being destroyed
         if self._executor is not None:
             self._executor.shutdown(timeout_sec=1.0)
         for node in self.nodes.values():

@@ -133,7 +133,7 @@ class SimRobotNodes(RobotNodes):
                 pub.publish(to_message(cls, stamped(message, stamp)))
 
         if rate_hz > 0:
-            self.nodes[node].create_timer(1.0 / rate_hz, send)
+            self.every(1.0 / rate_hz, send)
         else:
             send()  # latched: published once, kept for late subscribers
 
