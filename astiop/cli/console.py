@@ -12,6 +12,7 @@ from astiop.robot.fleet import is_fleet
 
 # `astiop serve`'s warm console: its services built (nothing running yet), waits for a tab
 SPARE = "ASTIOP_CONSOLE_SPARE"
+QUICK_S = 0.25  # a console opens once the fleet's graph showed no new robot for this long
 
 
 def _wait_for_tab() -> None:
@@ -43,7 +44,7 @@ def run_console(st: CliState, record: str | None = None) -> None:
         record_path = Path(record).expanduser() if record else default_path(st.db_path.parent)
     settings, fleet = st.settings, None
     if is_fleet(st.fleet_settings):
-        settings, fleet = open_fleet(st)
+        settings, fleet = open_fleet(st, keep_finding=True)
     try:
         app = make_app(settings, st.store, record=record_path, fleet=fleet)
     except (SpecError, BackendError) as exc:
@@ -55,34 +56,51 @@ def run_console(st: CliState, record: str | None = None) -> None:
     app.run()
 
 
-def open_fleet(st: CliState, who: str = "console"):
+def open_fleet(st: CliState, who: str = "console", keep_finding: bool = False):
     """The fleet's robots found (said as they are), the current one's settings (--robot-name,
-    else the first), and a watch of every one of them (not started)."""
+    else the first), and a watch of every one of them (not started). `keep_finding`: the
+    console opens on the robots found first (the graph quiet for QUICK_S) and the watch adds
+    those found later, as they are."""
     from functools import partial
 
     from astiop.cli.common import fail
     from astiop.robot.factory import make_robot_gateway
-    from astiop.robot.fleet import FleetError, find_robots, robot_settings
+    from astiop.robot.fleet import FleetError, FleetFinder, find_robots, robot_settings
     from astiop.robot.fleet_watch import FleetWatch
 
     whole = st.fleet_settings
     typer.echo("finding the fleet's robots…", err=True)
+
+    def said(robot) -> None:
+        typer.echo(f"  {robot.name} ({robot.namespace})", err=True)
+
+    def opener(robot):
+        return (robot.name, robot.namespace,
+                partial(make_robot_gateway, robot_settings(whole, robot.name), st.store,
+                        realtime=True, who=who, discover=False))  # fmt: skip
+
+    finder = None
     try:
-        robots = find_robots(whole, lambda r: typer.echo(f"  {r.name} ({r.namespace})", err=True))
+        if keep_finding and whole.fleet.discover == "auto":
+            finder = FleetFinder(whole)
+            robots = finder.settle(said, QUICK_S, wanted=st.robot_name)
+        else:
+            robots = find_robots(whole, said)
     except FleetError as exc:
+        if finder is not None:
+            finder.close()
         fail(str(exc))
     current = st.robot_name or robots[0].name
     if current not in {r.name for r in robots}:
+        if finder is not None:
+            finder.close()
         fail(f"no robot named '{current}' in the fleet (its robots: "
              f"{', '.join(r.name for r in robots)})")  # fmt: skip
-    opens = [
-        (r.name, r.namespace,
-         partial(make_robot_gateway, robot_settings(whole, r.name), st.store, realtime=True,
-                 who=who, discover=False))
-        for r in robots
-    ]  # fmt: skip
-    watch = FleetWatch(opens)
+    watch = FleetWatch([opener(r) for r in robots])
     watch.settings_for = partial(robot_settings, whole)
+    if finder is not None:
+        watch.find_more = lambda: [opener(r) for r in finder.poll()]
+        watch.stop_finding = finder.close
     return robot_settings(whole, current), watch
 
 

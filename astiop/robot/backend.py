@@ -91,7 +91,15 @@ class RobotBackend(ABC):
             return contextlib.nullcontext(None)
         return self.inflight.running(checked.command.display())
 
-    def refresh(self) -> bool:
+    def zero_now(self) -> None:
+        """A zero velocity at once where sending one is cheap (the E-STOP follows it)."""
+        return None
+
+    def watch_lightly(self, light: bool) -> None:
+        """`light`: a fleet's robot watched for its row only (a live robot drops its scan)."""
+        return None
+
+    def refresh(self, settle: bool = True) -> bool:
         """Read the robot's graph again; False if nothing was read."""
         return False
 

@@ -63,49 +63,89 @@ def discovered(catalog: Catalog) -> list[FleetRobot]:
 
 
 def find_robots(
-    settings: Settings, on_found: Callable[[FleetRobot], None] | None = None
+    settings: Settings,
+    on_found: Callable[[FleetRobot], None] | None = None,
+    settle_s: float | None = None,
 ) -> list[FleetRobot]:
     """The fleet's robots: the settings' list, or every robot namespace on the domain, read
-    until the graph has settled (or robot.ros2_timeout_s); `on_found(robot)` as each is found."""
-    from astiop.robot.backend import BackendError
-    from astiop.robot.factory import make_robot_gateway
+    until the graph has settled for `settle_s` (default SETTLED_S; or robot.ros2_timeout_s);
+    `on_found(robot)` as each is found."""
     from astiop.robot.gateway import SETTLED_S
 
     on_found = on_found or (lambda _robot: None)
+    if settings.fleet.discover == "list":
+        listed = listed_robots(settings)
+        for robot in listed:
+            on_found(robot)
+        return listed
+    finder = FleetFinder(settings)
+    try:
+        return finder.settle(on_found, SETTLED_S if settle_s is None else settle_s)
+    finally:
+        finder.close()
+
+
+def listed_robots(settings: Settings) -> list[FleetRobot]:
     if settings.robot.backend != "ros2":
         raise FleetError("a fleet is reached over ROS 2: add --robot ros2")
-    if settings.fleet.discover == "list":
-        if not settings.fleet.robots:
-            raise FleetError(
-                "no fleet: list its robots as [[fleet.robots]] in the settings, or --fleet auto"
-            )
-        for robot in settings.fleet.robots:
-            on_found(robot)
-        return list(settings.fleet.robots)
-    whole = settings.model_copy(
-        update={"robot": settings.robot.model_copy(update={"namespace": ""})}
-    )
-    try:
-        gateway = make_robot_gateway(whole, None, who="fleet", discover=False)
-    except BackendError as exc:
-        raise FleetError(f"the ROS 2 graph could not be read: {exc}") from None
-    gateway.backend.params_wanted = False  # namespaces are found from the names alone
-    found: dict[str, FleetRobot] = {}
-    try:
-        now = time.monotonic()
-        deadline, changed = now + settings.robot.ros2_timeout_s, now
-        while now < deadline and not (found and now - changed >= SETTLED_S):
-            gateway.backend.refresh()
-            for robot in discovered(gateway.catalog):
-                if robot.name not in found:
-                    found[robot.name], changed = robot, time.monotonic()
-                    on_found(robot)
-            time.sleep(0.2)
-            now = time.monotonic()
-    finally:
-        gateway.close()
-    if not found:
+    if not settings.fleet.robots:
         raise FleetError(
-            "no robot namespace on the ROS 2 domain (a velocity command and a pose under one)"
+            "no fleet: list its robots as [[fleet.robots]] in the settings, or --fleet auto"
         )
-    return sorted(found.values(), key=lambda r: r.name)  # as found, and said, in a stable order
+    return list(settings.fleet.robots)
+
+
+class FleetFinder:
+    """Every robot namespace on the domain, read off the graph (names only, no parameter) as
+    often as `poll()` is called; the robots found so far in `found`."""
+
+    def __init__(self, settings: Settings):
+        from astiop.robot.backend import BackendError
+        from astiop.robot.factory import make_robot_gateway
+
+        if settings.robot.backend != "ros2":
+            raise FleetError("a fleet is reached over ROS 2: add --robot ros2")
+        self.settings = settings
+        whole = settings.model_copy(
+            update={"robot": settings.robot.model_copy(update={"namespace": ""})}
+        )
+        try:
+            self._gateway = make_robot_gateway(whole, None, who="fleet", discover=False)
+        except BackendError as exc:
+            raise FleetError(f"the ROS 2 graph could not be read: {exc}") from None
+        self._gateway.backend.params_wanted = False  # namespaces are found from the names alone
+        self.found: dict[str, FleetRobot] = {}
+
+    def poll(self) -> list[FleetRobot]:
+        """The robots found on the graph since the last poll."""
+        self._gateway.backend.refresh(settle=False)  # polled: the graph as it is now
+        new = [r for r in discovered(self._gateway.catalog) if r.name not in self.found]
+        for robot in new:
+            self.found[robot.name] = robot
+        return new
+
+    def settle(
+        self, on_found: Callable[[FleetRobot], None], settle_s: float, wanted: str | None = None
+    ) -> list[FleetRobot]:
+        """Poll until the graph has shown no new robot for settle_s (one found at least, and
+        the robot named `wanted`), or robot.ros2_timeout_s; every robot found, by name."""
+        now = time.monotonic()
+        deadline, changed = now + self.settings.robot.ros2_timeout_s, now
+
+        def enough() -> bool:
+            return bool(self.found) and (not wanted or wanted in self.found)
+
+        while now < deadline and not (enough() and now - changed >= settle_s):
+            for robot in self.poll():
+                changed = time.monotonic()
+                on_found(robot)
+            time.sleep(0.1)
+            now = time.monotonic()
+        if not self.found:
+            raise FleetError(
+                "no robot namespace on the ROS 2 domain (a velocity command and a pose under one)"
+            )
+        return sorted(self.found.values(), key=lambda r: r.name)  # a stable order
+
+    def close(self) -> None:
+        self._gateway.close()

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 import threading
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
@@ -14,6 +15,7 @@ from astiop.robot.state import RobotState
 
 STALE_S = 3.0  # a robot not heard for this long is stale: what it last said may no longer hold
 LOW_BATTERY = 0.2
+FIND_S = 1.0  # how often robots that join later are looked for on the graph
 
 
 @dataclass(frozen=True)
@@ -122,9 +124,15 @@ class FleetWatch:
         self.settings_for: Callable[[str], object] | None = None  # a robot's own settings
         self._rows = {name: FleetRow(name, ns) for name, ns, _ in robots}
         self._failed: dict[str, str] = {}  # robots whose E-STOP failed, and how
+        self._control: dict[str, str] = {}  # who controls each robot, as last read
         self._lock = threading.Lock()
         self._halt = threading.Event()
         self._threads: list[threading.Thread] = []
+        # robots that join later: polled every FIND_S while the watch runs, each one found
+        # (name, namespace, open) added to the watch; `stop_finding()` at the close
+        self.find_more: Callable[[], list[tuple[str, str, Callable[[], RobotGateway]]]] | None
+        self.find_more = None
+        self.stop_finding: Callable[[], None] = lambda: None
 
     def adopt(self, name: str, gateway: RobotGateway) -> None:
         """Watch `name` through a gateway the caller made (the console's current robot): one
@@ -132,13 +140,39 @@ class FleetWatch:
         self._given[name] = gateway
 
     def start(self) -> FleetWatch:
-        for name, ns, open_ in self.robots:
-            t = threading.Thread(
-                target=self._watch, args=(name, ns, open_), name=f"fleet-{name}", daemon=True
-            )
-            t.start()
-            self._threads.append(t)
+        for name, ns, open_ in list(self.robots):
+            self._start_watching(name, ns, open_)
+        if self.find_more is not None:
+            self._spawn(self._find, "fleet-find")
         return self
+
+    def _spawn(self, target: Callable[..., None], name: str, *args: object) -> None:
+        t = threading.Thread(target=target, args=args, name=name, daemon=True)
+        t.start()
+        self._threads.append(t)
+
+    def _start_watching(self, name: str, ns: str, open_) -> None:
+        self._spawn(self._watch, f"fleet-{name}", name, ns, open_)
+
+    def add(self, name: str, ns: str, open_: Callable[[], RobotGateway]) -> bool:
+        """A robot found after the start, watched from now (False: it is watched already)."""
+        with self._lock:
+            if name in self._rows:
+                return False
+            self.robots = sorted([*self.robots, (name, ns, open_)], key=lambda r: r[0])
+            self._rows[name] = FleetRow(name, ns)
+        self._start_watching(name, ns, open_)
+        self.on_rows(self.rows())
+        return True
+
+    def _find(self) -> None:
+        started = time.monotonic()  # a fleet still being discovered is looked at more often
+        while not self._halt.wait(0.25 if time.monotonic() - started < 5.0 else FIND_S):
+            try:
+                for name, ns, open_ in self.find_more():
+                    self.add(name, ns, open_)
+            except Exception:  # noqa: BLE001 - a graph not read this time: next time
+                continue
 
     def rows(self) -> list[FleetRow]:
         with self._lock:
@@ -154,21 +188,30 @@ class FleetWatch:
             gateway = self._given.get(name)
             if gateway is None:
                 gateway = open_()
+                gateway.watch_lightly(True)  # for its row; the current robot's is whole
                 gateway.start()
         except Exception as exc:  # noqa: BLE001 - one robot not reached is its own row
             self._set(FleetRow(name, ns, error=f"not reached: {exc}"))
             return
         with self._lock:
             self.gateways[name] = gateway
+        self._spawn(self._watch_control, f"fleet-{name}-control", name, gateway)
         while not self._halt.is_set():
             try:
                 st = gateway.state()
                 row = row_from(name, ns, gateway.profile.make, st, _age(st))
-                row = replace(row, control=control_of(gateway))
+                row = replace(row, control=self._control.get(name, "…"))
                 failed = self._failed.get(name)
                 self._set(replace(row, error=failed) if failed else row)
             except Exception as exc:  # noqa: BLE001
                 self._set(FleetRow(name, ns, error=f"not read: {exc}"))
+            self._halt.wait(self.period_s)
+
+    def _watch_control(self, name: str, gateway: RobotGateway) -> None:
+        """Who controls the robot, read apart from its state: the first read opens its lease's
+        channel on the robot's graph and waits for the holders there (up to seconds)."""
+        while not self._halt.is_set():
+            self._control[name] = control_of(gateway)
             self._halt.wait(self.period_s)
 
     def estop_all(self, skip: str = "") -> dict[str, list[str]]:
@@ -177,6 +220,10 @@ class FleetWatch:
         caller stops itself (the console's current one, first)."""
         results: dict[str, list[str]] = {}
         names = [n for n, _, _ in self.robots if n != skip]
+        for name in names:  # every robot's zero velocity first, in one pass: a thread takes
+            gateway = self.gateway_of(name)  # milliseconds to start on a busy process
+            if gateway is not None:
+                gateway.zero_now()
         threads = [
             threading.Thread(target=lambda n=n: results.__setitem__(n, self.estop(n)))
             for n in names
@@ -225,6 +272,7 @@ class FleetWatch:
         self._halt.set()
         for t in self._threads:
             t.join(timeout=2)
+        self.stop_finding()
         for gateway in {
             id(g): g for g in [*self.gateways.values(), *self._given.values()]
         }.values():

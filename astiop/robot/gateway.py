@@ -7,6 +7,7 @@ before anything is sent.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import threading
 import time
@@ -153,6 +154,12 @@ class RobotGateway:
                 failures.append(f"the E-STOP is not latched for other processes: {exc}")
         return failures
 
+    def zero_now(self) -> None:
+        """A zero velocity sent at once, nothing else (a fleet's E-STOP sends every robot's
+        before the rest of each one's stop); never raises: the E-STOP that follows says why."""
+        with contextlib.suppress(Exception):
+            self.backend.zero_now()
+
     def settle_estop(self, timeout_s: float) -> list[str]:
         """Wait for what the E-STOP started in the background to go out (a process about to
         exit); the failures that came meanwhile."""
@@ -185,6 +192,10 @@ class RobotGateway:
         if other is None:
             return None
         return f"{self.lease.name} is controlled by {other.words}"
+
+    def watch_lightly(self, light: bool) -> None:
+        """A fleet's robot other than the current one is watched for its row only."""
+        self.backend.watch_lightly(light)
 
     def close(self) -> None:
         if self.lease is not None:

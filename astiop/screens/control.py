@@ -90,6 +90,8 @@ def use_robot(app, name: str) -> None:
     old = app._sampler
     old.halt.set()  # its thread ends at its next tick; its robot stays watched by the fleet
     services = app.services
+    services.gateway.watch_lightly(True)  # a row of the fleet's from now
+    gateway.watch_lightly(False)
     services.gateway = gateway
     services.settings = app.fleet.settings_for(name)
     app.robot_state = gateway.state()

@@ -46,6 +46,7 @@ from astiop.ros2.validation import CANCEL_SUFFIX
 
 GRAPH_POLL_S = 1.0
 DISCOVERY_S = 3.0  # at most this long for a new process's discovery to settle
+SCAN_TYPES = frozenset({"sensor_msgs/msg/LaserScan", "sensor_msgs/msg/PointCloud2"})
 DISCOVERY_QUIET_S = 1.0  # no change in the graph for this long: discovery has settled
 DISCOVERY_YOUNG_S = 10.0  # a process this young may not have discovered the whole robot
 PARAMS_REFRESH_S = 30.0
@@ -90,6 +91,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         self._closed = threading.Event()
         self._cmd_vel: tuple[Any, Any, str] | None = None  # publisher, class, type
         self._hold: dict | None = None
+        self.light = False  # a fleet's robot watched for its row: no scan (watch_lightly)
         self._hold_until = 0.0
         self.t0 = time.monotonic()
         self.events = EventLog(self.t0)
@@ -138,14 +140,16 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
     def discovering(self) -> bool:
         return time.monotonic() - self.t0 < DISCOVERY_YOUNG_S
 
-    def refresh(self) -> bool:
-        """Read the graph again, and the parameters when the nodes changed or 30 s passed."""
+    def refresh(self, settle: bool = True) -> bool:
+        """Read the graph again, and the parameters when the nodes changed or 30 s passed;
+        in a young process, until discovery settles (`settle=False`: as it is now)."""
         with self._refresh_lock:
-            return self._refresh()
+            return self._refresh(settle)
 
-    def _refresh(self) -> bool:
+    def _refresh(self, settle: bool = True) -> bool:
         young = time.monotonic() - self.t0 < DISCOVERY_YOUNG_S  # discovery may still be going
-        lists = self._discover(DISCOVERY_QUIET_S * 3) if young else read_lists(self.proc)
+        waits = young and settle
+        lists = self._discover(DISCOVERY_QUIET_S * 3) if waits else read_lists(self.proc)
         # parameters of the nodes that serve them (other astiop processes do not), read for a
         # node when it appears, and for all of them every 30 s
         served = {n for n, _ in lists["service"]}
@@ -182,7 +186,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
                     self._watch_state_topics()
                 if time.monotonic() >= next_read:
                     next_read = time.monotonic() + GRAPH_POLL_S
-                    if read_lists(self.proc) != self._lists:
+                    if read_lists(self.proc, max_age_s=GRAPH_POLL_S / 2) != self._lists:
                         self.refresh()
                     self._drop_unwanted()
                     self._lost_for(time.monotonic())
@@ -226,6 +230,8 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
                 continue
             if name == self._name("odometry") and not self._is_wanted(name):
                 continue
+            if self._light_skips(name, spec.type):
+                continue
             if not self.proc.node.get_publishers_info_by_topic(name):
                 continue  # subscribed when a publisher appears, with its QoS
             if name == map_name:
@@ -264,11 +270,20 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
             return True  # the robot's pose or speed has no other source
         return time.monotonic() < self._wanted.get(name, 0.0)
 
+    def watch_lightly(self, light: bool) -> None:
+        self.light = light
+        self._poke.set()  # subscribed, or dropped at the graph thread's next read
+
+    def _light_skips(self, name: str, type_: str) -> bool:
+        """A scan not subscribed for a fleet's robot watched for its row (unless wanted)."""
+        return self.light and type_ in SCAN_TYPES and not self._is_wanted(name)
+
     def _drop_unwanted(self) -> None:
         with self._watch_lock:
-            for name in [self._name("odometry")]:
+            scans = [n for n, w in self._watches.items() if self._light_skips(n, w.type)]
+            for name in [self._name("odometry"), *scans]:
                 w = self._watches.get(name)
-                if w is not None and not self._is_wanted(name):
+                if w is not None and (name in scans or not self._is_wanted(name)):
                     self._watches = {n: v for n, v in self._watches.items() if n != name}
                     w.close()
 
@@ -464,6 +479,10 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
     @property
     def e_stopped(self) -> bool:
         return self.inflight.held
+
+    def zero_now(self) -> None:
+        if self._name("velocity_command"):
+            self._send_twist(zero_twist())
 
     def estop(self) -> list[str]:
         """Everything in flight ended first (timed publishes, goals, teleop), then the zero Twist

@@ -3,6 +3,9 @@ to read a topic with, matched to its publishers (as ros2topic's echo chooses it)
 
 from __future__ import annotations
 
+import threading
+import time
+
 from rclpy.action.graph import get_action_server_names_and_types_by_node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
@@ -32,8 +35,24 @@ def full_name(namespace: str, name: str) -> str:
     return f"{namespace.rstrip('/')}/{name}"
 
 
-def read_lists(proc: RosProcess) -> GraphLists:
-    """Topics, services, actions and nodes from this process's DDS discovery cache (no call)."""
+_read: dict[int, tuple[float, GraphLists]] = {}  # id(proc) -> (when, lists): the last read
+_read_lock = threading.Lock()
+
+
+def read_lists(proc: RosProcess, max_age_s: float = 0.0) -> GraphLists:
+    """Topics, services, actions and nodes from this process's DDS discovery cache (no call);
+    `max_age_s`: a read that recent is shared (a fleet's gateways poll one graph, each robot
+    every second: read once for all of them, not once per robot)."""
+    with _read_lock:
+        last = _read.get(id(proc))
+        if max_age_s > 0 and last is not None and time.monotonic() - last[0] <= max_age_s:
+            return last[1]
+        lists = _read_now(proc)
+        _read[id(proc)] = (time.monotonic(), lists)
+        return lists
+
+
+def _read_now(proc: RosProcess) -> GraphLists:
     node = proc.node
     me = full_name(node.get_namespace(), node.get_name())
     others = [

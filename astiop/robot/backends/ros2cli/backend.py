@@ -146,8 +146,9 @@ class Ros2Backend(RobotBackend):
         # a new process's first lists (the daemon's, or a fresh discovery) may be partial
         return time.monotonic() - self.t0 < DISCOVERY_YOUNG_S
 
-    def refresh(self) -> bool:
-        """Read the graph again (a name was missing, or 30 s passed); False if it failed."""
+    def refresh(self, settle: bool = True) -> bool:
+        """Read the graph again (a name was missing, or 30 s passed); False if it failed.
+        Each read is a `ros2` process of its own, settled or not."""
         try:
             self.catalog = self._graph.describe(self._graph.lists())
         except BackendError:
