@@ -58,6 +58,28 @@ def fleet_console(tmp_path):
     return app, fleet, SimRunner(fleet, speed=5.0)
 
 
+async def test_a_robot_found_after_the_console_opened_is_listed_and_stopped_with_the_rest(
+    tmp_path,
+):
+    app, fleet, runner = fleet_console(tmp_path)
+    watch = app.fleet
+    late = watch.robots.pop()  # astibot_3 joins the graph after the console opened
+    del watch._rows[late[0]]
+    polls = iter([[], [], [late]])  # found at the third look at the graph
+    watch.find_more = lambda: next(polls, [])
+    runner.start()
+    try:
+        async with app.run_test(size=(150, 40)) as pilot:
+            await pilot.press("f7")
+            await wait_for(pilot, lambda: len(_rows(app)) == 3 and "%" in _rows(app)[2][2])
+            assert [r[0].strip("▶ ") for r in _rows(app)] == NAMES
+            assert "3 robots:" in app.screen.sub_title
+            await pilot.press("ctrl+e")
+            await wait_for(pilot, lambda: all(r.e_stopped for r in fleet.robots))
+    finally:
+        runner.stop()
+
+
 def _rows(app) -> list[list[str]]:
     table = app.screen.query_one(DataTable)
     return [[str(c) for c in table.get_row_at(i)] for i in range(table.row_count)]
