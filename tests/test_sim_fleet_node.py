@@ -62,13 +62,20 @@ def test_two_astibots_in_one_warehouse_each_reached_by_its_name(tmp_path, monkey
             assert row["make"] == "astibot" and row["state"] == "charging", row
             assert abs(row["x_m"] - 1.15) < 0.05 and abs(row["y_m"] - (2.0 + i)) < 0.05, row
 
-        out = astiop(db, "--fleet", "auto", "--robot-name", "astibot_2", "chat", "-m", "rules",
-                     "--yes", "go to shipping", timeout=180)  # fmt: skip
+        # no --robot-name: the request names its robot
+        out = astiop(db, "--fleet", "auto", "chat", "-m", "rules", "--yes",
+                     "send astibot 2 to shipping", timeout=180)  # fmt: skip
         assert out.returncode == 0, out.stdout + out.stderr[-2000:]
+        assert "to astibot_2 (as named)" in out.stderr, out.stderr[-2000:]
         assert "arrived: shipping" in out.stdout, out.stdout + out.stderr[-3000:]
         assert until(lambda: poses[2] and math.dist(_xy(poses[2]), SHIPPING) < 0.3, 10)
         assert math.dist(_xy(poses[1]), (1.15, 3.0)) < 0.02, _xy(poses[1])  # never left its dock
         _recorded_and_replayed(db, tmp_path / "fleet.mcap")
+        out = astiop(db, "--fleet", "auto", "chat", "-m", "rules", "where are all the robots?")
+        assert out.returncode == 0, out.stdout + out.stderr[-2000:]
+        assert "astibot_2" in out.stdout and "37." in out.stdout, out.stdout  # at shipping
+        out = astiop(db, "--fleet", "auto", "chat", "-m", "rules", "go to shipping")
+        assert out.returncode != 0 and "which robot?" in out.stderr, out.stdout + out.stderr
 
         out = astiop(db, "--fleet", "auto", "estop", "--all")
         assert out.returncode == 0, out.stdout + out.stderr[-2000:]

@@ -9,6 +9,49 @@ import typer
 from astiop.cli.common import Ending, fail, interactive, print_json, state, take_control
 
 
+def _robot_named(st, text: str, as_json: bool) -> str | None:
+    """A fleet and no --robot-name: the request goes to the robot it names (its name, its
+    number, the one at a place, the nearest idle one to a place), said to it as "the robot";
+    a question about the whole fleet is answered here from every robot's row (None)."""
+    from astiop.agent.fleet_words import FleetWordsError, addressed, fleet_answer, fleet_question
+    from astiop.cli.fleet import members, read_rows
+    from astiop.robot.fleet import is_fleet
+    from astiop.robot.fleet_watch import FleetRow
+
+    if st.robot_name is not None or not is_fleet(st.fleet_settings):
+        return text
+    robots = members(st)
+    asked = fleet_question(text)
+    if asked is not None:
+        answer = fleet_answer(asked, read_rows(st, robots))
+        if as_json:
+            print_json({"answer": answer})
+        else:
+            typer.echo(answer)
+        return None
+    places = {loc.name: (loc.x, loc.y) for loc in st.store.list_locations()}
+    try:  # by its name or number first: no robot need be read for that
+        to = addressed(text, [FleetRow(r.name, r.namespace) for r in robots], places)
+    except FleetWordsError:
+        to = None
+    try:
+        to = (
+            to
+            if to is not None and to.how == "as named"
+            else addressed(text, read_rows(st, robots), places)
+        )
+    except FleetWordsError as exc:
+        fail(str(exc))
+    if to is None:
+        names = ", ".join(r.name for r in robots)
+        fail(f"which robot? this request names none of the fleet's ({names}): name one, "
+             "or give --robot-name")  # fmt: skip
+    if not as_json:
+        typer.echo(f"to {to.name} ({to.how})", err=True)
+    st.robot_name, st._settings = to.name, None  # the settings read again: that robot's
+    return to.request
+
+
 def chat(
     ctx: typer.Context,
     text: str = typer.Argument(..., help="What you want, in plain language."),
@@ -37,6 +80,9 @@ def chat(
     from astiop.agent.models.specs import SpecError, open_endpoint
 
     st = state(ctx)
+    text = _robot_named(st, text, as_json)
+    if text is None:
+        return  # a question about the whole fleet, answered
     settings = st.settings
     mode = mode or settings.llm.mode
     if mode not in ("command", "tool"):

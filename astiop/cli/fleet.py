@@ -47,7 +47,21 @@ def each(robots: list, work) -> dict[str, object]:
     return results
 
 
-def _read(settings, robot) -> dict:
+def read_rows(st, robots: list) -> list:
+    """Every robot's row (robot/fleet_watch.py's FleetRow) as it reports now, read at once."""
+    from astiop.robot.fleet_watch import FleetRow
+
+    settings = st.fleet_settings
+    found = each(robots, lambda r: _read(settings, r))
+    return [
+        found[r.name]
+        if not isinstance(found[r.name], Exception)
+        else FleetRow(r.name, r.namespace, error=str(found[r.name]))
+        for r in robots
+    ]
+
+
+def _read(settings, robot):
     from astiop.robot.factory import make_robot_gateway
     from astiop.robot.fleet import robot_settings
     from astiop.robot.fleet_watch import row_of
@@ -63,7 +77,7 @@ def _read(settings, robot) -> dict:
                 if st.status is not None:
                     break
             time.sleep(0.2)
-        return row_of(robot.name, robot.namespace, gateway, None).as_json()
+        return row_of(robot.name, robot.namespace, gateway)
     finally:
         gateway.close()
 
@@ -73,14 +87,10 @@ def list_cmd(ctx: typer.Context, as_json: bool = typer.Option(False, "--json")) 
     """Every robot of the fleet with what it reports: state, battery, pose, speed."""
     st = state(ctx)
     robots = members(st)
-    settings = st.fleet_settings
-    found = each(robots, lambda r: _read(settings, r))
-    rows = []
-    for robot in robots:
-        got = found[robot.name]
-        if isinstance(got, Exception):
-            got = {"name": robot.name, "namespace": robot.namespace, "error": str(got)}
-        rows.append(got)
+    rows = [
+        {"name": r.name, "namespace": r.namespace, "error": r.error} if r.error else r.as_json()
+        for r in read_rows(st, robots)
+    ]
     if as_json:
         print_json(rows)
         return

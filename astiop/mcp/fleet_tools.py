@@ -42,7 +42,7 @@ class FleetTools:
         for name, tools in self.robots.items():
             gw = tools.gateway
             st = gw.state()
-            row = row_of(name, gw.profile.namespace, gw, None).as_json()
+            row = row_of(name, gw.profile.namespace, gw).as_json()
             row["heard"] = st.lost_s is None
             if gw.lease is not None:
                 holder = gw.lease.holder()

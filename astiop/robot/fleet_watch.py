@@ -59,9 +59,11 @@ class FleetRow:
         }
 
 
-def row_of(name: str, namespace: str, gateway: RobotGateway, age_s: float | None) -> FleetRow:
+def row_of(name: str, namespace: str, gateway: RobotGateway) -> FleetRow:
+    """The robot's row as its gateway reads it now."""
     make = gateway.profile.make if gateway.profile else ""
-    return row_from(name, namespace, make, gateway.state(), age_s)
+    st = gateway.state()
+    return row_from(name, namespace, make, st, _age(st))
 
 
 def _age(st: RobotState) -> float | None:
