@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import threading
 import time
+import traceback
 from collections.abc import Callable
 from typing import Any
 
@@ -86,6 +87,7 @@ class Schedule:
         self._lock = threading.Lock()
         self._thread: threading.Thread | None = None
         self._halt = threading.Event()
+        self._failed: set[int] = set()
 
     def every(self, period_s: float, send: Callable[[], None]) -> None:
         with self._lock:
@@ -113,10 +115,12 @@ class Schedule:
             for e in due:
                 try:
                     e[2]()
-                except Exception:  # noqa: BLE001 - a context shut down under it, at the end
+                except Exception:  # noqa: BLE001 - one topic's failure stops no other topic
                     if self._halt.is_set():
-                        return
-                    raise
+                        return  # a context shut down under it, at the end
+                    if id(e) not in self._failed:  # said once per topic, not at its rate
+                        self._failed.add(id(e))
+                        traceback.print_exc()
             self._halt.wait(max(soonest - time.monotonic(), 0.0005))
 
 
