@@ -126,7 +126,7 @@ def replay(
     from astiop.recording import RecordingError
     from astiop.recording.reader import Recording, fleet_of
     from astiop.robot.backend import BackendError
-    from astiop.robot.backends.replay.backend import SPEEDS, open_replay
+    from astiop.robot.backends.replay.backend import SPEEDS, ReplayBackend
     from astiop.robot.gateway import RobotGateway
     from astiop.store import Store
 
@@ -148,7 +148,7 @@ def replay(
                 )
                 gateway = fleet.robots[0][2]()
             else:
-                backend = open_replay(file, store=store, speed=speed, paused=paused)
+                backend = ReplayBackend(recording, store=store, speed=speed, paused=paused)
                 settings, fleet = st.settings, None
                 gateway = RobotGateway(backend, store=store, who="replay")
             app = make_app(settings, store, gateway=gateway, fleet=fleet)

@@ -171,7 +171,6 @@ class RobotView(Recording):
 
     def __init__(self, recording: Recording, namespace: str, shared: bool):
         # read already: the recording's channels seen through the namespace, nothing re-read
-        self.recording, self.namespace = recording, namespace
         self.path, self.metadata, self.cut = recording.path, recording.metadata, recording.cut
         self.start_ns, self.end_ns = recording.start_ns, recording.end_ns
         inside = len(namespace)

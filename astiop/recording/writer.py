@@ -70,11 +70,6 @@ def session_metadata(gateway, fleet: list[tuple[str, str]] | None = None) -> dic
     return meta
 
 
-def events_topic(namespace: str) -> str:
-    """A robot's events: a fleet robot's under its namespace (Foxglove shows them apart)."""
-    return f"{namespace}/astiop/events"
-
-
 JSON_SCHEMAS = {
     "/astiop/interactions": {
         "type": "object",
@@ -231,7 +226,12 @@ class SessionRecorder:
                     self._topic_message(gateway, topic, kept, topics[topic].type, message, stamp)
                 for ev in events:
                     data = {"kind": ev.kind, "severity": ev.severity, "message": ev.message}
-                    self._json(events_topic(ns), data, int((ev.t or now) * 1e9), "/astiop/events")
+                    self._json(
+                        _under(ns, "/astiop/events"),
+                        data,
+                        int((ev.t or now) * 1e9),
+                        "/astiop/events",
+                    )
                     self._event_seq[ns] = max(self._event_seq.get(ns, 0), ev.seq)
             for turn in turns:
                 self._interaction(turn, int(robot_now * 1e9))

@@ -65,10 +65,9 @@ def discovered(catalog: Catalog) -> list[FleetRobot]:
 def find_robots(
     settings: Settings,
     on_found: Callable[[FleetRobot], None] | None = None,
-    settle_s: float | None = None,
 ) -> list[FleetRobot]:
     """The fleet's robots: the settings' list, or every robot namespace on the domain, read
-    until the graph has settled for `settle_s` (default SETTLED_S; or robot.ros2_timeout_s);
+    until the graph has settled for SETTLED_S (or robot.ros2_timeout_s);
     `on_found(robot)` as each is found."""
     from astiop.robot.gateway import SETTLED_S
 
@@ -80,7 +79,7 @@ def find_robots(
         return listed
     finder = FleetFinder(settings)
     try:
-        return finder.settle(on_found, SETTLED_S if settle_s is None else settle_s)
+        return finder.settle(on_found, SETTLED_S)
     finally:
         finder.close()
 

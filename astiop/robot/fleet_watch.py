@@ -200,9 +200,7 @@ class FleetWatch:
         self._spawn(self._watch_control, f"fleet-{name}-control", name, gateway)
         while not self._halt.is_set():
             try:
-                st = gateway.state()
-                row = row_from(name, ns, gateway.profile.make, st, _age(st))
-                row = replace(row, control=self._control.get(name, "…"))
+                row = replace(row_of(name, ns, gateway), control=self._control.get(name, "…"))
                 failed = self._failed.get(name)
                 self._set(replace(row, error=failed) if failed else row)
             except Exception as exc:  # noqa: BLE001

@@ -283,7 +283,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
             scans = [n for n, w in self._watches.items() if self._light_skips(n, w.type)]
             for name in [self._name("odometry"), *scans]:
                 w = self._watches.get(name)
-                if w is not None and (name in scans or not self._is_wanted(name)):
+                if w is not None and not self._is_wanted(name):
                     self._watches = {n: v for n, v in self._watches.items() if n != name}
                     w.close()
 
@@ -491,8 +491,7 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         failures = self.inflight.stop_all()
         self._estop.begin()
         try:
-            if self._name("velocity_command"):
-                self._send_twist(zero_twist())  # matched already in a running console
+            self.zero_now()  # matched already in a running console
             self._estop.start(self._zero_burst, "estop-zero")
         except Exception as exc:  # noqa: BLE001 - /stop and the cancels go out regardless
             failures.append(f"{exc}: no zero Twist was sent")
