@@ -12,6 +12,7 @@ import os
 import subprocess
 import sys
 import threading
+import time
 from pathlib import Path
 
 import pytest
@@ -20,6 +21,9 @@ from tests.ros import SimNode, quiet_domain, require_ros, ros_client, until
 
 pytestmark = [pytest.mark.slow, pytest.mark.ros]
 SHIPPING = (37.6, 4.0)
+DRIVE = (
+    "ros2 topic pub --once /astibot_{}/cmd_vel geometry_msgs/msg/Twist '{{linear: {{x: 0.05}}}}'"
+)
 
 
 @contextlib.contextmanager
@@ -89,6 +93,7 @@ def test_two_astibots_in_one_warehouse_each_reached_by_its_name(tmp_path, monkey
         out = astiop(db, "--fleet", "auto", "fleet", "list", "--json")
         states = {r["name"]: r["state"] for r in json.loads(out.stdout)}
         assert states == {"astibot_1": "charging", "astibot_2": "idle"}, states  # let go
+        _whole_domain_asks_the_robot_it_reaches(db, client)
 
         # a console on another machine (its own database) controls astibot_2: taken over
         # from this machine, it is told through the robot's graph
@@ -97,6 +102,49 @@ def test_two_astibots_in_one_warehouse_each_reached_by_its_name(tmp_path, monkey
         # one MCP server for both: each tool names its robot; the approval names it too
         asyncio.run(_mcp_sends_astibot_1(db))
         assert until(lambda: math.dist(_xy(poses[1]), (1.15, 3.0)) > 0.5, 30), _xy(poses[1])
+
+
+def _whole_domain_asks_the_robot_it_reaches(db: Path, client) -> None:
+    """A command sent to astibot_1 by its names through a gateway on the whole domain (no
+    --fleet, no --robot-name) is ended and then held by astibot_1's own E-STOP, and refused
+    while another holds astibot_1's lease."""
+    from geometry_msgs.msg import Twist
+
+    from astiop.robot.lease import Lease, lease_key
+    from astiop.store import Store
+
+    twists = client.collect(Twist, "/astibot_1/cmd_vel")
+    repeated = DRIVE.format(1).replace("--once", "-r 10 -t 300")
+    cli = [sys.executable, "-m", "astiop", "--db", str(db), "--robot", "ros2", "exec", repeated]
+    pub = subprocess.Popen(
+        [*cli, "--yes"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    try:
+        assert until(lambda: len(twists) >= 3, 60), "the whole-domain publisher never sent"
+        fleet = ("--fleet", "auto", "--robot-name", "astibot_1", "estop")
+        out = astiop(db, *fleet)
+        assert out.returncode == 0, out.stdout + out.stderr[-2000:]
+        said = "".join(pub.communicate(timeout=15))
+        assert pub.returncode != 0 and "E-STOP ended it" in said, said
+    finally:
+        pub.kill()
+    moving = sum(1 for _, t in twists if t.linear.x)
+    time.sleep(1.0)
+    assert sum(1 for _, t in twists if t.linear.x) == moving  # no motion sent after it
+    out = astiop(db, "exec", DRIVE.format(1), "--yes")
+    assert out.returncode != 0 and "E-STOP" in out.stdout + out.stderr, out.stdout + out.stderr
+    out = astiop(db, *fleet, "--release", "--yes")
+    assert out.returncode == 0, out.stdout + out.stderr[-2000:]
+    key = lease_key("/astibot_1", os.environ["ROS_DOMAIN_ID"])
+    holder = Lease(Store(db), key, "astibot_1", "console")
+    try:
+        assert holder.take() is None
+        out = astiop(db, "exec", DRIVE.format(1), "--yes")
+        said = out.stdout + out.stderr
+        assert out.returncode != 0 and "astibot_1 is controlled by console" in said, said
+    finally:
+        holder.release()
+        holder.store.close()
 
 
 def _recorded_and_replayed(db: Path, path: Path) -> None:
@@ -135,8 +183,7 @@ def _controlled_from_another_machine(elsewhere, db: Path) -> None:
     there, holder = elsewhere
     lost = threading.Event()
     holder.on_lost = lambda _by: lost.set()
-    drive = ("--fleet", "auto", "--robot-name", "astibot_2", "exec", "ros2 topic pub --once "
-             "/astibot_2/cmd_vel geometry_msgs/msg/Twist '{linear: {x: 0.05}}'", "--yes")  # fmt: skip
+    drive = ("--fleet", "auto", "--robot-name", "astibot_2", "exec", DRIVE.format(2), "--yes")
     try:
         assert holder.take() is None
         out = astiop(db, "--take", *drive)

@@ -179,16 +179,11 @@ def _describe(intent: Intent) -> str:
 def other_robot(checks: list[Checked], catalog) -> str | None:
     """Why a plan may not run: it names another robot of the fleet than the one the request is
     about (a name under another robot's namespace), whatever it would do there."""
-    from astiop.robot.fleet import namespaces
+    from astiop.ros2.fleet_names import robot_under
 
-    robots: list[str] | None = None
     for checked in checks:
         name = checked.command.name if checked.command else None
-        if not name or name.count("/") < 2 or name.startswith(checked.namespace + "/"):
-            continue
-        robots = namespaces(catalog) if robots is None else robots
-        ns = "/" + name.split("/")[1]
-        if ns in robots:
-            own = checked.namespace.strip("/") or "this robot"
+        if checked.namespace and (ns := robot_under(name, checked.namespace, catalog)):
+            own = checked.namespace.strip("/")
             return f"this request is about {own}; {name} is another robot's ({ns.strip('/')})"
     return None

@@ -89,7 +89,7 @@ class RobotBackend(ABC):
         the stop itself, which must run while the E-STOP holds."""
         if checked.kind != "actuate" or always_allowed(checked):
             return contextlib.nullcontext(None)
-        return self.inflight.running(checked.command.display())
+        return self.inflight.running(checked.command.display(), checked.command.name)
 
     def zero_now(self) -> None:
         """A zero velocity at once where sending one is cheap (the E-STOP follows it)."""

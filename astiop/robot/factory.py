@@ -117,21 +117,23 @@ def make_robot_gateway(
             latch_key=settings.robot.namespace,  # a fleet's robot: a latch of its own
         )
         if store is not None:  # a robot on the graph is shared: one operator controls it
-            gateway.lease = robot_lease(settings, store, who, backend)
+            ns = settings.robot.namespace
+            gateway.lease = robot_lease(ns, store, who, backend)
+            # a name under another robot's namespace reaches that robot: its lease is asked
+            gateway.lease_of = lambda other: robot_lease(other, store, who, backend)
         return gateway
     return make_sim_gateway(
         settings, store, realtime=realtime, who=who, restore_latch=restore_latch
     )
 
 
-def robot_lease(settings: Settings, store: Store, who: str, backend):
-    """The lease of the settings' ROS 2 robot: its namespace on this process's domain, announced
-    on the robot's graph where the transport can."""
+def robot_lease(ns: str, store: Store, who: str, backend):
+    """The lease of the ROS 2 robot under namespace `ns` on this process's domain, announced on
+    the robot's graph where the transport can."""
     import os
 
     from astiop.robot.lease import Lease, lease_key
 
-    ns = settings.robot.namespace
     key = lease_key(ns, os.environ.get("ROS_DOMAIN_ID", "0"))
     name = ns.strip("/") or "the robot"
     return Lease(store, key, name, who, channel=lambda: backend.control_channel(ns))

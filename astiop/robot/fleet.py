@@ -12,7 +12,7 @@ from collections.abc import Callable
 
 from astiop.config import FleetRobot, Settings
 from astiop.ros2.catalog import Catalog
-from astiop.ros2.profile import ProfileSpec, match_profile
+from astiop.ros2.fleet_names import namespaces
 
 
 class FleetError(ValueError):
@@ -43,19 +43,6 @@ def robot_settings(settings: Settings, name: str) -> Settings:
         update={"namespace": found.namespace, "profile": found.profile or settings.robot.profile}
     )
     return settings.model_copy(update={"robot": robot})
-
-
-def namespaces(catalog: Catalog) -> list[str]:
-    """The namespaces on the graph that hold a robot: a velocity command and a pose or odometry
-    matched inside it (a name's first segment is a candidate namespace)."""
-    names = list(catalog.topics)
-    candidates = sorted({"/" + n.split("/")[1] for n in names if n.count("/") >= 2})
-    robots = []
-    for ns in candidates:
-        profile = match_profile(catalog, ProfileSpec(namespace=ns))
-        if profile.has("velocity_command") and (profile.has("pose") or profile.has("odometry")):
-            robots.append(ns)
-    return robots
 
 
 def discovered(catalog: Catalog) -> list[FleetRobot]:

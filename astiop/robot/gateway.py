@@ -12,6 +12,7 @@ import logging
 import threading
 import time
 from collections.abc import Callable
+from typing import Any
 
 from astiop.robot.backend import BackendError, Execution, MapGeometry, RobotBackend
 from astiop.robot.latch_watch import LatchWatcher
@@ -19,6 +20,7 @@ from astiop.robot.playback import Playback, PlaysBack
 from astiop.robot.safety import Review, SafetyPolicy, always_allowed
 from astiop.robot.state import RobotEvent, RobotState, TopicStat
 from astiop.ros2.catalog import Catalog
+from astiop.ros2.fleet_names import robot_under
 from astiop.ros2.profile import Profile, match_profile
 from astiop.ros2.render import STAMPED
 from astiop.ros2.validation import Checked, validate
@@ -61,6 +63,11 @@ class RobotGateway:
         self.latch_key = latch_key  # a namespaced robot latches its own E-STOP (a fleet's)
         self._latch_seen = self.latched
         self.lease = None  # robot/lease.py: set where the robot is shared (ROS 2)
+        # a fleet's robot reached through a whole-domain gateway by its names: its lease, made
+        # by this (robot/factory.py) the first time a motion is sent to it
+        self.lease_of: Callable[[str], Any] | None = None
+        self._leases: dict[str, Any] = {}
+        self._leases_lock = threading.Lock()
         self.use_map()
         if restore_latch and self._latch_seen and not backend.e_stopped:
             backend.estop()  # a restart keeps the E-STOP until it is released
@@ -198,8 +205,9 @@ class RobotGateway:
         self.backend.watch_lightly(light)
 
     def close(self) -> None:
-        if self.lease is not None:
-            self.lease.release()
+        for lease in [self.lease, *self._leases.values()]:
+            if lease is not None:
+                lease.release()
         if self._watcher is not None:
             self._watcher.close()
         self.backend.close()
@@ -225,7 +233,22 @@ class RobotGateway:
                     self.backend.estop()
                 elif not latched and self.backend.e_stopped:
                     self.backend.release_estop(robot=False)  # the releaser told the robot
+            if not latched:
+                self._end_what_moves_latched_robots()
         return latched
+
+    def _end_what_moves_latched_robots(self) -> None:
+        """What this process has in flight on another robot of the fleet, reached by its names,
+        ends when that robot's own E-STOP latches (in any process)."""
+        inflight = self.backend.inflight
+        names = inflight.names()
+        if not names or self.store is None:
+            return
+        robots = {n: robot_under(n, self.latch_key, self.catalog) for n in names}
+        latched = {ns for ns in set(robots.values()) if ns and self.store.robot_latch(ns)}
+        if latched:
+            for failure in inflight.end_where(lambda name: robots.get(name) in latched):
+                log.error(failure)
 
     def events_since(self, seq: int) -> list[RobotEvent]:
         """The robot's events after `seq`. Each is kept in the store the first time any reader
@@ -350,7 +373,7 @@ class RobotGateway:
         if not review.allowed:
             result.reason = review.reason
             return result
-        if self.lease is not None and (why := self.lease.refusal(checked)):
+        if why := self._lease_refusal(checked):
             result.reason = why  # another operator controls this robot
             return result
         if review.needs_confirmation:
@@ -443,7 +466,7 @@ class RobotGateway:
             return result
         if not review.allowed:
             return result
-        if self.lease is not None and (why := self.lease.refusal(review.checked)):
+        if why := self._lease_refusal(review.checked):
             result.reason = why
             return result
         if self._held_by_estop(review.checked):
@@ -460,8 +483,30 @@ class RobotGateway:
         return result
 
     def _held_by_estop(self, checked: Checked) -> bool:
-        """Latched, and not a command the E-STOP always lets through (/stop)."""
-        return not always_allowed(checked) and self.e_stopped
+        """Latched (this robot, or the fleet's robot the command is sent to), and not a command
+        the E-STOP always lets through (/stop)."""
+        if always_allowed(checked):
+            return False
+        if self.e_stopped:
+            return True
+        other = self._other_robot(checked)
+        return bool(other) and self.store is not None and self.store.robot_latch(other) is not None
+
+    def _other_robot(self, checked: Checked) -> str:
+        """The namespace of another robot of the graph a command is sent to by its names ("":
+        this gateway's own robot)."""
+        name = checked.command.name if checked.command else None
+        return robot_under(name, self.latch_key, self.catalog)
+
+    def _lease_refusal(self, checked: Checked) -> str | None:
+        """Why another operator's control of the robot the command is sent to refuses it."""
+        lease = self.lease
+        if self.lease_of is not None and (other := self._other_robot(checked)):
+            with self._leases_lock:
+                if other not in self._leases:
+                    self._leases[other] = self.lease_of(other)
+                lease = self._leases[other]
+        return lease.refusal(checked) if lease is not None else None
 
     def _adopt_speed_limits(self, checked: Checked, result: Execution) -> None:
         """A `param set` of the robot's own speed limit that went through becomes safety's

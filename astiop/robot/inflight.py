@@ -19,9 +19,16 @@ ENDED = "the E-STOP ended it"
 
 
 class Job:
-    def __init__(self, owner: InFlight, what: str, on_end: Callable[[], None] | None = None):
+    def __init__(
+        self,
+        owner: InFlight,
+        what: str,
+        on_end: Callable[[], None] | None = None,
+        name: str = "",
+    ):
         self.owner = owner
         self.what = what
+        self.name = name  # the topic, service or action it moves the robot through
         self.lock = threading.RLock()
         self.ended_by_estop = False
         self._on_end = on_end
@@ -74,19 +81,19 @@ class InFlight:
         self._local = threading.local()
         self.held = False  # the E-STOP holds: nothing starts
 
-    def start(self, what: str, on_estop: Callable[[], None] | None = None) -> Job:
+    def start(self, what: str, on_estop: Callable[[], None] | None = None, name: str = "") -> Job:
         with self._lock:
             if self.held:
                 raise BackendError(HELD)
-            job = Job(self, what, on_estop)
+            job = Job(self, what, on_estop, name)
             self._jobs.append(job)
             self._busy.notify_all()
             return job
 
     @contextmanager
-    def running(self, what: str) -> Iterator[Job]:
+    def running(self, what: str, name: str = "") -> Iterator[Job]:
         """A job for the duration of one command on this thread (`current()` finds it)."""
-        job = self.start(what)
+        job = self.start(what, name=name)
         self._local.job = job
         try:
             yield job
@@ -114,6 +121,18 @@ class InFlight:
             jobs, self._jobs = self._jobs, []
             self._busy.notify_all()
         return [f for f in (job.estop() for job in jobs) if f]
+
+    def end_where(self, sent_to: Callable[[str], bool]) -> list[str]:
+        """End the jobs whose name `sent_to` picks (another process's E-STOP of one robot of a
+        fleet), holding nothing; the failures."""
+        with self._lock:
+            ended = [job for job in self._jobs if job.name and sent_to(job.name)]
+            self._jobs = [job for job in self._jobs if job not in ended]
+        return [f for f in (job.estop() for job in ended) if f]
+
+    def names(self) -> list[str]:
+        with self._lock:
+            return [job.name for job in self._jobs if job.name]
 
     def release(self) -> None:
         with self._lock:

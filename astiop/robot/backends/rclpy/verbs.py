@@ -304,7 +304,9 @@ class RclpyVerbs(ServesVerbs):
             return "\n".join(lines) + "\n", {"accepted": False, "status": "REJECTED"}
         goal_id = bytes(handle.goal_id.uuid).hex()
         try:  # followed as a job of its own until it ends: the E-STOP cancels it
-            job = self.inflight.start(f"goal {c.command.name}", handle.cancel_goal_async)
+            job = self.inflight.start(
+                f"goal {c.command.name}", handle.cancel_goal_async, c.command.name
+            )
         except BackendError:
             handle.cancel_goal_async()  # the E-STOP came while it was being accepted
             raise BackendError(f"{ENDED}: the goal was accepted and canceled") from None

@@ -558,7 +558,7 @@ class Ros2Backend(RobotBackend):
         """Return at acceptance; the client keeps running and is followed to the end."""
         result = ros2_process.Run(argv)  # filled by the follower thread
         # a job of its own for the goal's life: the E-STOP stops its client, which cancels it
-        goal = self.inflight.start(f"goal {checked.command.name}")
+        goal = self.inflight.start(f"goal {checked.command.name}", name=checked.command.name)
         try:  # SIGINT, not a kill: its client cancels the goal on the robot
             proc = ros2_process.spawn_owned(self.executable, argv, goal, _stop_in_background)
         except BackendError:
