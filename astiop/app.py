@@ -309,7 +309,7 @@ class AstiopApp(App):
                 self.services.gateway,
                 store,
                 on_error=said,
-                fleet=[(name, ns) for name, ns, _ in fleet.robots] if fleet else None,
+                fleet=fleet.names if fleet else None,
                 gateway_of=fleet.gateway_of if fleet else None,
             )
             self.recorder = recorder.start()

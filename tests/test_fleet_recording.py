@@ -24,7 +24,8 @@ NAMES = ["astibot_1", "astibot_2"]
 
 
 def _record(tmp_path):
-    """astibot_2 driven toward shipping and astibot_1 E-STOPPED, recorded from the first."""
+    """astibot_2 driven toward shipping and astibot_1 E-STOPPED, recorded from the first;
+    astibot_2 found a moment after the recording began (as a fleet's console finds robots)."""
     settings = load_settings({"llm": {"model": "rules"}}, env={}, path=tmp_path / "none.toml")
     fleet = SimFleet(NAMES)
     store = Store(tmp_path / "console.db")
@@ -39,16 +40,19 @@ def _record(tmp_path):
         for name, sim in zip(NAMES, fleet.robots, strict=True)
     }
     path = tmp_path / "fleet.mcap"
+    found = NAMES[:1]
     recorder = SessionRecorder(
         path,
         gateways["astibot_1"],
         store,
-        fleet=[(name, f"/{name}") for name in NAMES],
+        fleet=lambda: [(name, f"/{name}") for name in found],
         gateway_of=gateways.get,
     )
     sent = gateways["astibot_2"].run(goto_command("shipping"), confirm=lambda _c: True)
     assert sent.executed, sent.reason
-    for _ in range(40):  # 8 s of simulated time, a poll each 0.2 s
+    for i in range(40):  # 8 s of simulated time, a poll each 0.2 s
+        if i == 2:
+            found = NAMES  # astibot_2 joins: recorded from now
         fleet.step(0.2)
         recorder.poll()
     gateways["astibot_1"].estop()

@@ -79,7 +79,7 @@ def record(
             gateway,
             st.store,
             scan_hz=scan_hz,
-            fleet=[(n, ns) for n, ns, _ in fleet.robots] if fleet else None,
+            fleet=fleet.names if fleet else None,
             gateway_of=fleet.gateway_of if fleet else None,
         ).start()
     except RecordingError as exc:

@@ -101,9 +101,10 @@ JSON_SCHEMAS = {
 class SessionRecorder:
     """Polls the gateway (never the simulator) and the store while it runs, in its own thread.
 
-    A fleet's session (`fleet`: its robots, (name, namespace), and `gateway_of(name)`, None for
-    a robot not reached yet) records every robot: its topics by their full names, under its
-    namespace, and its events on `<namespace>/astiop/events`.
+    A fleet's session (`fleet()`: its robots now, (name, namespace), and `gateway_of(name)`,
+    None for a robot not reached yet) records every robot: its topics by their full names, under
+    its namespace, and its events on `<namespace>/astiop/events`. A robot found after the
+    recording began is recorded from then, and the metadata's list of robots written again.
 
     A poll that fails is said once (`on_error`, called from the recording's thread, and a line
     on stderr) and the recording goes on; `stop()` finishes the file whatever the polls did."""
@@ -117,7 +118,7 @@ class SessionRecorder:
         scan_hz: float | None = None,
         flush_s: float = FLUSH_S,
         on_error: Callable[[str], None] | None = None,
-        fleet: list[tuple[str, str]] | None = None,
+        fleet: Callable[[], list[tuple[str, str]]] | None = None,
         gateway_of: Callable[[str], Any] | None = None,
     ):
         from mcap_ros2._dynamic import serialize_dynamic  # the encoder its Writer uses
@@ -135,8 +136,10 @@ class SessionRecorder:
             raise RecordingError(f"cannot write {self.path}: {exc.strerror or exc}") from None
         self._writer = Writer(self._file)
         self._writer.start(profile="ros2", library="astiop")
-        self._writer.add_metadata("astiop", session_metadata(gateway, fleet))
-        self._fleet = fleet or []
+        self._fleet = fleet
+        self._listed = fleet() if fleet else []  # the robots the metadata lists
+        self._meta = session_metadata(gateway, self._listed)
+        self._writer.add_metadata("astiop", self._meta)
         self._gateway_of = gateway_of or (lambda _name: None)
         self._channels: dict[str, tuple[int, Any]] = {}  # topic -> (channel id, encoder)
         self._last: dict[str, int] = {}  # topic -> last stamp written (ns)
@@ -218,6 +221,7 @@ class SessionRecorder:
         with self._lock:
             if self._finished:
                 return
+            self._list_the_fleet()
             for gateway, now, messages, times, events, ns in robots:
                 topics = gateway.catalog.topics
                 for topic, message in messages.items():
@@ -245,12 +249,21 @@ class SessionRecorder:
     def _robots(self) -> list[tuple[str, Any]]:
         """(namespace, gateway) of every robot recorded: the gateway's alone, or the fleet's
         reached so far (the current robot's first: its clock logs the store's records)."""
-        if not self._fleet:
+        if self._fleet is None:
             return [("", self.gateway)]
-        reached = [(ns, self._gateway_of(name)) for name, ns in self._fleet]
+        fleet = self._fleet()
+        reached = [(ns, self._gateway_of(name)) for name, ns in fleet]
         current = [(ns, gw) for ns, gw in reached if gw is self.gateway] or [("", self.gateway)]
         others = [(ns, gw) for ns, gw in reached if gw is not None and gw is not self.gateway]
         return current + others
+
+    def _list_the_fleet(self) -> None:
+        """The metadata written again when robots joined (a reader keeps the last)."""
+        fleet = self._fleet() if self._fleet is not None else []
+        if fleet and fleet != self._listed:
+            self._listed = fleet
+            self._meta["fleet"] = json.dumps([list(robot) for robot in fleet])
+            self._writer.add_metadata("astiop", dict(self._meta))
 
     def _read(self, ns: str, gateway) -> tuple:
         """One robot's new messages and events, read before the writer is locked."""

@@ -176,6 +176,10 @@ class FleetWatch:
             except Exception:  # noqa: BLE001 - a graph not read this time: next time
                 continue
 
+    def names(self) -> list[tuple[str, str]]:
+        """Every robot watched now, (name, namespace)."""
+        return [(name, ns) for name, ns, _ in self.robots]
+
     def rows(self) -> list[FleetRow]:
         with self._lock:
             return [self._rows[name] for name, _, _ in self.robots]
