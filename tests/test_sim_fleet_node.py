@@ -183,11 +183,12 @@ def _controlled_from_another_machine(elsewhere, db: Path) -> None:
     there, holder = elsewhere
     lost = threading.Event()
     holder.on_lost = lambda _by: lost.set()
-    drive = ("--fleet", "auto", "--robot-name", "astibot_2", "exec", DRIVE.format(2), "--yes")
+    drive = ("--fleet", "auto", "exec", DRIVE.format(2), "--yes")  # to the robot it names
     try:
         assert holder.take() is None
         out = astiop(db, "--take", *drive)
         assert out.returncode == 0, out.stdout + out.stderr[-2000:]
+        assert "to astibot_2 (its names)" in out.stderr, out.stderr[-2000:]
         assert lost.wait(10), "the holder on the other machine was never told"
         assert not holder.held
     finally:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from typing import TYPE_CHECKING
 
 import typer
@@ -10,6 +11,27 @@ from astiop.cli.common import fail, interactive, print_json, state, take_control
 
 if TYPE_CHECKING:
     from astiop.ros2.validation import Checked
+
+
+def _to_the_robot_named(st, command: str) -> None:
+    """A fleet and no --robot-name: a command whose names are under one robot's namespace
+    (`/astibot_2/cmd_vel`) goes to that robot, as if named (its profile, its lease, its
+    E-STOP); one naming none goes to the whole domain."""
+    from astiop.cli.fleet import members
+    from astiop.robot.fleet import is_fleet
+
+    if st.robot_name is not None or not is_fleet(st.fleet_settings):
+        return
+    under = set(re.findall(r"""(?:^|[\s'"])/([A-Za-z][A-Za-z0-9_]*)/""", command))
+    if not under:
+        return
+    robots = {r.namespace.strip("/"): r.name for r in members(st)}
+    named = sorted(robots[ns] for ns in under if ns in robots)
+    if len(named) > 1:
+        fail(f"one robot per command: this one names {' and '.join(named)}")
+    if named:
+        st.robot_name, st._settings = named[0], None  # the settings read again: that robot's
+        typer.echo(f"to {named[0]} (its names)", err=True)
 
 
 def exec_command(
@@ -27,6 +49,7 @@ def exec_command(
     from astiop.robot.factory import make_robot_gateway
 
     st = state(ctx)
+    _to_the_robot_named(st, command)
     try:
         gateway = make_robot_gateway(st.settings, st.store)
     except BackendError as exc:
