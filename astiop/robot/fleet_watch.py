@@ -15,6 +15,8 @@ from astiop.robot.state import RobotState
 
 STALE_S = 3.0  # a robot not heard for this long is stale: what it last said may no longer hold
 LOW_BATTERY = 0.2
+FIRST_ROW_S = 0.1  # a robot's row read this often until its battery and pose came in
+FIRST_FOR_S = 5.0  # (a robot with no battery topic is not read that often for long)
 FIND_S = 1.0  # how often robots that join later are looked for on the graph
 
 
@@ -202,14 +204,18 @@ class FleetWatch:
         with self._lock:
             self.gateways[name] = gateway
         self._spawn(self._watch_control, f"fleet-{name}-control", name, gateway)
+        # until its battery and pose came in (for FIRST_FOR_S at most), read more often
+        whole, first_until = False, time.monotonic() + FIRST_FOR_S
         while not self._halt.is_set():
             try:
                 row = replace(row_of(name, ns, gateway), control=self._control.get(name, "…"))
+                whole = whole or (row.battery is not None and row.x is not None)
                 failed = self._failed.get(name)
                 self._set(replace(row, error=failed) if failed else row)
             except Exception as exc:  # noqa: BLE001
                 self._set(FleetRow(name, ns, error=f"not read: {exc}"))
-            self._halt.wait(self.period_s)
+            quick = not whole and time.monotonic() < first_until
+            self._halt.wait(FIRST_ROW_S if quick else self.period_s)
 
     def _watch_control(self, name: str, gateway: RobotGateway) -> None:
         """Who controls the robot, read apart from its state: the first read opens its lease's
