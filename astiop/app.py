@@ -66,7 +66,7 @@ class AstiopApp(App):
         Binding("f5", "switch_mode('teleop')", "Teleop"),
         Binding("f6", "switch_mode('bench')", "Bench"),
         Binding("f7", "switch_mode('fleet')", "Fleet"),
-        Binding("ctrl+t", "take_control", "Take control", show=False),
+        Binding("ctrl+t", "take_control", "Take control / let go", show=False),
         Binding("ctrl+r", "release_estop", "Release e-stop", priority=True),
         Binding("ctrl+q", "quit", "Quit", priority=True),
         # a replay's clock; focused inputs and tables keep these keys
@@ -277,6 +277,12 @@ class AstiopApp(App):
                 f"Go to {loc.name}",
                 f"Drive to ({loc.x:.1f}, {loc.y:.1f}) after a y/n",
                 partial(self.goto_location, loc.name),
+            )
+        lease = self.services.gateway.lease
+        if lease is not None:  # ctrl+t's second way: a browser never hands ctrl+t to a page
+            title = "Let go of control" if lease.held else "Take control"
+            yield SystemCommand(
+                f"{title} of {lease.name}", "Asked first (ctrl+t)", self.action_take_control
             )
         if self.recorder is None:
             yield SystemCommand(

@@ -244,3 +244,28 @@ def test_a_robot_not_reached_is_its_own_red_row_and_its_stop_a_failure(tmp_path)
         assert failures["far"] == ["not reached: no connection to it"]
     finally:
         watch.close()
+
+
+async def test_ctrl_t_lets_go_of_control_after_a_question_and_takes_it_back(tmp_path):
+    app, _fleet, _runner = fleet_console(tmp_path)
+    other = Lease(Store(tmp_path / "console.db"), lease_key("/astibot_2", 0), "astibot_2",
+                  "another console")  # fmt: skip
+    try:
+        async with app.run_test(size=(150, 40)) as pilot:
+            await wait_for(pilot, lambda: "in control" in app.sub_title)
+            assert other.take() is not None  # held by this console
+            await pilot.press("ctrl+t")
+            await wait_for(pilot, lambda: isinstance(app.screen, ConfirmModal))
+            assert app.screen.question.startswith("Let go of control of astibot_2?")
+            await pilot.press("y")
+            await wait_for(pilot, lambda: "WATCHING" in app.sub_title)
+            assert other.take() is None  # free: taken without taking it over
+            await pilot.press("ctrl+t")
+            await wait_for(pilot, lambda: isinstance(app.screen, ConfirmModal))
+            assert "Take control of astibot_2 from another console" in app.screen.question
+            await pilot.press("y")
+            await wait_for(pilot, lambda: "in control" in app.sub_title)
+            await wait_for(pilot, lambda: not other.held)  # told it was taken over
+    finally:
+        other.release()
+        other.store.close()

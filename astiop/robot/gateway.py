@@ -200,6 +200,11 @@ class RobotGateway:
             return None
         return f"{self.lease.name} is controlled by {other.words}"
 
+    def let_go_of_control(self) -> None:
+        """Give up control of a shared robot (it is free for another operator to take)."""
+        if self.lease is not None:
+            self.lease.let_go()
+
     def watch_lightly(self, light: bool) -> None:
         """A fleet's robot other than the current one is watched for its row only."""
         self.backend.watch_lightly(light)

@@ -203,13 +203,20 @@ class Lease:
                 self.on_lost(overtaken or self.other_holder())
             return
 
-    def release(self) -> None:
+    def let_go(self) -> None:
+        """Control given up: the robot is free for anyone to take; this process watches it (and
+        takes it again with its next motion if no one has)."""
         self._halt.set()
+        if self._thread is not None:
+            self._thread.join(HEARTBEAT_S)  # its last renewal must not follow the letting go
         if self._held:
             self._held = False
             self._announce(released=True, acked_s=0.5)
             with contextlib.suppress(Exception):  # it expires by itself
                 self.store.release_lease(self.robot, self.token)
+
+    def release(self) -> None:
+        self.let_go()
         if self._channel is not None:
             with contextlib.suppress(Exception):
                 self._channel.close()

@@ -1,6 +1,6 @@
 """The console's control of a shared robot (robot/lease.py): taken at start when no one holds
-it, else the robot is watched; ctrl+t takes it over, asked first; a console whose robot was
-taken over is told at once and watches from then on."""
+it, else the robot is watched; ctrl+t takes it over, asked first (or, held here, lets go of it);
+a console whose robot was taken over is told at once and watches from then on."""
 
 from __future__ import annotations
 
@@ -48,14 +48,15 @@ def words(gateway) -> str:
 
 
 def take_over(app) -> None:
-    """ctrl+t: control of the current robot taken from whoever has it, once the operator said."""
+    """ctrl+t: control of the current robot taken from whoever has it, once the operator said;
+    held here already, let go of (asked too)."""
     gateway = app.services.gateway
     lease = gateway.lease
     if lease is None:
         app.notify("This robot is this console's own: there is no control to take.")
         return
     if lease.held:
-        app.notify(f"{lease.name} is controlled from here.")
+        _let_go(app, gateway, lease.name)
         return
     holder = lease.other_holder()
     by = f" from {holder.words}; they will be told" if holder else ""
@@ -71,6 +72,23 @@ def take_over(app) -> None:
             app.call_from_thread(app.refresh_subtitle)
 
         app.run_worker(take, thread=True, group="lease", exit_on_error=False)
+
+    app.push_screen(ConfirmModal(question), done)
+
+
+def _let_go(app, gateway, name: str) -> None:
+    question = f"Let go of control of {name}? Another operator may then take it; you watch it."
+
+    def done(ok: bool | None) -> None:
+        if not ok:
+            return
+
+        def let_go() -> None:
+            gateway.let_go_of_control()
+            app.call_from_thread(app.notify, f"{name} is free: you watch it (ctrl+t takes it).")
+            app.call_from_thread(app.refresh_subtitle)
+
+        app.run_worker(let_go, thread=True, group="lease", exit_on_error=False)
 
     app.push_screen(ConfirmModal(question), done)
 
