@@ -15,6 +15,7 @@ from astiop.robot.backends.live_catalog import (
     CANCEL_GOAL,
     NAVIGATE,
     RELEASE,
+    GraphLists,
     describe_graph,
     navigation_actions,
     stop_service_type,
@@ -146,10 +147,12 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
         with self._refresh_lock:
             return self._refresh(settle)
 
-    def _refresh(self, settle: bool = True) -> bool:
+    def _refresh(self, settle: bool = True, lists: GraphLists | None = None) -> bool:
+        """`lists`: the graph just read by the caller (not read again)."""
         young = time.monotonic() - self.t0 < DISCOVERY_YOUNG_S  # discovery may still be going
         waits = young and settle
-        lists = self._discover(DISCOVERY_QUIET_S * 3) if waits else read_lists(self.proc)
+        if lists is None:
+            lists = self._discover(DISCOVERY_QUIET_S * 3) if waits else read_lists(self.proc)
         # parameters of the nodes that serve them (other astiop processes do not), read for a
         # node when it appears, and for all of them every 30 s
         served = {n for n, _ in lists["service"]}
@@ -166,9 +169,10 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
             for node in new:
                 self._params_of[node] = [p for p in read if p[0].split(" ", 1)[0] == node]
         self._params_of = {n: ps for n, ps in self._params_of.items() if n in nodes}
-        self._params = sorted(p for ps in self._params_of.values() for p in ps)
-        self._lists = lists
-        self.catalog = describe_graph({**lists, "param": self._params}, self._fixed)
+        params = sorted(p for ps in self._params_of.values() for p in ps)
+        if lists != self._lists or params != self._params:  # else the catalog is as described
+            self._params, self._lists = params, lists
+            self.catalog = describe_graph({**lists, "param": params}, self._fixed)
         self.refreshed_at = time.monotonic()
         self._watch_state_topics()
         return True
@@ -186,8 +190,10 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
                     self._watch_state_topics()
                 if time.monotonic() >= next_read:
                     next_read = time.monotonic() + GRAPH_POLL_S
-                    if read_lists(self.proc, max_age_s=GRAPH_POLL_S / 2) != self._lists:
-                        self.refresh()
+                    lists = read_lists(self.proc, max_age_s=GRAPH_POLL_S / 2)
+                    if lists != self._lists:
+                        with self._refresh_lock:
+                            self._refresh(lists=lists)
                     self._drop_unwanted()
                     self._lost_for(time.monotonic())
             except Exception as exc:  # noqa: BLE001 - the loop must outlive one bad read
