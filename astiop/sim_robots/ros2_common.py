@@ -7,6 +7,8 @@ rclpy API used here is Humble's too (rclpy's humble branch: node.py, executors.p
 
 from __future__ import annotations
 
+import heapq
+import itertools
 import math
 import threading
 import time
@@ -83,7 +85,8 @@ class Schedule:
     in Python), and a fleet's hundreds of timers kept its executors busy doing only that."""
 
     def __init__(self) -> None:
-        self._entries: list[list[Any]] = []  # [next due (monotonic), period, send]
+        self._due: list[tuple[float, int, float, Callable[[], None]]] = []  # a heap: soonest first
+        self._count = itertools.count()  # ties broken by the order the sends were added
         self._lock = threading.Lock()
         self._thread: threading.Thread | None = None
         self._halt = threading.Event()
@@ -91,7 +94,8 @@ class Schedule:
 
     def every(self, period_s: float, send: Callable[[], None]) -> None:
         with self._lock:
-            self._entries.append([time.monotonic() + period_s, period_s, send])
+            entry = (time.monotonic() + period_s, next(self._count), period_s, send)
+            heapq.heappush(self._due, entry)
 
     def start(self) -> None:
         with self._lock:
@@ -104,22 +108,29 @@ class Schedule:
         if self._thread is not None and self._thread is not threading.current_thread():
             self._thread.join(timeout=2.0)
 
+    def _take_due(self, now: float) -> tuple[list[tuple[int, Callable[[], None]]], float]:
+        """The sends due now, each put back a period on; when the next one is due."""
+        due = []
+        with self._lock:
+            while self._due and self._due[0][0] <= now:
+                at, n, period, send = heapq.heappop(self._due)
+                # a late tick is not caught up: the next is a period away
+                heapq.heappush(self._due, (at + period if at + period > now else now + period,
+                                           n, period, send))  # fmt: skip
+                due.append((n, send))
+            return due, self._due[0][0] if self._due else now + 0.1
+
     def _run(self) -> None:
         while not self._halt.is_set():
-            now = time.monotonic()
-            with self._lock:
-                due = [e for e in self._entries if e[0] <= now]
-                for e in due:  # a late tick is not caught up: the next is a period away
-                    e[0] = e[0] + e[1] if e[0] + e[1] > now else now + e[1]
-                soonest = min((e[0] for e in self._entries), default=now + 0.1)
-            for e in due:
+            due, soonest = self._take_due(time.monotonic())
+            for n, send in due:
                 try:
-                    e[2]()
+                    send()
                 except Exception:  # noqa: BLE001 - one topic's failure stops no other topic
                     if self._halt.is_set():
                         return  # a context shut down under it, at the end
-                    if id(e) not in self._failed:  # said once per topic, not at its rate
-                        self._failed.add(id(e))
+                    if n not in self._failed:  # said once per topic, not at its rate
+                        self._failed.add(n)
                         traceback.print_exc()
             self._halt.wait(max(soonest - time.monotonic(), 0.0005))
 
