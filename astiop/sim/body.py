@@ -32,8 +32,11 @@ class Body:
 
     def motor_power(self, wheel_speeds) -> float:
         """W drawn by the drive at these wheel speeds (rad/s)."""
-        turning = sum(1 for w in wheel_speeds if abs(w) > 0.05)
-        rolling = sum(self.wheel_torque_nm * abs(w) for w in wheel_speeds)
+        turning, rolling, torque = 0, 0, self.wheel_torque_nm
+        for w in wheel_speeds:  # a loop, not two generators: 20 Hz; the same sums in order
+            w = abs(w)
+            turning += w > 0.05
+            rolling += torque * w
         return (rolling + self.idle_w * turning) / self.efficiency
 
 

@@ -16,6 +16,24 @@ class Leg:
     v_max: float
     planned: bool = True  # replan around obstacles (the dock legs are straight and slow)
     waypoint: int = 0
+    # (path, waypoint, its segments' lengths): remaining_length's, kept while they hold
+    _segments: tuple = field(default=(None, -1, ()), repr=False, compare=False)
+
+    def remaining_length(self, x: float, y: float) -> float:
+        """`path_length([(x, y)] + self.path[self.waypoint:])`, the same sum in the same order,
+        the waypoints' segments measured once per path and waypoint (the control loop's 20 Hz)."""
+        path, wp = self.path, self.waypoint
+        held_path, held_wp, segments = self._segments
+        if held_path is not path or held_wp != wp:
+            segments = tuple(math.dist(p, q) for p, q in zip(path[wp:], path[wp + 1 :]))
+            self._segments = (path, wp, segments)
+        if wp >= len(path):
+            return 0  # sum() of nothing, as path_length
+        total = 0
+        total += math.dist((x, y), path[wp])
+        for d in segments:
+            total += d
+        return total
 
 
 @dataclass

@@ -53,15 +53,20 @@ def inverse_kinematics(
     vx: float, vy: float, wz: float, params: MecanumParams | None = None
 ) -> np.ndarray:
     """Wheel speeds (rad/s, FL FR RL RR) for a body velocity; not saturated."""
+    return np.array(wheel_speeds(vx, vy, wz, params))
+
+
+def wheel_speeds(
+    vx: float, vy: float, wz: float, params: MecanumParams | None = None
+) -> tuple[float, float, float, float]:
+    """`inverse_kinematics` as a tuple of floats (the simulator's 20 Hz control needs no array)."""
     p = params or ASTIBOT
     k, r = p.k, p.wheel_radius
-    return np.array(
-        [
-            (vx - vy - k * wz) / r,
-            (vx + vy + k * wz) / r,
-            (vx + vy - k * wz) / r,
-            (vx - vy + k * wz) / r,
-        ]
+    return (
+        (vx - vy - k * wz) / r,
+        (vx + vy + k * wz) / r,
+        (vx + vy - k * wz) / r,
+        (vx - vy + k * wz) / r,
     )
 
 

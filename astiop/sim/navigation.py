@@ -5,6 +5,7 @@ A mixin of `Simulator`: it works on the simulator's world, path planner, pose an
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -17,7 +18,7 @@ from astiop.sim.controller import (
     goto_pose_command,
     tracking_error,
 )
-from astiop.sim.geometry import path_length, segments_hit_boxes, wrap_angle
+from astiop.sim.geometry import segments_hit_boxes, wrap_angle
 from astiop.sim.goal import Goal, GoalResult, Leg
 from astiop.sim.path_planner import PlanningError
 
@@ -32,6 +33,12 @@ YIELD_LANE_MARGIN_M = 0.15  # each side of the base: robots docked side by side 
 YIELD_REPLAN_S = 2.0
 ROBOT_GIVE_UP_S = 30.0
 ROBOT_BOX_PAD_M = 0.5  # a robot is seen from one side: its box grows this much each way
+
+
+@functools.lru_cache(maxsize=8)
+def _slow_gains(v_max: float) -> ControllerGains:
+    """The gains of a slow leg (dock, undock): made once, not per control step."""
+    return ControllerGains(v_max=v_max, w_max=0.3)
 
 
 class GoalError(ValueError):
@@ -152,17 +159,13 @@ class NavigationMixin:
                 return (0.0, 0.0, 0.0)
             self._finish("succeeded", f"reached {g.name}")
             return (0.0, 0.0, 0.0)
-        remaining = path_length([pose[:2]] + leg.path[leg.waypoint :])
+        remaining = leg.remaining_length(pose[0], pose[1])
         if self._yield_to_robots(pose, remaining):
             return (0.0, 0.0, 0.0)
         leg = g.current  # a plan around a robot may have changed its path
         final = leg.waypoint == len(leg.path) - 1
-        gains = (
-            self.gains
-            if leg.v_max >= self.gains.v_max
-            else ControllerGains(v_max=leg.v_max, w_max=0.3)
-        )
-        remaining = path_length([pose[:2]] + leg.path[leg.waypoint :])
+        gains = self.gains if leg.v_max >= self.gains.v_max else _slow_gains(leg.v_max)
+        remaining = leg.remaining_length(pose[0], pose[1])
         command = diff_drive_command if self.chassis.differential else goto_pose_command
         return command(pose, leg.path[leg.waypoint], leg.target[2], remaining, final, gains)
 
@@ -204,6 +207,8 @@ class NavigationMixin:
         """The nearest robot seen in the base's way: in the lane as wide as the base (and a
         margin) ahead of it toward its next waypoint, up to its yield gap and not beyond where
         this leg ends."""
+        if not self.detected:
+            return None  # nothing seen (20 Hz: spare the geometry below)
         leg = self.goal.current
         wx, wy = leg.path[leg.waypoint] if leg.path else leg.target[:2]
         x, y, theta = pose

@@ -14,6 +14,7 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+import pymunk
 
 from astiop.sim import lidar
 from astiop.sim.battery import Battery
@@ -22,7 +23,13 @@ from astiop.sim.controller import ControllerGains, tracking_error
 from astiop.sim.conveyor import Conveyor
 from astiop.sim.geometry import wrap_angle
 from astiop.sim.goal import Goal, GoalResult
-from astiop.sim.kinematics import ASTIBOT, MecanumParams, achievable_velocity, inverse_kinematics
+from astiop.sim.kinematics import (
+    ASTIBOT,
+    MecanumParams,
+    achievable_velocity,
+    inverse_kinematics,
+    wheel_speeds,
+)
 from astiop.sim.navigation import (
     BLOCKED_GIVE_UP_S,
     ROBOT_LENGTH,  # noqa: F401 - the ASTIbot's size, read from here by tests
@@ -40,6 +47,8 @@ ROBOT_MASS = ASTIBOT_BODY.mass
 TELEOP_TIMEOUT_S = 0.5
 STOP_LATCHED = "the stop is latched: /release to move again"
 A_LIN, A_ANG = 1.0, 2.0  # m/s², rad/s² the base ramps with
+_SET_VELOCITY = pymunk.Body.velocity.fset
+_SET_ANGULAR_VELOCITY = pymunk.Body.angular_velocity.fset
 
 
 @dataclass
@@ -103,7 +112,7 @@ class Simulator(NavigationMixin):
         self._tick = 0
         self._carry = 0.0
         self.after_step: list = []  # called after each step(), outside the lock
-        self._v = np.zeros(3)  # body velocity being applied (robot frame)
+        self._v = [0.0, 0.0, 0.0]  # body velocity being applied (robot frame), floats: per step
         self._applied = (0.0, 0.0, 0.0)
         self._target = (0.0, 0.0, 0.0)
         self._teleop = _Teleop()
@@ -127,6 +136,8 @@ class Simulator(NavigationMixin):
         self._event_seq = 0
         self._motor_power = 0.0
         self._energy_dt = 0.0
+        self._pose_at = (-1, (0.0, 0.0, 0.0))  # (world step, pose): the body moves only in a step
+        self._dock_at: tuple = (None, None, None)  # (map, dock name, station)
         if self.lidar_enabled:
             self._scan()
 
@@ -172,14 +183,30 @@ class Simulator(NavigationMixin):
     # -- state -----------------------------------------------------------------------
     @property
     def pose(self) -> tuple[float, float, float]:
-        p = self.body.position
-        return (p.x, p.y, wrap_angle(self.body.angle))
+        step, pose = self._pose_at
+        if step != self.world.steps:  # read once per physics step, not per use
+            p = self.body.position
+            pose = (p.x, p.y, wrap_angle(self.body.angle))
+            self._pose_at = (self.world.steps, pose)
+        return pose
+
+    def _dock(self):
+        """The dock station, looked up once per map and dock name (`docked()` is 20 Hz)."""
+        held_map, held_name, dock = self._dock_at
+        if held_map is not self.map or held_name != self.dock_name:
+            dock = self.map.station(self.dock_name)
+            self._dock_at = (self.map, self.dock_name, dock)
+        return dock
 
     def docked(self) -> bool:
-        dock = self.map.station(self.dock_name)
+        dock = self._dock()
         if dock is None or dock.docked_pose is None:
             return False
-        ex, ey, eth = tracking_error(self.pose, dock.docked_pose)
+        pose = self.pose
+        dx, dy, _ = dock.docked_pose
+        if abs(dx - pose[0]) > 0.09 or abs(dy - pose[1]) > 0.09:
+            return False  # surely more than 0.08 m off, the error below turned or not (20 Hz)
+        ex, ey, eth = tracking_error(pose, dock.docked_pose)
         return math.hypot(ex, ey) < 0.08 and abs(eth) < math.radians(5) and self.speed() < 0.05
 
     def speed(self) -> float:
@@ -322,7 +349,7 @@ class Simulator(NavigationMixin):
                 self.cancel("e-stop")
                 self.conveyor.abort()
                 self._teleop = _Teleop()
-                self._v[:] = 0.0
+                self._v[:] = (0.0, 0.0, 0.0)
                 self.control.velocity, self.control.angular_velocity = (0, 0), 0.0
                 self._applied = (0.0, 0.0, 0.0)
                 self._event("estop", "E-STOP engaged", "error")
@@ -373,8 +400,12 @@ class Simulator(NavigationMixin):
             self._carry += duration
             n = int(self._carry / self.dt + 1e-9)
             self._carry -= n * self.dt
-            for _ in range(n):
-                self._substep()
+            before, world_step, dt = self._before_physics, self.world.step, self.dt
+            for _ in range(n):  # _substep, with its lookups made once
+                before()
+                world_step(dt)
+                if self._contact is not None:  # _after_physics
+                    self._on_collision(self._contact)
         for observe in self.after_step:  # e.g. a recorder, in fast mode
             observe()
 
@@ -400,31 +431,43 @@ class Simulator(NavigationMixin):
         self._after_physics()
 
     def _before_physics(self) -> None:
-        """The robot's share of a substep before the world moves: control, lidar, its motors."""
-        self._tick += 1
-        self.t = self._tick * self.dt
-        if self._tick % self._control_every == 0:
-            self._control(self.dt * self._control_every)
-        if self.lidar_enabled and self._tick % self._lidar_every == 0:
+        """The robot's share of a substep before the world moves: control, lidar, its motors.
+        100 Hz: written for speed (min(d, max(-d, x)) spelled as comparisons, same values)."""
+        tick = self._tick = self._tick + 1
+        dt = self.dt
+        self.t = tick * dt
+        if tick % self._control_every == 0:
+            self._control(dt * self._control_every)
+        if self.lidar_enabled and tick % self._lidar_every == 0:
             self._scan()
             if self.goal is not None:
                 self._check_path()
         v = self._v
         if self.e_stopped or self.fault:
-            v[:] = 0.0
+            v[:] = vx, vy, wz = (0.0, 0.0, 0.0)
         else:
             tx, ty, tw = self._target
-            dl, da = A_LIN * self.dt, A_ANG * self.dt
-            v[0] += min(dl, max(-dl, tx - v[0]))
-            v[1] += min(dl, max(-dl, ty - v[1]))
-            v[2] += min(da, max(-da, tw - v[2]))
+            vx, vy, wz = v
+            dl, da = A_LIN * dt, A_ANG * dt
+            d = tx - vx
+            vx += d if -dl < d < dl else (dl if d >= dl else -dl)
+            d = ty - vy
+            vy += d if -dl < d < dl else (dl if d >= dl else -dl)
+            d = tw - wz
+            wz += d if -da < d < da else (da if d >= da else -da)
+            v[:] = vx, vy, wz
         th = self.body.angle
         c, s = math.cos(th), math.sin(th)
-        command = (c * v[0] - s * v[1], s * v[0] + c * v[1], v[2])
-        if command != self._applied:  # pymunk's attribute setters cost more than the check
+        command = (c * vx - s * vy, s * vx + c * vy, wz)
+        applied = self._applied
+        if command != applied:  # pymunk's attribute setters cost more than the check
             self._applied = command
-            self.control.velocity = command[:2]
-            self.control.angular_velocity = command[2]
+            # the properties' own setters (pymunk.Body's __setattr__ hook doubles their cost);
+            # setting a kinematic body's velocity to the value it has is no change: skipped
+            if command[:2] != applied[:2]:
+                _SET_VELOCITY(self.control, command[:2])
+            if wz != applied[2]:
+                _SET_ANGULAR_VELOCITY(self.control, wz)
 
     def _after_physics(self) -> None:
         if self._contact is not None:
@@ -436,7 +479,7 @@ class Simulator(NavigationMixin):
             return
         self.collisions += 1
         self.fault = f"collision with {kind.split(':')[0]}"
-        self._v[:] = 0.0
+        self._v[:] = (0.0, 0.0, 0.0)
         self._target = (0.0, 0.0, 0.0)
         self._teleop = _Teleop()
         self.control.velocity, self.control.angular_velocity = (0, 0), 0.0
@@ -457,7 +500,7 @@ class Simulator(NavigationMixin):
             self._target = achievable_velocity(vx, vy, wz, self.params)
         else:
             self._target = (0.0, 0.0, 0.0)
-        w = inverse_kinematics(*self._v, self.params)
+        w = wheel_speeds(*self._v, self.params)
         self._motor_power = self.chassis.motor_power(w)
         self.battery.update(dt, self._motor_power, on_charger=self.docked())
         done = self.conveyor.update(dt)
@@ -467,12 +510,15 @@ class Simulator(NavigationMixin):
     # -- 10 Hz: lidar, obstacles, re-planning -----------------------------------------------
     def _scan(self) -> None:
         t0 = time.perf_counter()
-        a, b, owner = self.world.edges(self.body)
+        edges, owner, unmapped_edges = self.world.lidar_edges(self.body)
         x, y, th = self.pose
-        ranges, hit = lidar.cast(x, y, th, a, b, self.lidar_spec)
+        ranges, hit = lidar.cast_edges(x, y, th, edges, self.lidar_spec, hits=unmapped_edges)
         self.lidar_ms.append((time.perf_counter() - t0) * 1e3)
         self.scan_ranges = lidar.add_noise(ranges, self.rng, self.lidar_spec)
         self.scan_stamp = self.t
+        if not unmapped_edges:  # every edge is the map's: nothing to detect
+            self.detected = []
+            return
         owners = owner[np.maximum(hit, 0)]
         unmapped = (hit >= 0) & (owners >= 0)
         robots = None

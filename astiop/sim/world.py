@@ -10,6 +10,7 @@ import numpy as np
 import pymunk
 
 from astiop.sim.geometry import circle_polygon, oriented_box, polygon_edges, rect_edges
+from astiop.sim.lidar import Edges
 from astiop.warehouse import WarehouseMap
 
 CT_ROBOT, CT_STATIC, CT_OBSTACLE = 1, 2, 3
@@ -69,6 +70,7 @@ class World:
         self._obstacle_bodies: dict[int, tuple[pymunk.Body, pymunk.Shape]] = {}
         self._ids = itertools.count(1)
         self._edges_cache: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._lidar_cache: tuple[Edges, np.ndarray, bool] | None = None  # of the fixed edges
         self.robots: list[tuple[pymunk.Body, float, float, object]] = []  # … length, width, sim
         self.steps = 0  # physics steps so far: the robots' edges are computed once per step
         self._robot_edges: tuple[int, np.ndarray, np.ndarray, np.ndarray] | None = None
@@ -119,7 +121,7 @@ class World:
         self.space.add(body, shape)
         self.obstacles[obstacle.id] = obstacle
         self._obstacle_bodies[obstacle.id] = (body, shape)
-        self._edges_cache = None
+        self._edges_cache = self._lidar_cache = None
         return obstacle
 
     def remove_obstacle(self, obstacle_id: int) -> Obstacle:
@@ -127,7 +129,7 @@ class World:
             raise WorldError(f"no obstacle with id {obstacle_id}")
         body, shape = self._obstacle_bodies.pop(obstacle_id)
         self.space.remove(body, shape)
-        self._edges_cache = None
+        self._edges_cache = self._lidar_cache = None
         return self.obstacles.pop(obstacle_id)
 
     def robot_rank(self, body: pymunk.Body) -> int:
@@ -147,6 +149,17 @@ class World:
             np.concatenate([fixed[1], b[keep]]),
             np.concatenate([fixed[2], owners[keep]]),
         )
+
+    def lidar_edges(self, seen_by: pymunk.Body | None = None) -> tuple[Edges, np.ndarray, bool]:
+        """`edges(seen_by)` prepared for `lidar.cast_edges`: (edges, owners, whether any edge is
+        not the fixed map's). The fixed geometry's are prepared once per change of it."""
+        if len(self.robots) < 2 and (not self.robots or self.robots[0][0] is seen_by):
+            if self._lidar_cache is None:
+                a, b, owners = self._fixed_edges()
+                self._lidar_cache = (Edges(a, b), owners, bool((owners >= 0).any()))
+            return self._lidar_cache
+        a, b, owners = self.edges(seen_by)
+        return Edges(a, b), owners, bool((owners >= 0).any())
 
     def _every_robots_edges(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Every robot's box edges as they are at this step, computed at once (a fleet's robots
