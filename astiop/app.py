@@ -34,7 +34,7 @@ from astiop.screens import control, mission_commands
 from astiop.screens.approvals import ApprovalDesk
 from astiop.screens.bench import BenchScreen
 from astiop.screens.chat import ChatScreen
-from astiop.screens.dashboard import DashboardScreen
+from astiop.screens.dashboard import DashboardScreen, motion_key
 from astiop.screens.fleet import FleetScreen
 from astiop.screens.locations import LocationsScreen
 from astiop.screens.logs import LogsScreen
@@ -43,6 +43,8 @@ from astiop.screens.modals import ConfirmModal
 from astiop.screens.teleop import TeleopScreen
 from astiop.services import Services
 from astiop.store import Store
+
+STILL_HZ = 4.0  # a still robot's sampling: only its clock, scan noise and battery change
 
 
 class AstiopApp(App):
@@ -106,6 +108,7 @@ class AstiopApp(App):
         self._sampler = StateSampler(
             services.gateway, self._state_sampled, self._sampler_failed, sample_hz, last
         )
+        self._motion: tuple = ()  # the last sample's motion_key
 
     def on_mount(self) -> None:
         gateway = self.services.gateway
@@ -184,6 +187,7 @@ class AstiopApp(App):
         self.call_from_thread(self.notify, text, severity="error", markup=False)
 
     def on_robot_state_sampled(self, msg: RobotStateSampled) -> None:
+        self._pace_sampler(msg)
         self.robot_state = msg.state
         if msg.events:  # kept here: a screen not shown when they came still shows them
             self.recent_events = (self.recent_events + msg.events)[-50:]
@@ -196,6 +200,16 @@ class AstiopApp(App):
                 self.notify(ev.message, title=ev.kind, markup=False)
         if self.screen_stack and self.screen in self.listeners:  # none while shutting down
             self.screen.post_message(RobotStateSampled(msg.state, msg.events, msg.stats))
+
+    def _pace_sampler(self, msg: RobotStateSampled) -> None:
+        """STILL_HZ while two samples in a row show the same robot (`motion_key`) and no
+        events, sample_hz as soon as one does not: an idle console drew its clock at 10 Hz,
+        most of its CPU. The sampler reads its period and its stats' stride at each tick."""
+        key = motion_key(msg.state)
+        still = key == self._motion and not msg.events
+        self._motion = key
+        hz = min(STILL_HZ, self.sample_hz) if still else self.sample_hz
+        self._sampler.period, self._sampler.every = 1.0 / hz, max(int(hz), 1)
 
     def on_turn_finished(self, msg: TurnFinished) -> None:
         self.broadcast(lambda: TurnFinished(msg.result, msg.model))

@@ -46,6 +46,18 @@ async def test_the_robot_line_keeps_its_words_apart(tmp_path):
         assert not re.search(r">(&#160;)+mode&#160;auto", svg)
 
 
+async def test_the_dashboard_follows_a_still_robots_clock(tmp_path):
+    # a still robot is redrawn less often than it is sampled, but what changes still shows
+    sim = Simulator(seed=0)
+    sim.step(1.0)  # on the dock: charging, still
+    app = console(tmp_path, sim=sim)
+    async with app.run_test(size=SIZE) as pilot:
+        panel = app.screen.query_one("#robot")
+        await wait_for(pilot, lambda: "t 1.0 s" in str(panel.render()))
+        sim.step(0.5)
+        await wait_for(pilot, lambda: "t 1.5 s" in str(panel.render()))
+
+
 def map_text(view) -> str:
     return "\n".join(view.render_line(y).text for y in range(view.size.height))
 

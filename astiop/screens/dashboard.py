@@ -23,6 +23,7 @@ from astiop.screens.base import ConsoleScreen
 from astiop.screens.messages import RobotStateSampled, TurnFinished
 from astiop.screens.panel_text import show_text
 from astiop.widgets.gauges import BatteryGauge
+from astiop.widgets.live_table import LiveTable
 from astiop.widgets.map_view import Place, WarehouseMapView
 from astiop.widgets.mission_panel import MissionPanel
 
@@ -48,6 +49,23 @@ def _rate_and_age(s: TopicStat) -> tuple[str, str]:
     if math.isnan(s.measured_hz):
         return "-", "unwatched"  # nothing here subscribes to it (on a live robot)
     return f"{s.measured_hz:.1f}", "never" if math.isinf(s.age_s) else f"{s.age_s:.1f}s"
+
+
+def motion_key(st: RobotState) -> tuple:
+    """All the Dashboard shows but the clock, the scan and the battery, at the precision shown:
+    while it holds, the robot is still and need not be sampled as often (the app's pace)."""
+    p, v, status = st.pose, st.velocity, st.status
+    return (
+        st.state_word,
+        status and (status.mode, status.active_goal, status.fault, round(status.speed, 2)),
+        p and (round(p.x, 2), round(p.y, 2), round(p.theta, 3)),
+        v and tuple(round(c, 2) for c in v),
+        st.lost_s is None,
+        st.plan,
+        st.obstacles,
+        st.conveyor,
+        st.battery and st.battery.charging,
+    )
 
 
 def robot_text(st: RobotState) -> Text:
@@ -108,7 +126,7 @@ class DashboardScreen(ConsoleScreen):
                 yield Static(id="robot", classes="panel")
                 yield BatteryGauge(id="battery", classes="panel")
                 yield Static(id="agent", classes="panel")
-                yield DataTable(id="topics", cursor_type="none")
+                yield LiveTable(id="topics", cursor_type="none")
                 yield Static(id="services", classes="panel")
         yield Footer()
 

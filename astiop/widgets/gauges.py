@@ -30,9 +30,12 @@ class BatteryGauge(Static):
                 + ("  charging" if charging else "")
             )
         )
-        if text.plain != getattr(self, "_shown", None):
+        shown = getattr(self, "_shown", None)
+        if text.plain != shown:
+            # a layout pass redraws the whole screen: only when the line's length, so its
+            # wrapping, may change (the figures keep their widths)
+            self.update(text, layout=shown is None or len(text.plain) != len(shown))
             self._shown = text.plain
-            self.update(text)
 
 
 class WheelBars(Static):

@@ -32,6 +32,17 @@ def _body_points(x: float, y: float, th: float, length: float = 1.0, width: floa
     return x + gu * c - gv * s, y + gu * s + gv * c
 
 
+def _line_runs(lines: np.ndarray) -> list[tuple[int, int]]:
+    """Sorted line numbers (repeats allowed) as runs of consecutive lines: (first, count)."""
+    runs: list[tuple[int, int]] = []
+    for y in np.unique(lines).tolist():
+        if runs and runs[-1][0] + runs[-1][1] == y:
+            runs[-1] = (runs[-1][0], runs[-1][1] + 1)
+        else:
+            runs.append((y, 1))
+    return runs
+
+
 # palette index -> colour
 PALETTE = [
     "#1b1f24",
@@ -143,8 +154,9 @@ class WarehouseMapView(Widget):
         rows = np.nonzero((pixels != self._pixels).any(axis=1))[0]
         self._pixels = pixels
         if len(rows):
-            y0, y1 = int(rows.min()) // 2, int(rows.max()) // 2
-            self.refresh(Region(0, y0, w, y1 - y0 + 1))
+            # the changed lines alone: scan noise flips a few pixels far apart, and one region
+            # spanning them redrew most of the map each sample
+            self.refresh(*(Region(0, y0, w, n) for y0, n in _line_runs(rows // 2)))
 
     # -- the legend -----------------------------------------------------------------------
     def _legend_lines(self, w: int) -> list[list[Segment]]:
