@@ -72,6 +72,8 @@ def run_console(st: CliState, record: str | None = None) -> None:
         if fleet is not None:
             fleet.close()
         fail(str(exc))
+    if fleet is not None:  # every robot's gateway opened while the screen starts
+        fleet.start()
     if spare:  # built ahead (a ROS 2 robot discovered, the model loading): now its tab
         _wait_for_tab()
     # what start-up made lives as long as the process: kept out of the collector's full scans,

@@ -144,6 +144,9 @@ class FleetWatch:
         self._given[name] = gateway
 
     def start(self) -> FleetWatch:
+        """Watch every robot (once: started again, nothing more)."""
+        if self._threads:
+            return self
         for name, ns, open_ in list(self.robots):
             self._start_watching(name, ns, open_)
         if self.find_more is not None:

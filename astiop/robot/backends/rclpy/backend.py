@@ -48,6 +48,7 @@ from astiop.ros2.validation import CANCEL_SUFFIX
 GRAPH_POLL_S = 1.0
 DISCOVERY_S = 3.0  # at most this long for a new process's discovery to settle
 SCAN_TYPES = frozenset({"sensor_msgs/msg/LaserScan", "sensor_msgs/msg/PointCloud2"})
+SHARED_READ_S = 0.1  # a graph read this recent serves every gateway of the process
 DISCOVERY_QUIET_S = 1.0  # no change in the graph for this long: discovery has settled
 DISCOVERY_YOUNG_S = 10.0  # a process this young may not have discovered the whole robot
 PARAMS_REFRESH_S = 30.0
@@ -107,15 +108,30 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
 
     def _discover(self, settle_s: float) -> dict:
         """Discovery is under way in a new process: read until the graph stops growing (Fast
-        DDS announces a participant's endpoints in rounds, so a pause is not the end)."""
-        deadline = time.monotonic() + settle_s
-        lists, stable_since = read_lists(self.proc), time.monotonic()
-        while time.monotonic() < deadline:
+        DDS announces a participant's endpoints in rounds, so a pause is not the end). A robot
+        under a namespace (one of a fleet, each in its own process) is waited for until a name
+        of its own is seen, up to the transport's timeout: on a loaded machine one participant
+        may be discovered seconds after another."""
+        ns = self._fixed.namespace.rstrip("/")
+        t0 = time.monotonic()
+        deadline = t0 + settle_s
+        longest = t0 + self.timeout_s if ns and settle_s > 0 else deadline
+
+        def its_own(lists: dict) -> bool:
+            return not ns or any(n.startswith(ns + "/") for n, _ in lists["topic"])
+
+        # a read this recent is shared: a fleet's robots, opened at once, read one graph
+        lists, stable_since = read_lists(self.proc, SHARED_READ_S), time.monotonic()
+        while time.monotonic() < (deadline if its_own(lists) else longest):
             time.sleep(0.1)
-            now = read_lists(self.proc)
+            now = read_lists(self.proc, SHARED_READ_S)
             if now != lists:
                 lists, stable_since = now, time.monotonic()
-            elif lists["node"] and time.monotonic() - stable_since > DISCOVERY_QUIET_S:
+            elif (
+                lists["node"]
+                and its_own(lists)
+                and time.monotonic() - stable_since > DISCOVERY_QUIET_S
+            ):
                 break
         return lists
 
