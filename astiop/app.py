@@ -204,12 +204,12 @@ class AstiopApp(App):
     def _pace_sampler(self, msg: RobotStateSampled) -> None:
         """STILL_HZ while two samples in a row show the same robot (`motion_key`) and no
         events, sample_hz as soon as one does not: an idle console drew its clock at 10 Hz,
-        most of its CPU. The sampler reads its period and its stats' stride at each tick."""
+        most of its CPU."""
         key = motion_key(msg.state)
         still = key == self._motion and not msg.events
         self._motion = key
         hz = min(STILL_HZ, self.sample_hz) if still else self.sample_hz
-        self._sampler.period, self._sampler.every = 1.0 / hz, max(int(hz), 1)
+        self._sampler.pace(hz)
 
     def on_turn_finished(self, msg: TurnFinished) -> None:
         self.broadcast(lambda: TurnFinished(msg.result, msg.model))

@@ -28,9 +28,12 @@ class StateSampler(threading.Thread):
         self.publish = publish
         self.report = report
         self.seq = seq  # events up to here were read at start
-        self.period = 1.0 / hz
-        self.every = max(int(hz), 1)
+        self.pace(hz)
         self.halt = threading.Event()
+
+    def pace(self, hz: float) -> None:
+        """Sample at `hz` from the next tick on (topic statistics still about once a second)."""
+        self.period, self.every = 1.0 / hz, max(int(hz), 1)
 
     def run(self) -> None:
         seq, n, failing = self.seq, 0, False
