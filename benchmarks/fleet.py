@@ -1,6 +1,7 @@
 """A fleet of simulated ASTIbots over real DDS, and a console watching it, at N = 1, 5, 10, 25.
 
     python benchmarks/fleet.py [--robots 1,5,10,25] [--window 10] [--settle 10] [--domain 70]
+                               [--discovery-server]
 
 For each N, in fresh processes on a domain of their own (the loopback only):
 - `astiop sim node --robots N --prefix astibot_`: seconds to "up as ROS 2 nodes", and its CPU
@@ -14,7 +15,10 @@ For each N, in fresh processes on a domain of their own (the loopback only):
 - ctrl+e sent to that console: milliseconds from the key to the first zero Twist of the last
   robot, each robot's /astibot_i/cmd_vel taken by a probe process of its own (time.monotonic()
   is system-wide on Linux).
-The CLI transport is not measured here: it runs one `ros2` process per read, per robot.
+With --discovery-server, every process discovers through the Fast DDS Discovery Server (the
+wheels' `fast-discovery-server` on 127.0.0.1:11811, the console a super client) instead of
+simple discovery. The CLI transport is not measured here: it runs one `ros2` process per read,
+per robot.
 Ends with a Markdown table.
 """
 
@@ -125,8 +129,9 @@ def measure(n: int, domain: int, window: float, env: dict, settle: float) -> dic
     ).start()
     work = Path(tempfile.mkdtemp(prefix="astiop-fleet-bench-"))
     session = f"fleetbench{n}"
+    ds = " ".join(f"{k}={env[k]}" for k in ("ROS_DISCOVERY_SERVER", "ROS_SUPER_CLIENT") if k in env)
     console = (
-        f"cd {work} && env ROS_DOMAIN_ID={domain} ASTIOP_LLM__MODEL=rules "
+        f"cd {work} && env ROS_DOMAIN_ID={domain} ASTIOP_LLM__MODEL=rules {ds} "
         f"{sys.executable} -m astiop --db {work / 'c.db'} --robot ros2 --ros2-transport rclpy "
         "--fleet auto"
     )
@@ -182,11 +187,17 @@ def main() -> None:
     ap.add_argument("--window", type=float, default=10.0)
     ap.add_argument("--domain", type=int, default=70)
     ap.add_argument("--settle", type=float, default=10.0, help="s after the listing, then CPU")
+    ap.add_argument(
+        "--discovery-server",
+        action="store_true",
+        help="discover through the Fast DDS Discovery Server, not simple discovery",
+    )
     args = ap.parse_args()
     if shutil.which("tmux") is None:
         sys.exit("fleet.py runs the console under tmux: install tmux")
     env = {**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST", "ROS_LOCALHOST_ONLY": "1"}
     os.environ.update(ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST", ROS_LOCALHOST_ONLY="1")
+    server = discovery_server(env) if args.discovery_server else None
     rows = []
     for k, n in enumerate(int(x) for x in args.robots.split(",")):
         row = measure(n, args.domain + k, args.window, env, args.settle)
@@ -204,6 +215,25 @@ def main() -> None:
               f"| {fmt(r['console_cpu_start'], '.0f')} / {fmt(r['console_cpu'], '.0f')} "
               f"| {fmt(r['estop_first_ms'], '.0f')} / "
               f"{fmt(r['estop_last_ms'], '.0f')} |")  # fmt: skip
+    if server is not None:
+        server.terminate()
+
+
+def discovery_server(env: dict) -> subprocess.Popen:
+    """The wheels' Fast DDS Discovery Server on the loopback (its libraries are the venv's),
+    and every process of the benchmark its client (the console, a super client: the whole
+    graph, as ros2 sees it)."""
+    venv = Path(sys.prefix)
+    libs = [str(venv / "lib"), *map(str, venv.glob("lib/python*/site-packages/ros_fastrtps.libs"))]
+    server_env = {**env, "LD_LIBRARY_PATH": ":".join([*libs, env.get("LD_LIBRARY_PATH", "")])}
+    exe = shutil.which("fast-discovery-server", path=str(venv / "bin")) or "fast-discovery-server"
+    server = subprocess.Popen([exe, "-i", "0", "-l", "127.0.0.1", "-p", "11811"],
+                              env=server_env, stdout=subprocess.DEVNULL)  # fmt: skip
+    time.sleep(1.0)
+    if server.poll() is not None:
+        sys.exit("fast-discovery-server did not start")
+    env.update(ROS_DISCOVERY_SERVER="127.0.0.1:11811", ROS_SUPER_CLIENT="TRUE")
+    return server
 
 
 if __name__ == "__main__":
