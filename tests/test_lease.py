@@ -75,3 +75,37 @@ def test_motion_without_the_lease_is_refused_and_never_reaches_the_robot(tmp_pat
         other.release()
         other.store.close()
         store.close()
+
+
+def test_a_take_under_way_when_the_lease_is_released_takes_nothing(tmp_path):
+    """A console that closes while its first take is still opening the robot's graph (which
+    waits for the holders there) leaves no holder behind: no row, no word, no heartbeat."""
+    opening, opened = threading.Event(), threading.Event()
+    said: list[dict] = []
+
+    class Graph:  # the robot's graph, slow to open as a loaded DDS discovery is
+        def __init__(self):
+            opening.set()
+            opened.wait(5)
+
+        def announce(self, word, _acked_s=0.0):
+            said.append(word)
+
+        def holders(self, _released=False):
+            return []
+
+        def close(self):
+            pass
+
+    store = Store(tmp_path / "c.db")
+    lease = Lease(store, "/@0", "the robot", "console", channel=Graph)
+    taking = threading.Thread(target=lease.take)
+    taking.start()
+    assert opening.wait(5)
+    lease.release()  # the console closes meanwhile
+    opened.set()
+    taking.join(5)
+    assert not lease.held and store.lease("/@0") is None
+    assert not said, said  # never announced as a holder (nor as anything: it was closed)
+    assert lease._thread is None, "no heartbeat started"
+    store.close()

@@ -52,6 +52,7 @@ def _join_the_graph_early(settings) -> None:
 
 
 def run_console(st: CliState, record: str | None = None) -> None:
+    spare = os.environ.pop(SPARE, None) == "1"  # first: ASTIOP_* names settings
     _join_the_graph_early(st.fleet_settings)
     from astiop.agent.models.specs import SpecError
     from astiop.app import make_app
@@ -59,7 +60,6 @@ def run_console(st: CliState, record: str | None = None) -> None:
     from astiop.recording import default_path
     from astiop.robot.backend import BackendError
 
-    spare = os.environ.pop(SPARE, None) == "1"
     record_path = None
     if record is not None:
         record_path = Path(record).expanduser() if record else default_path(st.db_path.parent)

@@ -38,7 +38,7 @@ def bench(
         print_json(data)
         return
     typer.echo(
-        f"real-time factor  {data['real_time_factor']:8.1f}x   (target >= 250)\n"
+        f"real-time factor  {data['real_time_factor']:8.1f}x   (target >= 1000)\n"
         f"lidar per scan    {data['lidar_ms_mean']:8.3f} ms  (target <= 0.25)\n"
         f"plan mean / max   {data['plan_ms_mean']:8.2f} / {data['plan_ms_max']:.2f} ms "
         f"(target <= 10)\n"

@@ -246,13 +246,12 @@ class RobotGateway:
         """What this process has in flight on another robot of the fleet, reached by its names,
         ends when that robot's own E-STOP latches (in any process)."""
         inflight = self.backend.inflight
-        names = inflight.names()
-        if not names or self.store is None:
+        if not inflight.names():
             return
-        robots = {n: robot_under(n, self.latch_key, self.catalog) for n in names}
-        latched = {ns for ns in set(robots.values()) if ns and self.store.robot_latch(ns)}
+        latched = self._latched_robots()
         if latched:
-            for failure in inflight.end_where(lambda name: robots.get(name) in latched):
+            ended = inflight.end_where(lambda name: any(_under(name, ns) for ns in latched))
+            for failure in ended:
                 log.error(failure)
 
     def events_since(self, seq: int) -> list[RobotEvent]:
@@ -494,8 +493,12 @@ class RobotGateway:
             return False
         if self.e_stopped:
             return True
-        other = self._other_robot(checked)
-        return bool(other) and self.store is not None and self.store.robot_latch(other) is not None
+        name = checked.command.name if checked.command else None
+        return bool(name) and any(_under(name, ns) for ns in self._latched_robots())
+
+    def _latched_robots(self) -> list[str]:
+        """The namespaces of every robot whose own E-STOP is latched (none without a store)."""
+        return self.store.latched_robots() if self.store is not None else []
 
     def _other_robot(self, checked: Checked) -> str:
         """The namespace of another robot of the graph a command is sent to by its names ("":
@@ -563,3 +566,8 @@ class _Journal:
         if note not in ex.notes:
             ex.notes.append(note)
         self.gateway._say_store_error(note)
+
+
+def _under(name: str, namespace: str) -> bool:
+    """Whether `name` is inside `namespace` ("/tb3_1/cmd_vel" is inside "/tb3_1")."""
+    return name.startswith(namespace.rstrip("/") + "/")

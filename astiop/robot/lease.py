@@ -85,6 +85,7 @@ class Lease:
         self.on_lost: Callable[[Holder | None], None] = lambda holder: None
         self._open_channel = channel
         self._channel: Any = None
+        self._closed = False  # released for good: a take still under way takes nothing
         self._held = False
         self.tried = False  # a take was answered (held or refused) at least once
         self._taken_at = 0.0
@@ -98,10 +99,13 @@ class Lease:
     @property
     def channel(self) -> Any:
         """The robot's graph, opened the first time it is needed."""
-        if self._channel is None and self._open_channel is not None:
+        if self._channel is None and self._open_channel is not None and not self._closed:
             self._channel = self._open_channel()
             self._open_channel = None
-            if not self._held:  # every writer says a word: a take waits for no silent one
+            if self._closed:  # released while it was being opened: its word is never said
+                with contextlib.suppress(Exception):
+                    self._channel.close()
+            elif not self._held:  # every writer says a word: a take waits for no silent one
                 self._announce(released=True)
         return self._channel
 
@@ -128,9 +132,15 @@ class Lease:
         try:
             if not force and (remote := self._remote()):
                 return remote[0]
+            if self._closed:
+                return None  # released meanwhile (a console closing): nothing to take
             refused = self.store.take_lease(
                 self.robot, self.token, self.who, self.host, self.pid, force
             )
+            if refused is None and self._closed:  # released while it was being taken
+                with contextlib.suppress(Exception):
+                    self.store.release_lease(self.robot, self.token)
+                return None
             self._held = refused is None
             if self._held:
                 self._taken_at = time.time()
@@ -180,13 +190,15 @@ class Lease:
         )
 
     def _start_heartbeat(self) -> None:
+        if self._closed:
+            return
         if self._thread is None or not self._thread.is_alive():
             self._halt.clear()
             self._thread = threading.Thread(target=self._beat, name="lease", daemon=True)
             self._thread.start()
 
     def _beat(self) -> None:
-        while not self._halt.wait(HEARTBEAT_S):
+        while not self._halt.wait(HEARTBEAT_S) and not self._closed:
             try:
                 kept = self.store.renew_lease(self.robot, self.token)
             except Exception:  # noqa: BLE001 - a busy store: tried again at the next beat
@@ -216,6 +228,9 @@ class Lease:
                 self.store.release_lease(self.robot, self.token)
 
     def release(self) -> None:
+        """Let go for good (this process is done with the robot): a take under way on another
+        thread takes nothing, and no word is said on the robot's graph from now on."""
+        self._closed = True
         self.let_go()
         if self._channel is not None:
             with contextlib.suppress(Exception):

@@ -22,8 +22,12 @@ def namespaces(catalog: Catalog) -> list[str]:
 
 def robot_under(name: str | None, own: str, catalog: Catalog) -> str:
     """The namespace of another robot of the graph that `name` is under ("" : none, or `own`,
-    the namespace of the robot a gateway or request is about)."""
+    the namespace of the robot a gateway or request is about). A namespace that holds a
+    velocity command is a robot's, its pose not discovered yet or not."""
     if not name or name.count("/") < 2 or (own and name.startswith(own.rstrip("/") + "/")):
         return ""
     ns = "/" + name.split("/")[1]
-    return ns if ns != own and ns in namespaces(catalog) else ""
+    if ns == own:
+        return ""
+    drives = match_profile(catalog, ProfileSpec(namespace=ns)).has("velocity_command")
+    return ns if drives else ""
