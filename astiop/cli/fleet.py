@@ -162,6 +162,12 @@ def release_all(st, yes: bool) -> None:
     from astiop.robot.fleet import robot_settings
 
     robots = members(st)
+    found = {r.namespace for r in robots}
+    if st.fleet_settings.fleet.discover == "auto":  # latched, not found on the graph (yet)
+        from astiop.config import FleetRobot
+
+        latched = [ns for ns in st.store.latched_robots() if ns not in found]
+        robots += [FleetRobot(name=ns.strip("/"), namespace=ns) for ns in latched]
     names = ", ".join(r.name for r in robots)
     if not yes:
         if not interactive():
