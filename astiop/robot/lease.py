@@ -219,8 +219,9 @@ class Lease:
         """Control given up: the robot is free for anyone to take; this process watches it (and
         takes it again with its next motion if no one has)."""
         self._halt.set()
-        if self._thread is not None:
-            self._thread.join(HEARTBEAT_S)  # its last renewal must not follow the letting go
+        beat = self._thread
+        if beat is not None and beat is not threading.current_thread():
+            beat.join(HEARTBEAT_S)  # its last renewal must not follow the letting go
         if self._held:
             self._held = False
             self._announce(released=True, acked_s=0.5)
@@ -229,7 +230,7 @@ class Lease:
 
     def release(self) -> None:
         """Let go for good (this process is done with the robot): a take under way on another
-        thread takes nothing, and no word is said on the robot's graph from now on."""
+        thread takes nothing, and nothing but its letting go is said on the robot's graph."""
         self._closed = True
         self.let_go()
         if self._channel is not None:
