@@ -17,14 +17,14 @@ READ_S = 10.0  # a robot's first pose and battery, or it is said to be silent
 STATUS_S = 2.0  # then its state word (a robot with no status of its own: its goal status)
 
 
-def members(st, on_found=None) -> list:
+def members(st, on_found=None, settle_s: float | None = None) -> list:
     """The fleet's robots: the settings' list, or every robot namespace on the domain, read
-    until the graph has settled; `on_found(robot)` is called as each is found (an E-STOP does
-    not wait for the whole graph to stop the first robot)."""
+    until the graph has settled (no new robot for `settle_s`); `on_found(robot)` is called as
+    each is found (an E-STOP does not wait for the whole graph to stop the first robot)."""
     from astiop.robot.fleet import FleetError, find_robots
 
     try:
-        return find_robots(st.fleet_settings, on_found)
+        return find_robots(st.fleet_settings, on_found, settle_s)
     except FleetError as exc:
         fail(str(exc))
 
@@ -108,6 +108,9 @@ def list_cmd(ctx: typer.Context, as_json: bool = typer.Option(False, "--json")) 
         )
 
 
+ESTOP_SETTLE_S = 5.0  # a fleet's E-STOP looks for robots until none new appeared this long
+
+
 def estop_all(st) -> None:
     """Every robot of the fleet stopped at once, each through its own zero Twists and stop (or
     its goals cancelled), then the E-STOP latched for every process on this database."""
@@ -136,7 +139,9 @@ def estop_all(st) -> None:
         thread.start()
         threads.append(thread)
 
-    robots = members(st, stop_now)
+    # looked for longer than a listing: on a loaded machine one robot's participant was
+    # discovered more than 2 s after another's, and the E-STOP must miss none
+    robots = members(st, stop_now, ESTOP_SETTLE_S)
     for thread in threads:
         thread.join()
     failed = False

@@ -52,9 +52,10 @@ def discovered(catalog: Catalog) -> list[FleetRobot]:
 def find_robots(
     settings: Settings,
     on_found: Callable[[FleetRobot], None] | None = None,
+    settle_s: float | None = None,
 ) -> list[FleetRobot]:
     """The fleet's robots: the settings' list, or every robot namespace on the domain, read
-    until the graph has settled for SETTLED_S (or robot.ros2_timeout_s);
+    until the graph has shown no new robot for `settle_s` (SETTLED_S; or robot.ros2_timeout_s);
     `on_found(robot)` as each is found."""
     from astiop.robot.gateway import SETTLED_S
 
@@ -66,7 +67,7 @@ def find_robots(
         return listed
     finder = FleetFinder(settings)
     try:
-        return finder.settle(on_found, SETTLED_S)
+        return finder.settle(on_found, settle_s or SETTLED_S)
     finally:
         finder.close()
 
