@@ -48,7 +48,7 @@ def _robot_named(st, text: str, as_json: bool) -> str | None:
              "or give --robot-name")  # fmt: skip
     if not as_json:
         typer.echo(f"to {to.name} ({to.how})", err=True)
-    st.robot_name, st._settings = to.name, None  # the settings read again: that robot's
+    st.address(to.name)
     return to.request
 
 

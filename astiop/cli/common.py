@@ -58,6 +58,11 @@ class CliState:
         except ConfigError as exc:
             fail(str(exc))
 
+    def address(self, robot_name: str) -> None:
+        """From now on, the fleet's robot `robot_name` (as --robot-name would): its settings
+        are read again."""
+        self.robot_name, self._settings = robot_name, None
+
     @property
     def settings(self) -> Settings:
         if self._settings is None:

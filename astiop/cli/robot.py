@@ -30,7 +30,7 @@ def _to_the_robot_named(st, command: str) -> None:
     if len(named) > 1:
         fail(f"one robot per command: this one names {' and '.join(named)}")
     if named:
-        st.robot_name, st._settings = named[0], None  # the settings read again: that robot's
+        st.address(named[0])
         typer.echo(f"to {named[0]} (its names)", err=True)
 
 

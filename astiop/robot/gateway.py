@@ -246,7 +246,7 @@ class RobotGateway:
         """What this process has in flight on another robot of the fleet, reached by its names,
         ends when that robot's own E-STOP latches (in any process)."""
         inflight = self.backend.inflight
-        if not inflight.names():
+        if not inflight.busy:
             return
         latched = self._latched_robots()
         if latched:

@@ -130,10 +130,6 @@ class InFlight:
             self._jobs = [job for job in self._jobs if job not in ended]
         return [f for f in (job.estop() for job in ended) if f]
 
-    def names(self) -> list[str]:
-        with self._lock:
-            return [job.name for job in self._jobs if job.name]
-
     def release(self) -> None:
         with self._lock:
             self.held = False
