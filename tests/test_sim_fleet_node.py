@@ -21,8 +21,9 @@ from tests.ros import SimNode, quiet_domain, require_ros, ros_client, until
 
 pytestmark = [pytest.mark.slow, pytest.mark.ros]
 SHIPPING = (37.6, 4.0)
+# backwards: a robot on its dock faces the station, and forwards it would drive into it
 DRIVE = (
-    "ros2 topic pub --once /astibot_{}/cmd_vel geometry_msgs/msg/Twist '{{linear: {{x: 0.05}}}}'"
+    "ros2 topic pub --once /astibot_{}/cmd_vel geometry_msgs/msg/Twist '{{linear: {{x: -0.05}}}}'"
 )
 
 
