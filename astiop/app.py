@@ -27,7 +27,6 @@ from astiop.robot.factory import make_robot_gateway, make_sim_gateway
 from astiop.robot.fleet_watch import FleetRow, FleetWatch, control_of, row_from
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.sampler import StateSampler
-from astiop.robot.state import RobotState, TopicStat
 from astiop.ros2.render import goto_command, sent_text
 from astiop.ros2.validation import Checked
 from astiop.screens import control, mission_commands
@@ -43,6 +42,7 @@ from astiop.screens.modals import ConfirmModal
 from astiop.screens.teleop import TeleopScreen
 from astiop.services import Services
 from astiop.store import Store
+from astiop.transports.state import RobotState, TopicStat
 
 STILL_HZ = 4.0  # a still robot's sampling: only its clock, scan noise and battery change
 

@@ -30,10 +30,10 @@ from astiop.agent.models.specs import open_endpoint  # noqa: E402
 from astiop.agent.turn import Agent  # noqa: E402
 from astiop.bench import stage2  # noqa: E402
 from astiop.bench.suites import RobotCase  # noqa: E402
-from astiop.robot.backends.sim.backend import SimBackend  # noqa: E402
 from astiop.robot.gateway import RobotGateway  # noqa: E402
 from astiop.robot.safety import SafetyPolicy  # noqa: E402
 from astiop.store import Store  # noqa: E402
+from astiop.transports.simulator.backend import SimBackend  # noqa: E402
 
 REQUESTS = Path(__file__).with_name("agent_requests.yaml")
 ANSWER_CHECKS = {

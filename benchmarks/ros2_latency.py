@@ -11,7 +11,7 @@ One run measures, each repeat in fresh processes:
   (tests/emulator.py), which pays `--latency-ms` of start-up on every call, as importing rclpy
   and ros2cli does; the emulated robot logs each Twist's arrival;
 - sim: the console on the built-in simulator, for the CPU reference only.
-rclpy runs the wait-set executor, Humble's, on every distro (astiop/robot/backends/rclpy/node.py).
+rclpy runs the wait-set executor, Humble's, on every distro (astiop/transports/rclpy/node.py).
 time.monotonic() is system-wide on Linux, so the robot's clock and the console's agree.
 
 Rows, after the robot is undocked: E-STOP (ctrl+e, while `w` is held) -> zero Twist at the

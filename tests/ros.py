@@ -159,13 +159,13 @@ def quiet_domain(timeout: float = 30.0) -> None:
     does not have). Only this process's long-lived participant (the gateways' shared one) can
     hold a dead peer: a new participant learns only of live ones. A robot process an earlier
     test left running on this domain is killed and named in a warning (a leak to mend)."""
-    from astiop.robot.backends.rclpy import node as rclpy_node
+    from astiop.transports.rclpy import node as rclpy_node
 
     shared = rclpy_node._shared
     if shared is None:
         return
+    from astiop.robot_programs.turtlebot3.graph import node_names
     from astiop.ros2.catalog import astibot_catalog
-    from astiop.sim_robots.turtlebot3.graph import node_names
 
     robots = {n.strip("/") for n in astibot_catalog().nodes}
     robots |= {n.rsplit("/", 1)[-1] for d in ("jazzy", "humble") for n in node_names(d)}

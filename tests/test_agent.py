@@ -7,10 +7,10 @@ import pytest
 
 from astiop.agent.models.specs import open_endpoint
 from astiop.agent.turn import Agent
-from astiop.robot.backends.sim.backend import SimBackend
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.safety import SafetyPolicy
 from astiop.sim.simulator import Simulator
+from astiop.transports.simulator.backend import SimBackend
 from tests.scripted_llm import ScriptedLLM
 
 YES = lambda _c: True  # noqa: E731

@@ -11,8 +11,8 @@ from astiop.bench import library, runner, scoring
 from astiop.bench.report import load_report, to_csv, to_markdown
 from astiop.bench.stage2 import Truth, build_sim, check_answer, score_case
 from astiop.config import load_settings
-from astiop.robot.backend import Execution
 from astiop.store import Store
+from astiop.transports.base import Execution
 from tests.cli_runner import run_cli
 
 

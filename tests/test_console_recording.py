@@ -18,7 +18,7 @@ def _recording_notices(app) -> list[str]:
 async def test_a_failing_robot_read_is_said_once_in_the_console_and_recording_goes_on(
     tmp_path, monkeypatch
 ):
-    from astiop.robot.backend import BackendError
+    from astiop.transports.base import BackendError
 
     path = tmp_path / "console.mcap"
     app = console(tmp_path, record=path)

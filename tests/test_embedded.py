@@ -13,10 +13,10 @@ from astiop.agent.models.embedded import EmbeddedModelError, EmbeddedServer, smo
 from astiop.agent.models.llm import OpenAIClient
 from astiop.agent.models.specs import LLMEndpoint, parse_spec
 from astiop.agent.turn import Agent
-from astiop.robot.backends.sim.backend import SimBackend
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.safety import SafetyPolicy
 from astiop.sim.simulator import Simulator
+from astiop.transports.simulator.backend import SimBackend
 
 pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("embedded")]  # one server
 

@@ -11,8 +11,8 @@ import time
 
 import pytest
 
-from astiop.robot.errors import BackendError
-from astiop.robot.inflight import InFlight
+from astiop.transports.errors import BackendError
+from astiop.transports.inflight import InFlight
 from tests.emulator import cmd_vel_received, emulated_robot, on_path
 from tests.ros import until
 
@@ -120,9 +120,9 @@ def test_a_publish_and_the_estop_raced_in_one_process_leave_the_robot_stopped(
     """On the CLI transport, the E-STOP while the publish's ros2 process is starting (the
     gateway's own, in this process): the publish is refused or ended, and no moving
     Twist follows the E-STOP's zeros."""
-    from astiop.robot.backends.ros2cli.backend import Ros2Backend
     from astiop.robot.gateway import RobotGateway
     from astiop.robot.safety import SafetyPolicy
+    from astiop.transports.ros2cli.backend import Ros2Backend
 
     with emulated_robot(speed=4.0) as folder:
         on_path(monkeypatch, folder)

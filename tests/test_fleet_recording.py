@@ -11,13 +11,13 @@ from astiop.cli.console import replayed_fleet
 from astiop.config import load_settings
 from astiop.recording import SessionRecorder, summary
 from astiop.recording.reader import Recording, fleet_of
-from astiop.robot.backends.replay.backend import READ_ONLY, open_fleet_replay
-from astiop.robot.backends.sim.backend import SimBackend
 from astiop.robot.factory import make_safety
 from astiop.robot.gateway import RobotGateway
 from astiop.ros2.render import goto_command
 from astiop.sim.fleet import SimFleet
 from astiop.store import Store
+from astiop.transports.replay.backend import READ_ONLY, open_fleet_replay
+from astiop.transports.simulator.backend import SimBackend
 from tests.tui_helpers import wait_for
 
 NAMES = ["astibot_1", "astibot_2"]

@@ -93,11 +93,11 @@ def test_what_is_sent_is_rebuilt_from_the_parse():
 def test_a_stamped_cmd_vel_gets_the_same_clamp_and_a_fresh_stamp(store):
     from dataclasses import replace
 
-    from astiop.robot.backends.sim.backend import SimBackend
     from astiop.robot.gateway import RobotGateway
     from astiop.robot.safety import SafetyPolicy
     from astiop.ros2.render import STAMPED
     from astiop.sim.simulator import Simulator
+    from astiop.transports.simulator.backend import SimBackend
 
     backend = SimBackend(Simulator(seed=0), store)
     backend.catalog.topics["/cmd_vel"] = replace(backend.catalog.topics["/cmd_vel"], type=STAMPED)
@@ -131,10 +131,10 @@ def test_types_are_as_each_distro_defines_them():
 def test_the_astibot_reports_its_lead_acid_battery_where_the_distro_can_say_so(
     monkeypatch, distro, technology
 ):
-    from astiop.robot.backends.sim.backend import SimBackend
     from astiop.robot.gateway import RobotGateway
     from astiop.robot.safety import SafetyPolicy
     from astiop.sim.simulator import Simulator
+    from astiop.transports.simulator.backend import SimBackend
 
     monkeypatch.setenv("ROS_DISTRO", distro)
     gateway = RobotGateway(SimBackend(Simulator(seed=0), None), SafetyPolicy())

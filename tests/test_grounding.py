@@ -8,11 +8,11 @@ from astiop.agent import grounding
 from astiop.agent.facts import facts_of
 from astiop.agent.models.llm import OpenAIClient
 from astiop.agent.models.reply_stream import repeating
-from astiop.robot.backend import Execution
-from astiop.robot.backends.sim.backend import SimBackend
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.safety import SafetyPolicy
 from astiop.sim.simulator import Simulator
+from astiop.transports.base import Execution
+from astiop.transports.simulator.backend import SimBackend
 from tests.scripted_llm import ScriptedLLM
 from tests.test_agent import make_agent
 

@@ -13,15 +13,15 @@ UI = ("astiop.app", "astiop.screens", "astiop.widgets", "astiop.cli.console")
 # Modules that import rclpy (the [ros] extra): imported only where it is installed, and skipped
 # with the reason elsewhere. `available` says whether rclpy imports, so it must not need it.
 ROS = (
-    "astiop.robot.backends.rclpy.",
-    "astiop.sim_robots.ros2_node.node",
-    "astiop.sim_robots.ros2_node.fleet",
-    "astiop.sim_robots.ros2_common",
-    "astiop.sim_robots.turtlebot3.node",
-    "astiop.sim_robots.turtlebot3.navigator",
-    "astiop.sim_robots.emulated_cli.dds",  # the emulated ros2 over DDS: dds, dds_calls, ...
+    "astiop.transports.rclpy.",
+    "astiop.robot_programs.ros2_node.node",
+    "astiop.robot_programs.ros2_node.fleet",
+    "astiop.robot_programs.ros2_common",
+    "astiop.robot_programs.turtlebot3.node",
+    "astiop.robot_programs.turtlebot3.navigator",
+    "astiop.robot_programs.emulated_cli.dds",  # the emulated ros2 over DDS: dds, dds_calls, ...
 )
-ROS_FREE = ("astiop.robot.backends.rclpy.available",)
+ROS_FREE = ("astiop.transports.rclpy.available",)
 
 # In the child, the [ros] extra's modules refuse to import, as where it is not installed: the
 # client library and every interface package (what a ROS module needs first).
@@ -62,8 +62,8 @@ def textual_imported_by(modules: list[str], prelude: str = "") -> str:
 def test_core_does_not_import_textual_nor_need_ros():
     modules = [n for n in headless_modules() if not needs_ros(n)]
     assert "astiop.sim.simulator" in modules and "astiop.store" in modules
-    assert "astiop.robot.factory" in modules and "astiop.sim_robots.ros2_node.run" in modules
-    assert "astiop.sim_robots.turtlebot3.run" in modules
+    assert "astiop.robot.factory" in modules and "astiop.robot_programs.ros2_node.run" in modules
+    assert "astiop.robot_programs.turtlebot3.run" in modules
     bad = textual_imported_by(modules, prelude=WITHOUT_ROS)
     assert bad == "", f"textual imported by the core: {bad}"
 
@@ -71,7 +71,7 @@ def test_core_does_not_import_textual_nor_need_ros():
 def test_ros_modules_do_not_import_textual():
     require_ros()  # skipped without the [ros] extra (failed in CI's run with it)
     modules = [n for n in headless_modules() if needs_ros(n)]
-    assert "astiop.robot.backends.rclpy.backend" in modules
-    assert "astiop.sim_robots.ros2_node.node" in modules
+    assert "astiop.transports.rclpy.backend" in modules
+    assert "astiop.robot_programs.ros2_node.node" in modules
     bad = textual_imported_by(modules)
     assert bad == "", f"textual imported by the ROS modules: {bad}"

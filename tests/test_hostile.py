@@ -14,13 +14,13 @@ import pytest
 
 from astiop.agent.models.specs import SpecError, parse_spec
 from astiop.config import ConfigError, load_settings
-from astiop.robot.backends.sim.backend import SimBackend
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.safety import SafetyPolicy
 from astiop.ros2.catalog import astibot_catalog
 from astiop.ros2.validation import validate
 from astiop.sim.simulator import Simulator
 from astiop.store import LocationError, Store, StoreError
+from astiop.transports.simulator.backend import SimBackend
 from tests.cli_runner import run_cli
 from tests.scripted_llm import ScriptedLLM
 from tests.test_agent import make_agent

@@ -25,11 +25,11 @@ from astiop.config import load_settings
 from astiop.mcp.approval import NO_CONSOLE, Policy
 from astiop.mcp.server import AstiopMCP
 from astiop.mcp.tools import CALL, TOOL_CLASSES, Call, Refused, RobotTools
-from astiop.robot.backends.sim.backend import SimBackend
 from astiop.robot.factory import make_safety, make_sim_gateway
 from astiop.robot.gateway import ESTOP_REASON, RobotGateway
 from astiop.sim.simulator import Simulator
 from astiop.store import Store
+from astiop.transports.simulator.backend import SimBackend
 
 ENV = {**os.environ, "ASTIOP_SIM__SPEED": "20", "ASTIOP_LLM__THREADS": "1"}
 ME = Implementation(name="pytest", version="1")

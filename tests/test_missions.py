@@ -16,11 +16,11 @@ from astiop.agent.turn import Agent
 from astiop.missions import view
 from astiop.missions.runner import MissionError, MissionRunner
 from astiop.missions.steps import Condition, Step
-from astiop.robot.backends.sim.backend import SimBackend
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.safety import SafetyPolicy
 from astiop.sim.simulator import Simulator
 from astiop.store import Store
+from astiop.transports.simulator.backend import SimBackend
 from tests.cli_runner import run_cli
 
 YES = lambda _c: True  # noqa: E731
@@ -182,7 +182,7 @@ KILLED_MID_MISSION = textwrap.dedent(
     import sys, time
     from astiop.missions.runner import MissionRunner
     from astiop.missions.steps import Step
-    from astiop.robot.backends.sim.backend import SimBackend
+    from astiop.transports.simulator.backend import SimBackend
     from astiop.robot.gateway import RobotGateway
     from astiop.robot.safety import SafetyPolicy
     from astiop.sim.simulator import Simulator

@@ -187,7 +187,7 @@ def test_a_failed_step_ends_a_repeat_until_stopped_and_is_never_repeated(store):
 def test_the_recording_holds_the_missions_start_each_steps_end_and_its_end(store, tmp_path):
     from astiop.recording import SessionRecorder
     from astiop.recording.reader import Recording
-    from astiop.robot.backends.replay.backend import ReplayBackend
+    from astiop.transports.replay.backend import ReplayBackend
 
     gateway = gateway_for(store)
     path = tmp_path / "mission.mcap"

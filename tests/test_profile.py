@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import pytest
 
-from astiop.robot.backends.live_catalog import describe_graph, nothing_listed
 from astiop.ros2.catalog import astibot_catalog
 from astiop.ros2.profile import match_profile, normalise_namespace
 from astiop.ros2.profile_file import ProfileError, parse, read_spec, shipped_names, write_profile
+from astiop.transports.live_catalog import describe_graph, nothing_listed
 
 # A TurtleBot3 Burger under Nav2 on Jazzy, the parts of its graph that matter here (beside the
 # names that could be taken for a role: Nav2's other velocities, costmaps, plans and poses)
@@ -168,7 +168,7 @@ def test_namespaces_are_checked():
 def test_the_state_reads_each_role_in_its_own_units():
     import math
 
-    from astiop.robot.state import from_messages
+    from astiop.transports.state import from_messages
 
     profile = match_profile(tb3_graph())
     amcl = {"pose": {"pose": {"position": {"x": 1.5, "y": -0.5}, "orientation": {"w": 1.0}}}}
@@ -192,7 +192,7 @@ def test_the_state_reads_each_role_in_its_own_units():
 
 
 def test_an_unsaid_battery_scale_reads_a_percentage_over_one_as_percent():
-    from astiop.robot.state import battery_fraction
+    from astiop.transports.state import battery_fraction
 
     assert battery_fraction(0.85, None) == 0.85 and battery_fraction(85.0, None) == 0.85
     assert (
@@ -288,7 +288,7 @@ def test_the_models_tools_are_the_robots_roles():
 
 def test_a_reading_is_said_in_its_roles_units():
     from astiop.agent.summaries import summarize
-    from astiop.robot.backend import Execution
+    from astiop.transports.base import Execution
 
     battery = {"percentage": 77.775, "voltage": 12.1, "current": -0.5, "power_supply_status": 2}
     ex = Execution("ros2 topic echo /battery_state --once", True, executed=True, values=battery,
@@ -350,7 +350,7 @@ def test_a_robot_that_takes_goals_on_a_topic_is_sent_them_there_and_fenced():
     odom = validate(goal.replace("frame_id: map", "frame_id: odom"), catalog)
     assert "map frame" in fence.review(odom, False).reason
     from astiop.agent.goals import started
-    from astiop.robot.backend import Execution
+    from astiop.transports.base import Execution
 
     assert started(Execution(goal, True, kind="actuate", executed=True))  # followed to arrival
 

@@ -12,9 +12,9 @@ from astiop.agent import grounding
 from astiop.agent.facts import facts_of
 from astiop.agent.summaries import summarize
 from astiop.config import load_settings
-from astiop.robot.backend import Execution
 from astiop.robot.factory import make_robot_gateway, make_sim_gateway
 from astiop.store import Store
+from astiop.transports.base import Execution
 from tests.ros import require_ros, until
 
 ECHO_BATTERY = "ros2 topic echo --once /battery_status sensor_msgs/msg/BatteryState"

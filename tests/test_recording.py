@@ -175,7 +175,7 @@ class _LinkThatDrops:
         self.failed = 0
 
     def messages(self, names):
-        from astiop.robot.backend import BackendError
+        from astiop.transports.base import BackendError
 
         if self.dropped.is_set():
             self.failed += 1

@@ -9,9 +9,9 @@ from mcap_ros2.writer import Writer
 from astiop.app import make_app
 from astiop.config import load_settings
 from astiop.recording.reader import Recording
-from astiop.robot.backends.replay.backend import READ_ONLY, open_replay
 from astiop.robot.gateway import RobotGateway
 from astiop.store import Store
+from astiop.transports.replay.backend import READ_ONLY, open_replay
 from tests.cli_runner import run_cli
 from tests.recordings import GOTO, record_trip
 from tests.tui_helpers import ask, wait_for

@@ -7,7 +7,6 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from astiop.robot.backends.sim.backend import SimBackend
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.safety import SafetyPolicy
 from astiop.ros2.catalog import astibot_catalog
@@ -15,6 +14,7 @@ from astiop.ros2.grammar import CommandSyntaxError, parse
 from astiop.ros2.interfaces import interface_show
 from astiop.ros2.validation import validate
 from astiop.sim.simulator import Simulator
+from astiop.transports.simulator.backend import SimBackend
 
 CAT = astibot_catalog()
 YES = lambda _c: True  # noqa: E731

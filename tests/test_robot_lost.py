@@ -53,9 +53,9 @@ def test_chat_says_it_lost_the_robot_killed_mid_goal_and_stores_it(monkeypatch, 
 
 
 def test_the_cli_transport_loses_the_robot_and_reconnects_when_it_comes_back(monkeypatch):
-    from astiop.robot.backends.ros2cli.backend import Ros2Backend
     from astiop.robot.gateway import RobotGateway
     from astiop.robot.safety import SafetyPolicy
+    from astiop.transports.ros2cli.backend import Ros2Backend
 
     robots: list = []
     with emulated_robot(speed=4.0, processes=robots) as folder:

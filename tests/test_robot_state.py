@@ -4,9 +4,9 @@ import math
 
 import pytest
 
-from astiop.robot.backends.sim.backend import SimBackend
-from astiop.robot.state import from_messages
 from astiop.sim.simulator import Simulator
+from astiop.transports.simulator.backend import SimBackend
+from astiop.transports.state import from_messages
 
 
 def test_state_from_messages_agrees_with_the_simulator():

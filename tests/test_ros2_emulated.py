@@ -53,7 +53,7 @@ def robot(monkeypatch):
 
 
 def make_gateway(store: Store | None = None, *, stream: bool = True) -> RobotGateway:
-    from astiop.robot.backends.ros2cli.backend import Ros2Backend
+    from astiop.transports.ros2cli.backend import Ros2Backend
 
     gateway = RobotGateway(Ros2Backend("ros2", 10.0, stream=stream), SafetyPolicy(), store=store)
     gateway.start()
@@ -247,7 +247,7 @@ def test_a_stream_that_dies_is_restarted_and_said_so(robot):
 
 
 def test_a_refusal_printed_with_status_0_is_an_error(robot):
-    from astiop.robot.backends.ros2cli.backend import Ros2Backend
+    from astiop.transports.ros2cli.backend import Ros2Backend
 
     gateway = make_gateway(stream=False)
     try:
@@ -264,8 +264,8 @@ def test_a_refusal_printed_with_status_0_is_an_error(robot):
 def test_a_service_nobody_serves_is_reported_within_its_bound(monkeypatch):
     with emulated_robot(missing=("/dock",)) as folder:
         on_path(monkeypatch, folder)
-        from astiop.robot.backends.ros2cli.backend import Ros2Backend
         from astiop.ros2.catalog import astibot_catalog
+        from astiop.transports.ros2cli.backend import Ros2Backend
 
         backend = Ros2Backend("ros2", 10.0, stream=False)
         backend.catalog.services["/dock"] = astibot_catalog().services["/dock"]  # listed earlier
@@ -504,7 +504,7 @@ def test_param_and_interface_lists_print_as_ros2cli_on_the_emulated_and_in_proce
 
 
 def test_every_verb_the_grammar_accepts_has_its_handler_in_the_simulator():
-    from astiop.robot.backends.sim.backend import SimBackend
     from astiop.ros2.grammar import SUPPORTED
+    from astiop.transports.simulator.backend import SimBackend
 
     assert set(SimBackend.VERBS) == SUPPORTED

@@ -315,8 +315,8 @@ def test_stage_2_runs_on_the_live_robot_and_is_checked_against_what_it_reported(
 
 
 def test_param_list_is_asked_of_the_robot_and_printed_as_ros2cli(robot_gateway):
-    from astiop.robot.backends.rclpy.backend import RclpyBackend
     from astiop.ros2.grammar import SUPPORTED
+    from astiop.transports.rclpy.backend import RclpyBackend
 
     # the wheels carry no ament index of the installed interfaces: the CLI transport lists them
     assert SUPPORTED - set(RclpyBackend.VERBS) == {("interface", "list")}

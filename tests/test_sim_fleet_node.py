@@ -151,7 +151,7 @@ def _whole_domain_asks_the_robot_it_reaches(db: Path, client) -> None:
 def _recorded_and_replayed(db: Path, path: Path) -> None:
     """Every robot's topics in one recording, under its namespace; replayed, each where it was."""
     from astiop.recording.reader import Recording, fleet_of
-    from astiop.robot.backends.replay.backend import open_fleet_replay
+    from astiop.transports.replay.backend import open_fleet_replay
 
     out = astiop(db, "--fleet", "auto", "record", "--duration", "2", str(path), "--json")
     assert out.returncode == 0, out.stdout + out.stderr[-2000:]
@@ -168,10 +168,10 @@ def _recorded_and_replayed(db: Path, path: Path) -> None:
 def _another_machine(tmp_path: Path):
     """A console on another machine (a participant and a database of its own) watching
     astibot_2: its control topic open, holding nothing yet."""
-    from astiop.robot.backends.rclpy.control_topic import ControlTopic
-    from astiop.robot.backends.rclpy.node import RosProcess
     from astiop.robot.lease import Lease, lease_key
     from astiop.store import Store
+    from astiop.transports.rclpy.control_topic import ControlTopic
+    from astiop.transports.rclpy.node import RosProcess
 
     there = RosProcess()
     holder = Lease(Store(tmp_path / "elsewhere.db"), lease_key("/astibot_2", 0), "astibot_2",

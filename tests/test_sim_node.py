@@ -63,7 +63,7 @@ def _undocked(client) -> list:
 
 
 def test_every_catalog_topic_arrives_with_its_type_at_its_rate(robot, client):
-    from astiop.sim_robots.ros2_node.node import QOS
+    from astiop.robot_programs.ros2_node.node import QOS
 
     cls = _types()
     published = [t for t in CATALOG.topics.values() if t.publisher]

@@ -1,4 +1,4 @@
-"""The simulator node's publishing thread (sim_robots/ros2_common.py `Schedule`): each send at
+"""The simulator node's publishing thread (robot_programs/ros2_common.py `Schedule`): each send at
 its own period, a late tick not caught up, one send's failure said once and no other stopped."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from tests.ros import require_ros, until
 
 def test_each_send_at_its_period_and_a_failure_said_once(capfd):
     require_ros()
-    from astiop.sim_robots.ros2_common import Schedule
+    from astiop.robot_programs.ros2_common import Schedule
 
     counts = {"fast": 0, "slow": 0, "broken": 0}
 
@@ -42,7 +42,7 @@ def test_each_send_at_its_period_and_a_failure_said_once(capfd):
 
 def test_a_late_tick_is_not_caught_up():
     require_ros()
-    from astiop.sim_robots.ros2_common import Schedule
+    from astiop.robot_programs.ros2_common import Schedule
 
     times: list[float] = []
 

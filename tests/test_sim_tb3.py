@@ -1,5 +1,5 @@
 """`astiop sim node --robot turtlebot3` on real ROS 2 (rclpy, loopback only): a TurtleBot3 under
-Nav2 with upstream's names and types (the table in astiop/sim_robots/turtlebot3/graph.py, read
+Nav2 with upstream's names and types (the table in astiop/robot_programs/turtlebot3/graph.py, read
 from ROBOTIS-GIT/turtlebot3 and ros-navigation/navigation2), read and driven by a test's own
 rclpy node in another process."""
 
@@ -12,7 +12,7 @@ import time
 
 import pytest
 
-from astiop.sim_robots.turtlebot3.graph import endpoints
+from astiop.robot_programs.turtlebot3.graph import endpoints
 from tests.ros import require_ros, ros_client, tb3_node, until
 
 pytestmark = [pytest.mark.slow, pytest.mark.ros]
@@ -60,7 +60,7 @@ def _graph_differences(client, distro: str, ns: str) -> list[str]:
     participants on the domain (a test's client, one just gone) are not the robot's."""
     from rclpy.action import get_action_server_names_and_types_by_node
 
-    from astiop.sim_robots.turtlebot3.graph import endpoints, node_names
+    from astiop.robot_programs.turtlebot3.graph import endpoints, node_names
 
     node = client.node
     live = {(ns_.rstrip("/") + "/" + n) for n, ns_ in node.get_node_names_and_namespaces()}
@@ -139,7 +139,7 @@ def _xy(msg) -> tuple[float, float]:
 def _amcl(client, ns: str = ""):
     from geometry_msgs.msg import PoseWithCovarianceStamped
 
-    from astiop.sim_robots.ros2_common import LATCHED
+    from astiop.robot_programs.ros2_common import LATCHED
 
     return _latest(client, PoseWithCovarianceStamped, f"{ns}/amcl_pose", LATCHED)
 

@@ -136,7 +136,7 @@ def test_a_turtlebot3_session_is_recorded_and_replayed_by_its_own_roles(tmp_path
     the roles found on the recording (not the ASTIbot's /robot_pose)."""
     require_ros()
     from astiop.recording import SessionRecorder
-    from astiop.robot.backends.replay.backend import open_replay
+    from astiop.transports.replay.backend import open_replay
     from tests.ros import tb3_node
 
     with tb3_node(speed=8.0):

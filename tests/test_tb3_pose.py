@@ -18,7 +18,7 @@ from tests.ros import require_ros, ros_client, until
 from tests.test_tb3_operated import gateway_on, settings
 
 pytestmark = [pytest.mark.slow, pytest.mark.ros]
-START = (4.0, 4.0, 0.0)  # astiop/sim_robots/turtlebot3/node.py
+START = (4.0, 4.0, 0.0)  # astiop/robot_programs/turtlebot3/node.py
 LATENCY_S = 1.5  # a loaded machine (two pytest workers) reads its topics that late
 
 

@@ -9,7 +9,6 @@ import math
 
 import pytest
 
-from astiop.robot.state import from_messages
 from astiop.ros2.profile import match_profile
 from astiop.ros2.transforms import (
     MAX_PAIRS,
@@ -19,6 +18,7 @@ from astiop.ros2.transforms import (
     map_pose,
     yaw_of,
 )
+from astiop.transports.state import from_messages
 from tests.test_profile import tb3_graph
 
 HALF_PI = math.pi / 2

@@ -8,8 +8,8 @@ import numpy as np
 from textual.app import App
 from textual.widgets import DataTable, Input
 
-from astiop.robot.state import OccupancyGrid, Pose2D, RobotState
 from astiop.sim.simulator import Simulator
+from astiop.transports.state import OccupancyGrid, Pose2D, RobotState
 from astiop.widgets.map_view import Place, WarehouseMapView
 from tests.tui_helpers import ask, console, sim_of, wait_for
 

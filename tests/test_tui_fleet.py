@@ -11,7 +11,6 @@ from textual.widgets import DataTable, Input, Select, Static
 
 from astiop.app import make_app
 from astiop.config import load_settings
-from astiop.robot.backends.sim.backend import SimBackend
 from astiop.robot.factory import make_safety
 from astiop.robot.fleet import robot_settings
 from astiop.robot.fleet_watch import FleetWatch
@@ -21,6 +20,7 @@ from astiop.screens.modals import ConfirmModal
 from astiop.sim.fleet import SimFleet
 from astiop.sim.runner import SimRunner
 from astiop.store import Store
+from astiop.transports.simulator.backend import SimBackend
 from tests.tui_helpers import wait_for
 
 NAMES = ["astibot_1", "astibot_2", "astibot_3"]

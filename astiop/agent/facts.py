@@ -12,7 +12,7 @@ from typing import Any
 from astiop.agent.figures import NUMBER, quantities_in
 from astiop.agent.roles import role_of
 from astiop.agent.summaries import STATUS_WORDS, commanded_twist, directions, summarize
-from astiop.robot.backend import Execution
+from astiop.transports.base import Execution
 
 GOAL = re.compile(r"\bgoals?\b", re.I)
 _PLACE_IN_COMMAND = re.compile(r"name:\s*'?([\w-]+)")

@@ -11,10 +11,10 @@ import math
 import re
 import time
 
-from astiop.robot.backend import Execution
 from astiop.robot.gateway import RobotGateway
-from astiop.robot.state import LOST
 from astiop.ros2.render import POSE_STAMPED
+from astiop.transports.base import Execution
+from astiop.transports.state import LOST
 
 NAVIGATING = ("/goto_position", "/dock", "/undock", "send_goal", POSE_STAMPED)
 MOVING = ("navigating", "docking", "undocking", "blocked")

@@ -25,7 +25,7 @@ from astiop.agent.summaries import (
     stale_age,
     summarize,
 )
-from astiop.robot.backend import Execution
+from astiop.transports.base import Execution
 
 _COUNT_WORDS = {
     "no": 0, "zero": 0, "one": 1, "a single": 1, "two": 2, "three": 3, "four": 4, "five": 5,

@@ -11,8 +11,8 @@ from typing import Any
 
 from astiop.agent.intent import Intent
 from astiop.agent.roles import pose_of
-from astiop.robot.backend import Execution
 from astiop.store.records import LocationError
+from astiop.transports.base import Execution
 
 
 def asked(intents: list[Intent], profile: Any) -> str | None:

@@ -10,8 +10,8 @@ import asyncio
 import time
 
 from astiop.agent.result import TurnResult
-from astiop.robot.backend import Execution
 from astiop.store import Store
+from astiop.transports.base import Execution
 
 
 class Recorder:

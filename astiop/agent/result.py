@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from astiop.robot.backend import Execution
+from astiop.transports.base import Execution
 
 
 @dataclass

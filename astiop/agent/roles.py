@@ -8,8 +8,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from astiop.robot.backend import Execution
-from astiop.robot.state import battery_fraction, yaw_of
+from astiop.transports.base import Execution
+from astiop.transports.state import battery_fraction, yaw_of
 
 # the reader's key for a reading -> its role (ros2/profile.py)
 KEY_ROLES = {

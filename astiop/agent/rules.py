@@ -13,9 +13,9 @@ from typing import Any
 from astiop.agent.grounding import factual_answer
 from astiop.agent.intent import SERVICE_FOR, Intent, classify
 from astiop.agent.roles import name_for
-from astiop.robot.backend import Execution
 from astiop.ros2.render import goal_pose_command, nav_goal_command, velocity_pub_command
 from astiop.ros2.validation import CANCEL_SUFFIX
+from astiop.transports.base import Execution
 
 Locate = Callable[[str], "tuple[float, float] | None"]
 

@@ -12,8 +12,8 @@ import math
 from typing import Any
 
 from astiop.agent.roles import battery_percent, no_return, pose_of, role_of
-from astiop.robot.backend import Execution
 from astiop.ros2 import grammar
+from astiop.transports.base import Execution
 
 # action_msgs/srv/CancelGoal.srv's return codes
 CANCEL_CODES = {0: "accepted", 1: "rejected", 2: "unknown goal", 3: "goal already ended"}

@@ -37,10 +37,10 @@ from astiop.agent.recorder import Recorder
 from astiop.agent.result import TurnResult
 from astiop.agent.summaries import summarize
 from astiop.missions.runner import MissionRunner
-from astiop.robot.backend import Execution
 from astiop.robot.gateway import Confirm, RobotGateway
 from astiop.robot.safety import Review
 from astiop.store import Store
+from astiop.transports.base import Execution
 from astiop.warehouse import WarehouseMap
 
 OnEvent = Callable[[str, Any], None]  # ("plan_token" | "command" | "answer_token" | "status", x)

@@ -23,10 +23,10 @@ from astiop.bench.live import close_live, live_case
 from astiop.bench.suites import SuiteError
 from astiop.config import Settings
 from astiop.recording import FLUSH_S, SessionRecorder
-from astiop.robot.backends.sim.backend import SimBackend
 from astiop.robot.factory import make_safety
 from astiop.robot.gateway import RobotGateway
 from astiop.store import Store
+from astiop.transports.simulator.backend import SimBackend
 
 
 @dataclass

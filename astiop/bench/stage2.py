@@ -10,11 +10,11 @@ from typing import Any
 
 from astiop.agent.turn import TurnResult
 from astiop.bench.suites import RobotCase
-from astiop.robot.state import RobotState
 from astiop.ros2.grammar import CommandSyntaxError, parse
 from astiop.sim.simulator import Simulator
 from astiop.sim.state import SimState
 from astiop.store import Store
+from astiop.transports.state import RobotState
 
 ARRIVE_TOLERANCE_M = 0.3
 NUMBER = re.compile(r"-?\d+(?:\.\d+)?")

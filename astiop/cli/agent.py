@@ -100,8 +100,8 @@ def chat(
     except (SpecError, EmbeddedModelError) as exc:
         fail(str(exc))
     from astiop.agent.turn import Agent
-    from astiop.robot.backend import BackendError
     from astiop.robot.factory import make_robot_gateway
+    from astiop.transports.base import BackendError
 
     try:
         gateway = make_robot_gateway(settings, st.store)

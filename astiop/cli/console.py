@@ -43,7 +43,7 @@ def _join_the_graph_early(settings) -> None:
         return
 
     def start() -> None:
-        from astiop.robot.backends.rclpy.node import ros_process
+        from astiop.transports.rclpy.node import ros_process
 
         with contextlib.suppress(Exception):  # said by the robot's gateway, made next
             ros_process()
@@ -58,7 +58,7 @@ def run_console(st: CliState, record: str | None = None) -> None:
     from astiop.app import make_app
     from astiop.cli.common import fail
     from astiop.recording import default_path
-    from astiop.robot.backend import BackendError
+    from astiop.transports.base import BackendError
 
     record_path = None
     if record is not None:
@@ -147,10 +147,10 @@ def replay(
     from astiop.cli.common import fail, state
     from astiop.recording import RecordingError
     from astiop.recording.reader import Recording, fleet_of
-    from astiop.robot.backend import BackendError
-    from astiop.robot.backends.replay.backend import SPEEDS, ReplayBackend
     from astiop.robot.gateway import RobotGateway
     from astiop.store import Store
+    from astiop.transports.base import BackendError
+    from astiop.transports.replay.backend import SPEEDS, ReplayBackend
 
     if not (SPEEDS[0] <= speed <= SPEEDS[-1]):
         fail(f"--speed must be between {SPEEDS[0]:g} and {SPEEDS[-1]:g}")
@@ -182,9 +182,9 @@ def replay(
 
 def replayed_fleet(settings, recording, robots, store, speed: float, paused: bool):
     """The settings of the fleet's first robot, and a watch of every recorded robot."""
-    from astiop.robot.backends.replay.backend import open_fleet_replay
     from astiop.robot.fleet_watch import FleetWatch
     from astiop.robot.gateway import RobotGateway
+    from astiop.transports.replay.backend import open_fleet_replay
 
     backends = open_fleet_replay(recording, robots, store=store, speed=speed, paused=paused)
 

@@ -80,7 +80,7 @@ def _check_database(st, add) -> None:
         add("FAIL", "database", str(exc))
         return
     from astiop.cli.locations import robots_map
-    from astiop.robot.backend import BackendError
+    from astiop.transports.base import BackendError
 
     with contextlib.suppress(BackendError):  # a bad profile is said by the robot's own check
         store.use_map(*robots_map(st.settings))
@@ -176,8 +176,8 @@ def _check_robot(settings, add) -> None:
         wmap = default_map()
         add("ok", "robot", f"simulator: {wmap.name}, {len(wmap.stations)} stations")
         return
-    from astiop.robot.backend import BackendError
     from astiop.robot.factory import ros2_transport
+    from astiop.transports.base import BackendError
 
     try:
         transport, why = ros2_transport(settings)
@@ -215,9 +215,9 @@ def _check_robot(settings, add) -> None:
 
 
 def _check_cli_profile(settings, add) -> None:
-    from astiop.robot.backend import BackendError
-    from astiop.robot.backends.ros2cli.backend import Ros2Backend
     from astiop.robot.factory import profile_spec
+    from astiop.transports.base import BackendError
+    from astiop.transports.ros2cli.backend import Ros2Backend
 
     try:
         backend = Ros2Backend(
@@ -234,9 +234,9 @@ def _check_cli_profile(settings, add) -> None:
 
 
 def _check_rclpy(settings, add) -> None:
-    from astiop.robot.backend import BackendError
-    from astiop.robot.backends.rclpy.backend import RclpyBackend
     from astiop.robot.factory import profile_spec
+    from astiop.transports.base import BackendError
+    from astiop.transports.rclpy.backend import RclpyBackend
 
     try:
         backend = RclpyBackend(settings.robot.ros2_timeout_s, fixed=profile_spec(settings))

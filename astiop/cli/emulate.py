@@ -35,8 +35,8 @@ def emulate_ros2(
     ),
 ) -> None:
     """Run an emulated robot until Ctrl-C (or SIGTERM); put DIR on PATH and use `astiop --robot ros2`."""
+    from astiop.robot_programs.emulated_cli.robot import EmulatedRobot, write_client
     from astiop.ros2.cli_args import DISTROS
-    from astiop.sim_robots.emulated_cli.robot import EmulatedRobot, write_client
 
     if distro not in DISTROS:
         fail(f"--distro must be one of {', '.join(DISTROS)}, not '{distro}'")
@@ -78,7 +78,7 @@ def emulate_ros2(
 
 def _dds_server(distro: str, daemon_stopped: bool):
     try:
-        from astiop.sim_robots.emulated_cli.dds import DdsRos2
+        from astiop.robot_programs.emulated_cli.dds import DdsRos2
     except ImportError as exc:
         fail(f"--dds needs rclpy: {exc}")
     server = DdsRos2(distro)

@@ -50,7 +50,7 @@ def on_map(
         "simulator's is warehouse).",
     ),
 ) -> None:
-    from astiop.robot.backend import BackendError
+    from astiop.transports.base import BackendError
 
     st = state(ctx)
     if map_name:  # said: no robot need be reached

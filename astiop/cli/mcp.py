@@ -78,9 +78,9 @@ def mcp(
     from astiop.mcp.fleet_tools import FleetTools
     from astiop.mcp.server import AstiopMCP, serve_http, serve_stdio
     from astiop.mcp.tools import RobotTools
-    from astiop.robot.backend import BackendError
     from astiop.robot.factory import make_robot_gateway
     from astiop.robot.fleet import is_fleet
+    from astiop.transports.base import BackendError
 
     st = state(ctx)
     policy = Policy(approve_actuation=approve_actuation, timeout_s=approval_timeout)

@@ -113,8 +113,8 @@ def resume(
     from astiop.cli.common import interactive
     from astiop.missions import view
     from astiop.missions.runner import MissionError, MissionRunner
-    from astiop.robot.backend import BackendError
     from astiop.robot.factory import make_robot_gateway
+    from astiop.transports.base import BackendError
 
     st = state(ctx)
     m = _one(ctx, mission_id)

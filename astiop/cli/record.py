@@ -49,9 +49,9 @@ def record(
         if value is not None and not (math.isfinite(value) and 0 < value <= 86400):
             fail(f"{name} must be a positive number")
     from astiop.cli.console import open_fleet
-    from astiop.robot.backend import BackendError
     from astiop.robot.factory import make_robot_gateway
     from astiop.robot.fleet import is_fleet
+    from astiop.transports.base import BackendError
 
     st = state(ctx)
     path = file or default_path(st.db_path.parent)

@@ -45,8 +45,8 @@ def exec_command(
     ),
 ) -> None:
     """Validate and run one `ros2` command (the subset the agent uses) on the robot."""
-    from astiop.robot.backend import BackendError  # numpy: for the commands that use it
     from astiop.robot.factory import make_robot_gateway
+    from astiop.transports.base import BackendError  # numpy: for the commands that use it
 
     st = state(ctx)
     _to_the_robot_named(st, command)
@@ -109,8 +109,8 @@ def exec_command(
 def _release_robot(st) -> None:
     """A robot that latches its own stop (a /release service on its graph) is released too;
     its graph is read first, to know whether it has one."""
-    from astiop.robot.backend import BackendError
     from astiop.robot.factory import make_robot_gateway
+    from astiop.transports.base import BackendError
 
     try:
         gateway = make_robot_gateway(
@@ -189,7 +189,7 @@ def estop(
         if live:
             _release_robot(st)
         return
-    from astiop.robot.backend import BackendError
+    from astiop.transports.base import BackendError
 
     try:
         gateway = make_robot_gateway(

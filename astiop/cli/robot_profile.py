@@ -23,9 +23,9 @@ def profile(
 ) -> None:
     """Each role (pose, battery, scan, map, velocity command, navigation, stop, dock, ...), the
     name on the robot that plays it and why, and the roles the robot lacks."""
-    from astiop.robot.backend import BackendError
     from astiop.robot.factory import make_robot_gateway
     from astiop.ros2.profile_file import write_profile
+    from astiop.transports.base import BackendError
 
     st = state(ctx)
     if write is not None and write.exists() and not force:

@@ -55,7 +55,7 @@ def _shared_simulator(st: CliState, mode: str) -> subprocess.Popen | None:
     simulates its own (`--sim per-tab`, or auto where ROS 2 is not installed)."""
     if st.settings.robot.backend != "sim" or mode == "per-tab":
         return None
-    from astiop.sim_robots.ros2_node.run import NodeSetupError, check_imports
+    from astiop.robot_programs.ros2_node.run import NodeSetupError, check_imports
 
     try:
         check_imports()

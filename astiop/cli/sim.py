@@ -156,7 +156,7 @@ def node(
     """Run a simulated robot as real ROS 2 nodes on this machine's ROS domain, until Ctrl-C or
     SIGTERM: the ASTIbot (or a fleet of them in one warehouse, --robots N), or a TurtleBot3
     under Nav2. It respects the ROS environment (ROS_DOMAIN_ID, ROS_AUTOMATIC_DISCOVERY_RANGE)."""
-    from astiop.sim_robots.serving import NodeSetupError
+    from astiop.robot_programs.serving import NodeSetupError
 
     say = lambda line: typer.echo(line, err=True)  # noqa: E731
     if robot not in ROBOTS:
@@ -170,13 +170,13 @@ def node(
             if robots > 1 or prefix is not None or domains:
                 _serve_fleet(robots, prefix, domains, seed, speed, say)
                 return
-            from astiop.sim_robots.ros2_node.run import serve
+            from astiop.robot_programs.ros2_node.run import serve
 
             serve(seed, speed, say)
             return
         if robots > 1 or prefix is not None or domains:
             fail("--robots, --prefix and --domains: only for --robot astibot")
-        from astiop.sim_robots.turtlebot3.graph import DISTROS, MODELS
+        from astiop.robot_programs.turtlebot3.graph import DISTROS, MODELS
 
         if model not in MODELS:
             fail(f"--model must be {' or '.join(MODELS)}, not '{model}'")
@@ -184,7 +184,7 @@ def node(
             fail(f"--distro must be {' or '.join(DISTROS)}, not '{distro}'")
         if namespace and not _valid_namespace(namespace):
             fail(f"--namespace '{namespace}' is not a ROS name like /tb3_1")
-        from astiop.sim_robots.turtlebot3.run import serve as serve_tb3
+        from astiop.robot_programs.turtlebot3.run import serve as serve_tb3
 
         serve_tb3(seed=seed, speed=speed, distro=distro, model=model, namespace=namespace, say=say)
     except NodeSetupError as exc:
@@ -195,7 +195,7 @@ def _serve_fleet(robots: int, prefix, domains: bool, seed: int, speed: float, sa
     import os
     import re
 
-    from astiop.sim_robots.ros2_node.run import serve_fleet
+    from astiop.robot_programs.ros2_node.run import serve_fleet
 
     prefix = "astibot_" if prefix is None else prefix
     if not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", prefix):

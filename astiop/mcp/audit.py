@@ -12,8 +12,8 @@ import time
 from dataclasses import dataclass, field
 
 from astiop.bounded import MAX_REPLY_CHARS, one_line
-from astiop.robot.backend import Execution
 from astiop.store import Store, StoreError
+from astiop.transports.base import Execution
 
 MAX_SAID = 64  # distinct failures said on stderr; past that, a broken store would flood it
 

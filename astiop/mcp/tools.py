@@ -16,11 +16,11 @@ from astiop.bounded import MAX_COMMAND_CHARS, has_controls, one_line, preview
 from astiop.mcp.approval import Policy, clear, needs_approval
 from astiop.mcp.audit import CALL, AuditTrail, Call
 from astiop.mcp.mission_tools import MissionTools
-from astiop.robot.backend import Execution
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.safety import Review
 from astiop.ros2.render import STAMPED, goto_command
 from astiop.store import Store
+from astiop.transports.base import Execution
 
 __all__ = ["CALL", "TOOL_CLASSES", "Call", "Refused", "RobotTools"]
 

@@ -9,9 +9,9 @@ import time
 from dataclasses import dataclass
 
 from astiop.missions.steps import Step, read_name
-from astiop.robot.backend import Execution
 from astiop.robot.gateway import RobotGateway
-from astiop.robot.state import LOST, battery_fraction
+from astiop.transports.base import Execution
+from astiop.transports.state import LOST, battery_fraction
 
 MOVING = ("navigating", "docking", "undocking", "blocked")
 ARRIVED_M = 0.3

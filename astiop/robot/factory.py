@@ -43,7 +43,7 @@ def make_sim_gateway(
     who: str = "astiop",
     restore_latch: bool = True,
 ) -> RobotGateway:
-    from astiop.robot.backends.sim.backend import SimBackend
+    from astiop.transports.simulator.backend import SimBackend
 
     sim = sim or Simulator(seed=settings.sim.seed, v_max=settings.robot.max_linear_speed)
     backend = SimBackend(sim, store, realtime=realtime, speed=settings.sim.speed)
@@ -55,8 +55,8 @@ def make_sim_gateway(
 def ros2_transport(settings: Settings) -> tuple[str, str]:
     """("rclpy" or "cli", why the CLI when it is the CLI); BackendError if rclpy is asked for
     and cannot run here."""
-    from astiop.robot.backend import BackendError
-    from astiop.robot.backends.rclpy.available import rclpy_missing
+    from astiop.transports.base import BackendError
+    from astiop.transports.rclpy.available import rclpy_missing
 
     wanted = settings.robot.ros2_transport
     if wanted == "cli":
@@ -70,8 +70,8 @@ def ros2_transport(settings: Settings) -> tuple[str, str]:
 def profile_spec(settings: Settings):
     """What the settings fix of the robot's profile (robot.profile, robot.namespace);
     BackendError in one line for a profile that cannot be used."""
-    from astiop.robot.backend import BackendError
     from astiop.ros2.profile_file import ProfileError, read_spec
+    from astiop.transports.base import BackendError
 
     try:
         return read_spec(settings.robot.profile, settings.robot.namespace)
@@ -94,11 +94,11 @@ def make_robot_gateway(
         transport, why = ros2_transport(settings)
         fixed = profile_spec(settings)
         if transport == "rclpy":
-            from astiop.robot.backends.rclpy.backend import RclpyBackend
+            from astiop.transports.rclpy.backend import RclpyBackend
 
             backend = RclpyBackend(settings.robot.ros2_timeout_s, discover=discover, fixed=fixed)
         else:
-            from astiop.robot.backends.ros2cli.backend import Ros2Backend
+            from astiop.transports.ros2cli.backend import Ros2Backend
 
             backend = Ros2Backend(
                 settings.robot.ros2_executable,

@@ -87,8 +87,8 @@ class FleetFinder:
     often as `poll()` is called; the robots found so far in `found`."""
 
     def __init__(self, settings: Settings):
-        from astiop.robot.backend import BackendError
         from astiop.robot.factory import make_robot_gateway
+        from astiop.transports.base import BackendError
 
         if settings.robot.backend != "ros2":
             raise FleetError("a fleet is reached over ROS 2: add --robot ros2")

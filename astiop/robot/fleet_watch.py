@@ -11,7 +11,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 from astiop.robot.gateway import RobotGateway
-from astiop.robot.state import RobotState
+from astiop.transports.state import RobotState
 
 STALE_S = 3.0  # a robot not heard for this long is stale: what it last said may no longer hold
 LOW_BATTERY = 0.2

@@ -14,17 +14,17 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from astiop.robot.backend import BackendError, Execution, MapGeometry, RobotBackend
 from astiop.robot.latch_watch import LatchWatcher
-from astiop.robot.playback import Playback, PlaysBack
 from astiop.robot.safety import Review, SafetyPolicy, always_allowed
-from astiop.robot.state import RobotEvent, RobotState, TopicStat
 from astiop.ros2.catalog import Catalog
 from astiop.ros2.fleet_names import robot_under
 from astiop.ros2.profile import Profile, match_profile
 from astiop.ros2.render import STAMPED
 from astiop.ros2.validation import Checked, validate
 from astiop.store import Store, StoreError
+from astiop.transports.base import BackendError, Execution, MapGeometry, RobotBackend
+from astiop.transports.playback import Playback, PlaysBack
+from astiop.transports.state import RobotEvent, RobotState, TopicStat
 
 Confirm = Callable[[Checked], bool]
 log = logging.getLogger("astiop.robot")

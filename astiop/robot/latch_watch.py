@@ -13,8 +13,8 @@ import logging
 import threading
 from collections.abc import Callable
 
-from astiop.robot.inflight import InFlight
 from astiop.store import Store
+from astiop.transports.inflight import InFlight
 
 POLL_S = 0.02  # while in flight: another process's latch is seen within this
 HELD_POLL_S = 0.2  # while only held: a release elsewhere is followed within this

@@ -7,27 +7,14 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 from astiop.ros2.render import POSE_STAMPED  # a goal on a navigator's goal topic
-from astiop.ros2.validation import CANCEL_SUFFIX, Checked
+from astiop.ros2.validation import Checked, always_allowed
 from astiop.warehouse import GEOFENCE_MARGIN, fence_text, inside_fence
 
-# Services that only ever make the robot safer: never held by the e-stop, never confirmed
-# (under any namespace: /tb3_1/stop).
-ALWAYS_ALLOWED = {"stop"}
 # A velocity command is clamped by its type, whatever the topic (a namespace's /tb3_1/cmd_vel)
 VELOCITY_TYPES = {"geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped"}
 POSE_WITH_COVARIANCE = "geometry_msgs/msg/PoseWithCovarianceStamped"
 # |q| may differ from 1 by this much (a heading printed to a few digits still passes)
 UNIT_QUATERNION_TOLERANCE = 1e-3
-
-
-def always_allowed(checked: Checked) -> bool:
-    """A call of the robot's stop service (under any namespace), or a cancel of an action's
-    goals: only ever makes it safer."""
-    cmd = checked.command
-    if cmd is None or cmd.key != ("service", "call"):
-        return False
-    name = cmd.name or ""
-    return name.rsplit("/", 1)[-1] in ALWAYS_ALLOWED or name.endswith(CANCEL_SUFFIX)
 
 
 @dataclass(frozen=True)

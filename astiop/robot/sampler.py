@@ -6,7 +6,7 @@ import threading
 from collections.abc import Callable
 
 from astiop.robot.gateway import RobotGateway
-from astiop.robot.state import RobotEvent, RobotState, TopicStat
+from astiop.transports.state import RobotEvent, RobotState, TopicStat
 
 Publish = Callable[[RobotState, list[RobotEvent], "list[TopicStat] | None"], None]
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import argparse
 
-DISTROS = ("humble", "jazzy")
+from astiop.distro import DISTROS  # noqa: F401 - the emulated ros2 reads it here
 
 
 def positive_float(text: str) -> float:

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import argparse
 import difflib
-import os
 import re
 import shlex
 from dataclasses import dataclass
@@ -25,7 +24,8 @@ from astiop.bounded import (
     load_yaml,
     preview,
 )
-from astiop.ros2.cli_args import DISTROS, build_parser
+from astiop.distro import DISTROS, current_distro  # noqa: F401 - its callers read it here
+from astiop.ros2.cli_args import build_parser
 
 SHELL_OPERATORS = {"|", "||", "&", "&&", ";", ";;", ">", ">>", "<", "<<", "$(", "`", "(", ")"}
 SUPPORTED = {
@@ -101,11 +101,6 @@ _OPTIONS = {
 
 class CommandSyntaxError(ValueError):
     """The text is not a command of the supported `ros2` subset for this distro."""
-
-
-def current_distro() -> str:
-    distro = os.environ.get("ROS_DISTRO", "").strip().lower()
-    return distro if distro in DISTROS else "jazzy"
 
 
 class _Parser(argparse.ArgumentParser):

@@ -253,3 +253,18 @@ def cancel_service(catalog: Catalog, name: str) -> ServiceSpec | None:
     return ServiceSpec(
         name, "action_msgs/srv/CancelGoal", action.node, True, needs_confirmation=False
     )
+
+
+# Services that only ever make the robot safer: never held by the e-stop, never confirmed
+# (under any namespace: /tb3_1/stop).
+ALWAYS_ALLOWED = {"stop"}
+
+
+def always_allowed(checked: Checked) -> bool:
+    """A call of the robot's stop service (under any namespace), or a cancel of an action's
+    goals: only ever makes it safer."""
+    cmd = checked.command
+    if cmd is None or cmd.key != ("service", "call"):
+        return False
+    name = cmd.name or ""
+    return name.rsplit("/", 1)[-1] in ALWAYS_ALLOWED or name.endswith(CANCEL_SUFFIX)

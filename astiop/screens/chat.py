@@ -17,9 +17,9 @@ from astiop.agent.models.embedded import EmbeddedModelError
 from astiop.agent.models.specs import SpecError, open_endpoint
 from astiop.agent.turn import Agent, TurnResult
 from astiop.bounded import escape_controls
-from astiop.robot.backend import Execution
 from astiop.screens.base import ConsoleScreen
 from astiop.screens.messages import GoalEnded, TurnFinished
+from astiop.transports.base import Execution
 
 HELP = (
     "Ask in plain language, e.g. 'what is the battery level?' or 'send the robot to "

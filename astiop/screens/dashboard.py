@@ -17,11 +17,11 @@ from textual.widgets import DataTable, Footer, Header, Static
 
 from astiop.agent.models.probe import probe
 from astiop.bounded import escape_controls
-from astiop.robot.state import RobotState, TopicStat
 from astiop.screens import mission_commands
 from astiop.screens.base import ConsoleScreen
 from astiop.screens.messages import RobotStateSampled, TurnFinished
 from astiop.screens.panel_text import show_text
+from astiop.transports.state import RobotState, TopicStat
 from astiop.widgets.gauges import BatteryGauge
 from astiop.widgets.live_table import LiveTable
 from astiop.widgets.map_view import Place, WarehouseMapView

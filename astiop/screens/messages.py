@@ -5,7 +5,7 @@ from __future__ import annotations
 from textual.message import Message
 
 from astiop.agent.result import TurnResult
-from astiop.robot.state import RobotEvent, RobotState, TopicStat
+from astiop.transports.state import RobotEvent, RobotState, TopicStat
 
 
 class RobotStateSampled(Message, bubble=False):

@@ -16,10 +16,10 @@ from textual.binding import Binding
 from textual.containers import Vertical
 from textual.widgets import Footer, Header, Static
 
-from astiop.robot.state import RobotState, wheel_speeds
 from astiop.screens.base import ConsoleScreen
 from astiop.screens.messages import RobotStateSampled
 from astiop.screens.panel_text import show_text
+from astiop.transports.state import RobotState, wheel_speeds
 from astiop.widgets.gauges import WheelBars
 from astiop.widgets.map_view import WarehouseMapView
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 from rich.text import Text
 from textual.widgets import Static
 
-from astiop.robot.state import MAX_WHEEL_SPEED
+from astiop.transports.state import MAX_WHEEL_SPEED
 
 
 def bar(fraction: float, width: int, color: str) -> Text:

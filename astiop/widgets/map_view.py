@@ -18,7 +18,7 @@ from textual.geometry import Region
 from textual.strip import Strip
 from textual.widget import Widget
 
-from astiop.robot.state import OccupancyGrid, RobotState
+from astiop.transports.state import OccupancyGrid, RobotState
 from astiop.warehouse import WarehouseMap
 
 FOLLOW_HALF_M = 12.0  # with no map: metres shown either side of the robot

@@ -1,0 +1,195 @@
+"""What every robot backend offers the gateway: commands, live state, events, the map."""
+
+from __future__ import annotations
+
+import contextlib
+import time
+from abc import ABC, abstractmethod
+from collections.abc import Iterable
+from dataclasses import asdict, dataclass, field
+from typing import Any, Union
+
+from astiop.ros2.catalog import Catalog
+from astiop.ros2.validation import Checked, always_allowed
+from astiop.transports.errors import BackendError  # noqa: F401 - its home for every caller
+from astiop.transports.inflight import InFlight
+from astiop.transports.state import OccupancyGrid, RobotEvent, RobotState, TopicStat
+from astiop.warehouse import WarehouseMap
+
+# A known layout (the simulator's warehouse), the robot's /map, or nothing: then the map view
+# follows the robot and shows its scan.
+MapGeometry = Union[WarehouseMap, OccupancyGrid, None]
+
+
+@dataclass
+class Execution:
+    command: str
+    valid: bool
+    reason: str = ""
+    kind: str = "read"
+    executed: bool = False
+    output: str = ""
+    values: Any = None
+    notes: list[str] = field(default_factory=list)
+    error: str = ""
+    duration_s: float = 0.0
+    # measured (a reading the robot published), accepted (a service took a job on), commanded
+    # (what astiop sent), or reported (any other answer of the robot)
+    provenance: str = ""
+    age_s: float | None = None  # a reading's age by its stamp, on the robot's clock
+    period_s: float | None = None  # its topic's publishing period (None: latched or unknown)
+    role: str = ""  # the role its name plays on the robot (ros2/profile.py): "battery", "pose"
+    units: str | None = None  # battery: its profile's percentage scale (fraction | percent)
+
+    def record(self) -> dict[str, Any]:
+        """The fields a stored command row keeps."""
+        return {
+            "command": self.command,
+            "valid": int(self.valid),
+            "reason": self.reason or self.error or None,
+            "kind": self.kind,
+            "executed": int(self.executed),
+            "output": self.output,
+            "values": self.values,
+            "provenance": self.provenance or None,
+            "age_s": self.age_s,
+        }
+
+    def as_json(self) -> dict[str, Any]:
+        keys = ("command", "valid", "reason", "kind", "executed", "output", "values")
+        data = {k: v for k, v in asdict(self).items() if k in keys}
+        if self.notes:
+            data["notes"] = self.notes
+        if self.error:
+            data["error"] = self.error
+        if self.provenance:
+            data["provenance"] = self.provenance
+        if self.age_s is not None:
+            data["age_s"] = round(self.age_s, 3)
+        return data
+
+
+class RobotBackend(ABC):
+    """The base of every backend: what the gateway and the app read, with the defaults of a live
+    robot whose graph does not change. Each backend overrides what it has."""
+
+    name: str  # sim | ros2 | replay
+    catalog: Catalog
+    capabilities: frozenset[str]  # "commands", "teleop"; a replay has neither
+    label: str = ""  # how the header names it, when `name` alone is not enough
+    read_only: str = ""  # why commands are refused, when they are
+    refreshed_at: float = 0.0  # time.monotonic() of the last read of the robot's graph
+    refresh_every_s: float = 5.0  # a missing name reads the graph again at most this often
+    params_wanted: bool = True  # the nodes' parameters read with the graph (finding a fleet: no)
+    inflight: InFlight  # what this process has running that moves the robot
+
+    def actuating(self, checked: Checked):
+        """The job an actuating command runs as (the E-STOP ends it); None for a read and for
+        the stop itself, which must run while the E-STOP holds."""
+        if checked.kind != "actuate" or always_allowed(checked):
+            return contextlib.nullcontext(None)
+        return self.inflight.running(checked.command.display(), checked.command.name)
+
+    def zero_now(self) -> None:
+        """A zero velocity at once where sending one is cheap (the E-STOP follows it)."""
+        return None
+
+    def watch_lightly(self, light: bool) -> None:
+        """`light`: a fleet's robot watched for its row only (a live robot drops its scan)."""
+        return None
+
+    def refresh(self, settle: bool = True) -> bool:
+        """Read the robot's graph again; False if nothing was read."""
+        return False
+
+    def control_channel(self, namespace: str):
+        """Where the robot's lease is announced on its graph (robot/lease.py), for a robot that
+        other machines reach too; None: the store alone holds it."""
+        return None
+
+    def discovering(self) -> bool:
+        """Whether this process may not have discovered the whole robot yet (a name missing
+        from its graph may only not have been heard of)."""
+        return False
+
+    def robot_time(self) -> float | None:
+        """Now on the clock the robot stamps its messages with (seconds), or None when it is
+        not known here; a reading's age is measured on it."""
+        return None
+
+    def settle_estop(self, timeout_s: float) -> list[str]:
+        """Wait (at most `timeout_s`) for what an E-STOP started in the background to go out, for
+        a process about to exit; the failures that came. By default: the zero-Twist burst's
+        second."""
+        time.sleep(min(timeout_s, 1.0))
+        return []
+
+    def cancel_goals(self) -> None:
+        """Cancel the goals this process sent and that still run (the live transports follow
+        theirs; the simulator's goal yields to a zero velocity): nothing by default."""
+        return None
+
+    @property
+    @abstractmethod
+    def e_stopped(self) -> bool: ...
+
+    @abstractmethod
+    def start(self) -> None: ...
+
+    @abstractmethod
+    def close(self) -> None: ...
+
+    @abstractmethod
+    def estop(self) -> list[str]:
+        """Stop the robot now; returns the failures of each step (empty: all went out)."""
+        ...
+
+    @abstractmethod
+    def release_estop(self, *, robot: bool = True) -> list[str]:
+        """Let the robot move again; the failures (a robot that latches its own stop and did
+        not answer its release). `robot=False`: this process only (another process released
+        the latch and the robot)."""
+        ...
+
+    @abstractmethod
+    def execute(self, checked: Checked, timeout: float) -> tuple[str, object]: ...
+
+    @abstractmethod
+    def drive(self, twist: dict) -> None:
+        """Teleop: hold this (already clamped) velocity for a short lapse time."""
+        ...
+
+    @abstractmethod
+    def state(self) -> RobotState:
+        """The latest state; never blocks on the robot."""
+        ...
+
+    @abstractmethod
+    def messages(self, names: Iterable[str]) -> dict[str, dict]:
+        """The latest message on each of these topics that has one, as the robot sent it."""
+        ...
+
+    @abstractmethod
+    def message_times(self, names: Iterable[str]) -> dict[str, float]:
+        """When each of those latest messages came, on the robot's clock (`RobotState.t`):
+        published (simulator), received (robot), logged (replay)."""
+        ...
+
+    @abstractmethod
+    def events_since(self, seq: int) -> list[RobotEvent]: ...
+
+    @abstractmethod
+    def topic_stats(self) -> list[TopicStat]: ...
+
+    @abstractmethod
+    def wait_until_idle(self, timeout_s: float) -> str | None:
+        """Block until the robot has no active goal; returns how the goal ended, if known."""
+        ...
+
+    @abstractmethod
+    def map_geometry(self) -> MapGeometry: ...
+
+    def read_map(self, timeout_s: float) -> MapGeometry:
+        """The robot's map, read now if it has not been (a one-shot command never started the
+        watch that reads it): a goal's geofence may be its extent."""
+        return self.map_geometry()

@@ -1,0 +1,92 @@
+"""A robot's lease announced on its own graph, so that it holds between machines on one ROS 2
+domain as the store makes it hold between consoles on one machine: `<namespace>/astiop_control`,
+std_msgs/msg/String holding JSON, reliable and transient-local with depth 1.
+
+Why a transient-local topic: a console that joins later is handed every holder's last word at
+once (each writer keeps its own), with no server to ask and none to fail; a holder that dies
+takes its writer, and so its word, with it; anyone can read it (`ros2 topic echo
+/astibot_2/astiop_control`). The holder says it again every heartbeat; a word not heard again
+for the lease's time is a holder gone."""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import threading
+import time
+from typing import Any
+
+from rclpy.duration import Duration
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from std_msgs.msg import String
+
+from astiop.store.leases import LEASE_TTL_S
+from astiop.transports.rclpy.node import RosProcess
+
+QOS = QoSProfile(
+    depth=1,
+    history=HistoryPolicy.KEEP_LAST,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+)
+
+
+class ControlTopic:
+    def __init__(self, proc: RosProcess, namespace: str):
+        self.proc = proc
+        self.name = f"{namespace.rstrip('/')}/astiop_control"
+        self._lock = threading.Lock()
+        self._heard: dict[str, tuple[float, dict[str, Any]]] = {}  # token -> (when, word)
+        node = proc.node
+        self._pub = node.create_publisher(String, self.name, QOS)
+        self._sub = node.create_subscription(String, self.name, self._receive, QOS)
+
+    def settle(self, timeout_s: float = 5.0, least_s: float = 0.5) -> None:
+        """Until every other writer on the topic has been heard (their last words come at once,
+        transient-local) and every reader known matches this writer, and at least `least_s`
+        (a writer's endpoint may be discovered a moment after its process), or `timeout_s`: a
+        take must not miss a holder that is there, nor a holder miss the take."""
+        t0 = time.monotonic()
+        deadline = t0 + timeout_s
+        node = self.proc.node
+        while time.monotonic() < deadline:
+            others = node.count_publishers(self.name) - 1
+            with self._lock:
+                heard = len(self._heard)
+            readers = node.count_subscribers(self.name)
+            matched = self._pub.get_subscription_count() >= readers
+            if heard >= others and matched and time.monotonic() - t0 >= least_s:
+                return
+            time.sleep(0.05)
+
+    def _receive(self, msg: String) -> None:  # the executor's thread
+        try:
+            word = json.loads(msg.data)
+            token = str(word["token"])
+        except (ValueError, KeyError, TypeError):
+            return  # not ours: nothing to follow
+        with self._lock:
+            self._heard[token] = (time.monotonic(), word)
+
+    def announce(self, word: dict[str, Any], acked_s: float = 0.0) -> None:
+        """Say it; with `acked_s`, wait that long at most for every reader to have it (a word
+        said just before this process ends: a takeover, a release)."""
+        self._pub.publish(String(data=json.dumps(word)))
+        if acked_s > 0:  # ros2/rclpy humble rclpy/rclpy/publisher.py: wait_for_all_acked
+            self._pub.wait_for_all_acked(Duration(nanoseconds=int(acked_s * 1e9)))
+
+    def holders(self, released: bool = False) -> list[dict[str, Any]]:
+        """Every holder heard within the lease's time that has not let go (`released`: and
+        those that took it and let go since), latest take first."""
+        now = time.monotonic()
+        with self._lock:
+            live = [w for t, w in self._heard.values() if now - t < LEASE_TTL_S]
+        live = [w for w in live if released or not w.get("released")]
+        return sorted(live, key=lambda w: (w.get("taken_at", 0.0), w["token"]), reverse=True)
+
+    def close(self) -> None:
+        node = self.proc.node
+        for entity, destroy in ((self._sub, node.destroy_subscription),
+                                (self._pub, node.destroy_publisher)):  # fmt: skip
+            with contextlib.suppress(Exception):  # the process is ending
+                destroy(entity)

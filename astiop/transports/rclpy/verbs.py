@@ -1,0 +1,390 @@
+"""The ros2 verbs executed in process through rclpy, each printed as ros2cli prints it (jazzy
+branch: ros2topic/verb/{list,info,echo,pub,hz}.py, ros2service/verb/call.py,
+ros2action/verb/send_goal.py, ros2node/api, ros2param/verb/{get,set}.py), with the same
+structured values the CLI transport returns."""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+from rclpy.action import ActionClient
+from rclpy.qos import qos_profile_sensor_data
+
+from astiop.ros2.interfaces import interface_show
+from astiop.ros2.message_objects import MessageTypeError, interface_class, to_dict, to_message
+from astiop.ros2.printing import (
+    echo_text,
+    list_text,
+    node_info_text,
+    param_list_text,
+    ros2cli_yaml,
+)
+from astiop.ros2.render import STAMPED
+from astiop.ros2.validation import Checked
+from astiop.transports.base import BackendError
+from astiop.transports.inflight import ENDED, Job
+from astiop.transports.rclpy.graph import full_name, hidden, latched, matched_qos, read_params
+from astiop.transports.rclpy.node import RosTimeout
+from astiop.transports.verb_table import ServesVerbs, runs
+
+# action_msgs/msg/GoalStatus -> send_goal.py's _goal_status_to_string
+STATUS = {
+    1: "ACCEPTED",
+    2: "EXECUTING",
+    3: "CANCELING",
+    4: "SUCCEEDED",
+    5: "CANCELED",
+    6: "ABORTED",
+}
+PARAM_WORDS = {
+    1: "Boolean value is:",
+    2: "Integer value is:",
+    3: "Double value is:",
+    4: "String value is:",
+}
+PARAM_FIELDS = {1: "bool_value", 2: "integer_value", 3: "double_value", 4: "string_value"}
+
+
+class RclpyVerbs(ServesVerbs):
+    """Mixed into RclpyBackend: uses its proc, catalog, watches, goals and events."""
+
+    def execute(self, checked: Checked, timeout: float) -> tuple[str, Any]:
+        cmd = checked.command
+        handler = self.verb_handler(cmd.key)
+        if handler is None:
+            raise BackendError(
+                f"ros2 {cmd.verb} {cmd.sub} is not served through rclpy (the CLI transport, "
+                "--ros2-transport cli, runs it)"
+            )
+        try:
+            with self.actuating(checked):  # refused while the E-STOP holds, ended by it
+                return handler(checked, timeout)
+        except RosTimeout as exc:
+            raise BackendError(str(exc)) from None
+        except MessageTypeError as exc:
+            raise BackendError(str(exc)) from None
+
+    # -- listings ---------------------------------------------------------------------------
+    def _listing(self, kind: str, c: Checked) -> tuple[str, list[str]]:
+        return list_text(self._lists[kind], c.command.flags)
+
+    @runs("topic list")
+    def _topic_list(self, c: Checked, timeout: float):
+        return self._listing("topic", c)
+
+    @runs("service list")
+    def _service_list(self, c: Checked, timeout: float):
+        return self._listing("service", c)
+
+    @runs("action list")
+    def _action_list(self, c: Checked, timeout: float):
+        return self._listing("action", c)
+
+    @runs("node list")
+    def _node_list(self, c: Checked, timeout: float):
+        names = [n for n, _ in self._lists["node"]]
+        return "".join(f"{n}\n" for n in names), names
+
+    @runs("topic type", "service type")
+    def _topic_type(self, c: Checked, timeout: float):
+        return c.type + "\n", c.type
+
+    @runs("topic info")
+    def _topic_info(self, c: Checked, timeout: float):
+        node, name = self.proc.node, c.command.name
+        pubs, subs = node.count_publishers(name), node.count_subscribers(name)
+        text = f"Type: {c.type}\nPublisher count: {pubs}\nSubscription count: {subs}\n"
+        return text, {"type": c.type, "publishers": pubs, "subscribers": subs}
+
+    @runs("action info")
+    def _action_info(self, c: Checked, timeout: float):
+        from rclpy.action import get_action_server_names_and_types_by_node
+
+        servers = [
+            full_name(ns, n)
+            for n, ns in self.proc.node.get_node_names_and_namespaces()
+            if any(
+                a == c.command.name
+                for a, _ in get_action_server_names_and_types_by_node(self.proc.node, n, ns)
+            )
+        ]
+        lines = [
+            f"Action: {c.command.name}",
+            "Action clients: 0",
+            f"Action servers: {len(servers)}",
+        ]
+        return "\n".join(lines + [f"    {s}" for s in servers]) + "\n", {"servers": servers}
+
+    @runs("node info")
+    def _node_info(self, c: Checked, timeout: float):
+        from rclpy.action import (
+            get_action_client_names_and_types_by_node,
+            get_action_server_names_and_types_by_node,
+        )
+
+        node, target = self.proc.node, c.command.name
+        ns, _, leaf = target.rpartition("/")
+        ns = ns or "/"
+        sections = {
+            "Subscribers": node.get_subscriber_names_and_types_by_node(leaf, ns),
+            "Publishers": node.get_publisher_names_and_types_by_node(leaf, ns),
+            "Service Servers": node.get_service_names_and_types_by_node(leaf, ns),
+            "Service Clients": node.get_client_names_and_types_by_node(leaf, ns),
+            "Action Servers": get_action_server_names_and_types_by_node(node, leaf, ns),
+            "Action Clients": get_action_client_names_and_types_by_node(node, leaf, ns),
+        }
+        info = {
+            k: sorted((n, ", ".join(t)) for n, t in v if not hidden(n)) for k, v in sections.items()
+        }
+        return node_info_text(target, info), info
+
+    @runs("interface show")
+    def _interface_show(self, c: Checked, timeout: float):
+        return interface_show(c.command.args["type"]), None
+
+    # -- topics -----------------------------------------------------------------------------
+    @runs("topic echo")
+    def _topic_echo(self, c: Checked, timeout: float):
+        name = c.command.name
+        timeout = c.command.options.get("timeout", timeout)
+        w = self._watches.get(name)
+        spec = self.catalog.topics.get(name)
+        if w is not None and spec is not None and spec.rate_hz > 0:
+            # the robot's last publication, if it came within one period, is the message
+            # `ros2 topic echo --once` would print next (one period newer at most)
+            msg = w.current(1.0 / spec.rate_hz) or w.next_message(timeout)
+        elif w is not None and latched(self.proc, name) and w.latest_object() is not None:
+            msg = w.latest_object()  # what a new subscription is handed at once (/amcl_pose)
+        elif w is not None:
+            msg = w.next_message(timeout)
+        else:
+            msg = self._one_message(name, c.type, timeout)
+        if msg is None:
+            raise BackendError(f"no reading from {name} in {timeout:g} s")
+        values = to_dict(msg)
+        field = c.command.options.get("field")
+        if field:
+            for part in field.split("."):
+                values = values[part]
+            return ros2cli_yaml(values) + "---\n", values
+        return echo_text(values, c.command), values
+
+    def _one_message(self, name: str, type_: str, timeout: float) -> Any:
+        from astiop.transports.rclpy.watch import TopicWatch
+
+        w = TopicWatch(self.proc, name, type_)
+        try:
+            return w.next_message(timeout) or w.latest_object()
+        finally:
+            w.close()
+
+    @runs("topic hz")
+    def _topic_hz(self, c: Checked, timeout: float):
+        name, windows = c.command.name, 2
+        times: list[float] = []
+        sub = self.proc.node.create_subscription(
+            interface_class(c.type), name, lambda _m: times.append(time.monotonic()),
+            qos_profile_sensor_data,
+        )  # fmt: skip
+        lines, rates = [], []
+        deadline = time.monotonic() + timeout
+        try:
+            printed_at = None
+            while len(rates) < windows and time.monotonic() < deadline:
+                time.sleep(0.05)
+                if len(times) < 2:
+                    continue
+                if printed_at is None:
+                    printed_at = times[-1]
+                    continue
+                if times[-1] < printed_at + 1.0:
+                    continue
+                deltas = [b - a for a, b in zip(times, times[1:])]
+                mean = sum(deltas) / len(deltas)
+                std = math.sqrt(sum((d - mean) ** 2 for d in deltas) / len(deltas))
+                rate = 1.0 / mean if mean > 0 else 0.0
+                rates.append(rate)
+                lines.append(
+                    f"average rate: {rate:.3f}\n\tmin: {min(deltas):.3f}s max: {max(deltas):.3f}s "
+                    f"std dev: {std:.5f}s window: {len(deltas)}"
+                )
+                printed_at = times[-1]
+        finally:
+            self.proc.node.destroy_subscription(sub)
+        if not rates:
+            raise BackendError(f"{name} is not being published (no rate within {timeout:g} s)")
+        return "\n".join(lines) + "\n", {"average_rate": round(rates[-1], 3), "windows": len(rates)}
+
+    @runs("topic pub")
+    def _topic_pub(self, c: Checked, timeout: float):
+        cmd = c.command
+        name, times = cmd.name, 1 if "once" in cmd.flags else cmd.options.get("times", 1)
+        rate = cmd.options.get("rate", 1.0)
+        message = c.message
+        if name == "/cmd_vel":
+            pub, cls, type_ = self._publisher()
+            twist = message["twist"] if type_ == STAMPED else message
+            with self._lock:
+                self._hold = None  # a command replaces what teleop held
+        else:
+            cls = interface_class(c.type)
+            pub = self.proc.node.create_publisher(cls, name, matched_qos(self.proc, name))
+        lines = []
+        job = self.inflight.current(f"publish on {name}")
+        try:
+            if pub.get_subscription_count() < 1:
+                lines.append("Waiting for at least 1 matching subscription(s)...")
+                deadline = time.monotonic() + timeout
+                while pub.get_subscription_count() < 1:
+                    if time.monotonic() > deadline:
+                        raise BackendError(f"no subscriber on {name} within {timeout:g} s")
+                    if job.wait(0.1):
+                        raise BackendError(f"{ENDED}: nothing was published")
+            lines.append("publisher: beginning loop")
+            for i in range(times):
+                if i and job.wait(1.0 / rate):
+                    raise BackendError(f"{ENDED} after {i} of {times} messages")
+                msg = (
+                    self._stamped(cls, message) if name == "/cmd_vel" else to_message(cls, message)
+                )
+                with job.sending():
+                    pub.publish(msg)
+                lines += [f"publishing #{i + 1}: {msg!r}", ""]
+        finally:
+            if name != "/cmd_vel":
+                self.proc.node.destroy_publisher(pub)
+        values: dict[str, Any] = {"published": times}
+        if name == "/cmd_vel":
+            values["twist"] = twist
+        return "\n".join(lines) + "\n", values
+
+    # -- services -----------------------------------------------------------------------------
+    @runs("service call")
+    def _service_call(self, c: Checked, timeout: float):
+        name = c.command.name
+        srv = interface_class(c.type)
+        request = to_message(srv.Request, c.message or {})
+        client = self.proc.client(srv, name)
+        lines = []
+        if not client.service_is_ready():
+            lines.append("waiting for service to become available...")
+            if not client.wait_for_service(timeout_sec=timeout):
+                raise BackendError(f"service {name} is not available (waited {timeout:g} s)")
+        lines.append(f"requester: making request: {request!r}\n")
+        read = c.kind != "actuate"
+        response = self.proc.ask(client, request, timeout, f"service {name}", again=read)
+        lines.append(f"response:\n{response!r}\n")
+        if c.local_name == "/stop":
+            self.cancel_goals()
+        return "\n".join(lines) + "\n", to_dict(response)
+
+    # -- the action ----------------------------------------------------------------------------
+    @runs("action send_goal")
+    def _action_send_goal(self, c: Checked, timeout: float):
+        """Return at acceptance; the goal is followed to its end in the background."""
+        action = interface_class(c.type)
+        goal = to_message(action.Goal, c.message or {})
+        client = ActionClient(self.proc.node, action, c.command.name)
+        lines = ["Waiting for an action server to become available..."]
+        if not client.wait_for_server(timeout_sec=timeout):
+            client.destroy()
+            raise BackendError(f"no action server for {c.command.name} within {timeout:g} s")
+        lines.append(f"Sending goal:\n     {ros2cli_yaml(to_dict(goal))}")
+        future = client.send_goal_async(goal)  # its feedback is not shown: it returns here
+        try:
+            handle = self.proc.wait(future, timeout, f"{c.command.name} goal")
+        except RosTimeout:
+            client.destroy()
+            raise
+        if not handle.accepted:
+            client.destroy()
+            lines.append("Goal was rejected.")
+            return "\n".join(lines) + "\n", {"accepted": False, "status": "REJECTED"}
+        goal_id = bytes(handle.goal_id.uuid).hex()
+        try:  # followed as a job of its own until it ends: the E-STOP cancels it
+            job = self.inflight.start(
+                f"goal {c.command.name}", handle.cancel_goal_async, c.command.name
+            )
+        except BackendError:
+            handle.cancel_goal_async()  # the E-STOP came while it was being accepted
+            raise BackendError(f"{ENDED}: the goal was accepted and canceled") from None
+        lines.append(f"Goal accepted with ID: {goal_id}\n")
+        self._goals.append(handle)
+        self._last_outcome = None
+        handle.get_result_async().add_done_callback(
+            lambda f: self._goal_ended(handle, client, f, job)
+        )
+        return "\n".join(lines) + "\n", {"accepted": True, "goal_id": goal_id, "status": "ACCEPTED"}
+
+    def _goal_ended(self, handle: Any, client: Any, future: Any, job: Job) -> None:
+        job.done()
+        if handle in self._goals:
+            self._goals.remove(handle)
+        result = future.result()
+        status = STATUS.get(result.status, "UNKNOWN") if result is not None else "UNKNOWN"
+        self._last_outcome = status.lower()
+        why = getattr(result.result, "error_msg", "") if result is not None else ""
+        severity = "info" if status == "SUCCEEDED" else "warning"
+        self.events.add("goal", severity, f"goal finished: {status}" + (f" ({why})" if why else ""))
+        client.destroy()
+
+    def cancel_goals(self) -> None:
+        for handle in list(self._goals):
+            handle.cancel_goal_async()
+
+    # -- parameters ----------------------------------------------------------------------------
+    @runs("param list")
+    def _param_list(self, c: Checked, timeout: float):
+        # asked of each node now, as ros2cli does (ros2param/verb/list.py)
+        served = {n for n, _ in self._lists["service"]}
+        nodes = [n for n, _ in self._lists["node"] if f"{n}/list_parameters" in served]
+        named = c.command.args.get("node")
+        read = read_params(self.proc, [named] if named else nodes, timeout)
+        params = [(*key.split(" ", 1), type_) for key, type_ in read]
+        return param_list_text(params, named, c.command.flags, c.command.options)
+
+    @runs("param get")
+    def _param_get(self, c: Checked, timeout: float):
+        from rcl_interfaces.srv import GetParameters
+
+        node, param = c.command.args["node"], c.command.args["param"]
+        response = self._param_call(
+            GetParameters, f"{node}/get_parameters", GetParameters.Request(names=[param]), timeout
+        )
+        if not response.values or response.values[0].type == 0:
+            raise BackendError(f"parameter {param} is not set on {node}")
+        value = response.values[0]
+        if value.type not in PARAM_WORDS:
+            raise BackendError(f"parameter {param} has a type astiop does not read ({value.type})")
+        v = getattr(value, PARAM_FIELDS[value.type])
+        return f"{PARAM_WORDS[value.type]} {v}\n", {"value": v}
+
+    @runs("param set")
+    def _param_set(self, c: Checked, timeout: float):
+        from rcl_interfaces.msg import Parameter, ParameterValue
+        from rcl_interfaces.srv import SetParameters
+
+        node, param = c.command.args["node"], c.command.args["param"]
+        value = c.message["value"]
+        kind = {bool: 1, int: 2, float: 3, str: 4}[type(value)]
+        pv = ParameterValue(type=kind, **{PARAM_FIELDS[kind]: value})
+        request = SetParameters.Request(parameters=[Parameter(name=param, value=pv)])
+        response = self._param_call(SetParameters, f"{node}/set_parameters", request, timeout)
+        result = response.results[0]
+        if not result.successful:  # ros2cli prints this and exits 0: it did not happen
+            raise BackendError(
+                "Setting parameter failed" + (f": {result.reason}" if result.reason else "")
+            )
+        return "Set parameter successful" + (
+            f": {result.reason}" if result.reason else ""
+        ) + "\n", {"value": value}
+
+    def _param_call(self, srv: Any, name: str, request: Any, timeout: float) -> Any:
+        try:
+            return self.proc.call(srv, name, request, timeout)
+        except RosTimeout as exc:
+            if "is not served" in str(exc):
+                raise BackendError(f"{name.rsplit('/', 1)[0]}: node not found") from None
+            raise
