@@ -502,9 +502,3 @@ def test_param_and_interface_lists_print_as_ros2cli_on_the_emulated_and_in_proce
         gateway.close()
         sim.close()
 
-
-def test_every_verb_the_grammar_accepts_has_its_handler_in_the_simulator():
-    from astiop.ros2.grammar import SUPPORTED
-    from astiop.transports.simulator.backend import SimBackend
-
-    assert set(SimBackend.VERBS) == SUPPORTED

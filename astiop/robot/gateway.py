@@ -21,6 +21,7 @@ from astiop.ros2.fleet_names import robot_under
 from astiop.ros2.profile import Profile, match_profile
 from astiop.ros2.render import STAMPED
 from astiop.ros2.validation import Checked, validate
+from astiop.ros2.verbs import VERBS
 from astiop.store import Store, StoreError
 from astiop.transports.base import BackendError, Execution, MapGeometry, RobotBackend
 from astiop.transports.playback import Playback, PlaysBack
@@ -409,7 +410,7 @@ class RobotGateway:
 
     def _provenance(self, checked: Checked) -> str:
         cmd = checked.command
-        if cmd.verb == "topic" and cmd.sub in ("echo", "hz"):
+        if VERBS[cmd.key].measures:
             return "measured"
         if cmd.verb == "service" and cmd.sub == "call":
             spec = self.catalog.services.get(cmd.name)

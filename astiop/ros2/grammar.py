@@ -26,41 +26,12 @@ from astiop.bounded import (
 )
 from astiop.distro import DISTROS, current_distro  # noqa: F401 - its callers read it here
 from astiop.ros2.cli_args import build_parser
+from astiop.ros2.verbs import VERBS
 
 SHELL_OPERATORS = {"|", "||", "&", "&&", ";", ";;", ">", ">>", "<", "<<", "$(", "`", "(", ")"}
-SUPPORTED = {
-    ("topic", "list"),
-    ("topic", "info"),
-    ("topic", "type"),
-    ("topic", "echo"),
-    ("topic", "hz"),
-    ("topic", "pub"),
-    ("service", "list"),
-    ("service", "type"),
-    ("service", "call"),
-    ("action", "list"),
-    ("action", "info"),
-    ("action", "send_goal"),
-    ("node", "list"),
-    ("node", "info"),
-    ("interface", "show"),
-    ("interface", "list"),
-    ("param", "list"),
-    ("param", "get"),
-    ("param", "set"),
-}
+SUPPORTED = set(VERBS)
 ALLOWED = ", ".join(sorted(f"{v} {s}" for v, s in SUPPORTED))
-EXAMPLES = {
-    ("topic", "echo"): "ros2 topic echo /battery_status sensor_msgs/msg/BatteryState --once",
-    ("topic", "pub"): 'ros2 topic pub --once /cmd_vel geometry_msgs/msg/Twist "{linear: {x: 0.2}}"',
-    ("service", "call"): "ros2 service call /goto_position astiop_msgs/srv/GotoPosition "
-    "\"{name: 'shipping'}\"",
-    ("action", "send_goal"): "ros2 action send_goal /navigate_to_pose "
-    'nav2_msgs/action/NavigateToPose "{pose: {header: {frame_id: map}, pose: {position: '
-    '{x: 5.0, y: 3.0}}}}" --feedback',
-    ("interface", "show"): "ros2 interface show sensor_msgs/msg/LaserScan",
-    ("param", "set"): "ros2 param set /astibot_base max_linear_speed 0.5",
-}
+EXAMPLES = {key: verb.example for key, verb in VERBS.items() if verb.example}
 # argparse destinations astiop reads, by its own names
 _FLAGS = {
     "once": "once",
@@ -85,7 +56,6 @@ _OPTIONS = {
     "filter": "filter",  # param list --filter RE (topic and service lists use filter_expr)
     "rate": "rate",
     "times": "times",
-    "window_size": "window",
     "timeout": "timeout",
     "print": "print",
     "wait_matching_subscriptions": "wait",
@@ -231,6 +201,7 @@ def parse(text: str, distro: str | None = None) -> Ros2Command:
         raise CommandSyntaxError(message + (f" (e.g. {example})" if example else "")) from None
     if ns.get("stdin"):
         raise CommandSyntaxError("astiop does not read values from stdin: give them as an argument")
+    verb = VERBS[key]
     args: dict[str, Any] = {}
     for dest in ("topic_name", "service_name", "action_name"):
         if ns.get(dest):
@@ -246,18 +217,13 @@ def parse(text: str, distro: str | None = None) -> Ros2Command:
     for dest in ("message_type", "service_type", "action_type", "type"):
         if ns.get(dest):
             args["type"] = ns[dest]
-    if key in (("topic", "pub"), ("service", "call")):
-        args["values"] = parse_values(ns.get("values") or "")
-    elif key == ("action", "send_goal"):
-        args["values"] = parse_values(ns.get("goal") or "")
-    flags = frozenset(ours for dest, ours in _FLAGS.items() if ns.get(dest))
-    options = {ours: ns[dest] for dest, ours in _OPTIONS.items() if ns.get(dest) is not None}
-    if key == ("topic", "pub") and not ns.get("times"):
-        options.pop("times", None)  # 0: forever, which astiop refuses
-    if key == ("topic", "hz") and ns.get("window_size") == 10000:
-        options.pop("window", None)  # ros2's default: astiop keeps its own short window
-    if key == ("topic", "echo") and options.get("truncate") == 128:
-        options.pop("truncate")
+    if verb.values_from:
+        args["values"] = parse_values(ns.get(verb.values_from) or "")
+    flag_names, option_names = {**_FLAGS, **verb.flags}, {**_OPTIONS, **verb.options}
+    flags = frozenset(ours for dest, ours in flag_names.items() if ns.get(dest))
+    options = {ours: ns[dest] for dest, ours in option_names.items() if ns.get(dest) is not None}
+    if verb.normalize is not None:
+        verb.normalize(ns, options)
     return Ros2Command(
         text.strip(), key[0], key[1], args, flags, options, tuple(tokens[1:]), distro
     )

@@ -1,5 +1,3 @@
-"""The robot layer's error: a valid command whose running failed."""
+"""The robot layer's error: a valid command whose running failed (raised by the verbs too)."""
 
-
-class BackendError(Exception):
-    """The command was valid but running it failed (timeout, no message, process error)."""
+from astiop.ros2.verbs.base import BackendError  # noqa: F401 - its home for the transports

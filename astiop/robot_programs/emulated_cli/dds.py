@@ -32,6 +32,7 @@ from rclpy.node import Node
 from astiop.robot_programs.emulated_cli.call import Call, Interrupted
 from astiop.robot_programs.emulated_cli.dds_calls import CallVerbs
 from astiop.robot_programs.emulated_cli.dds_topics import TopicVerbs
+from astiop.robot_programs.emulated_cli.verb_table import ServesVerbs, runs
 from astiop.ros2.definitions import DEFINITIONS
 from astiop.ros2.interfaces import interface_show
 from astiop.ros2.printing import (
@@ -43,7 +44,6 @@ from astiop.ros2.printing import (
 )
 from astiop.transports.rclpy.graph import full_name, hidden, read_params
 from astiop.transports.rclpy.verbs import PARAM_FIELDS
-from astiop.transports.verb_table import ServesVerbs, runs
 
 NODE_NAME = "_ros2cli_daemon_emulated"  # hidden, as the daemon's node is
 # ros2param/verb/get.py's labels, by rcl_interfaces/msg/ParameterType

@@ -21,8 +21,8 @@ from astiop.robot_programs.emulated_cli.dds_fields import (
     message_to_yaml,
     set_message_fields,
 )
+from astiop.robot_programs.emulated_cli.verb_table import runs
 from astiop.transports.rclpy.verbs import STATUS
-from astiop.transports.verb_table import runs
 
 RUNNING = (GoalStatus.STATUS_ACCEPTED, GoalStatus.STATUS_EXECUTING)
 

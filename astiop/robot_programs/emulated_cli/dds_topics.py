@@ -21,8 +21,8 @@ from rclpy.qos import (
 
 from astiop.robot_programs.emulated_cli.call import Call
 from astiop.robot_programs.emulated_cli.dds_fields import load_class, plain, set_message_fields
+from astiop.robot_programs.emulated_cli.verb_table import runs
 from astiop.ros2.printing import echo_yaml
-from astiop.transports.verb_table import runs
 
 QOS_FLAGS = ("qos_reliability", "qos_durability", "qos_depth", "qos_history", "qos_liveliness",
              "qos_liveliness_lease_duration_seconds")  # fmt: skip

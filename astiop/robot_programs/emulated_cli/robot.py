@@ -9,8 +9,10 @@ from __future__ import annotations
 
 import collections
 import contextlib
+import functools
 import json
 import os
+import shlex
 import socket
 import sys
 import threading
@@ -31,6 +33,9 @@ from astiop.ros2.printing import (
     param_list_text,
     type_of,
 )
+from astiop.ros2.validation import validate
+from astiop.ros2.verbs import VERBS
+from astiop.ros2.verbs.base import SAMPLE, BackendError
 from astiop.sim import messages as sm
 from astiop.sim.simulator import GoalError, Simulator
 from astiop.store import LocationError, Store
@@ -38,6 +43,7 @@ from astiop.transports.simulator.backend import SimBackend
 from astiop.transports.state import yaw_of
 
 MAP_TYPE = "nav_msgs/msg/OccupancyGrid"
+VERB_TIMEOUT_S = 10.0
 
 
 class EmulatedRobot(TopicVerbs):
@@ -105,6 +111,8 @@ class EmulatedRobot(TopicVerbs):
             return
         args = req.get("args", {})
         handler = getattr(self, f"_{args.get('command')}_{args.get('verb')}", None)
+        if handler is None and (args.get("command"), args.get("verb")) in VERBS:
+            handler = functools.partial(self._verb, argv=req.get("argv", []))
         if (args.get("command"), args.get("verb")) in SPAWN_DAEMON and not args.get("no_daemon"):
             self.daemon_running = True
         code = 1
@@ -119,6 +127,26 @@ class EmulatedRobot(TopicVerbs):
             with contextlib.suppress(Interrupted):
                 call.err(f"{type(exc).__name__}: {exc}\n")
         call.finish(code)
+
+    def _verb(self, call: Call, a: dict, argv: list[str]) -> int:
+        """A verb with no emulation of its own here: run as the simulator in process runs it
+        (astiop/ros2/verbs/), printed as ros2 prints it; one ros2 runs until stopped (hz, bw)
+        waits for its SIGINT after."""
+        checked = validate(shlex.join(["ros2", *argv]), self.catalog, self.distro)
+        if checked.command is not None and checked.command.name in self.missing:
+            call.wait(3600.0)  # ros2 waits for a topic nobody publishes
+        if not checked.valid:
+            call.err(checked.reason + "\n")
+            return 1
+        try:
+            text, _ = self.backend.execute(checked, VERB_TIMEOUT_S)
+        except BackendError as exc:
+            call.err(f"{exc}\n")
+            return 1
+        call.out(text)
+        if VERBS[checked.command.key].means == SAMPLE:
+            call.wait(3600.0)
+        return 0
 
     # -- service ----------------------------------------------------------------------------
     def _service_list(self, call: Call, a: dict) -> int:

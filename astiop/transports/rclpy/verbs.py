@@ -1,33 +1,26 @@
-"""The ros2 verbs executed in process through rclpy, each printed as ros2cli prints it (jazzy
-branch: ros2topic/verb/{list,info,echo,pub,hz}.py, ros2service/verb/call.py,
-ros2action/verb/send_goal.py, ros2node/api, ros2param/verb/{get,set}.py), with the same
-structured values the CLI transport returns."""
+"""rclpy as a transport the verbs run on (ros2/verbs/transport.py): the graph, messages, a
+topic's arrivals, publishing, service calls, goals and parameters in process, printed as ros2cli
+prints them (jazzy branch: ros2topic/verb/{pub,hz,bw}.py, ros2service/verb/call.py,
+ros2action/verb/send_goal.py, ros2node/api, ros2param/verb/{get,set}.py)."""
 
 from __future__ import annotations
 
-import math
 import time
+from collections.abc import Callable
 from typing import Any
 
 from rclpy.action import ActionClient
 from rclpy.qos import qos_profile_sensor_data
 
-from astiop.ros2.interfaces import interface_show
 from astiop.ros2.message_objects import MessageTypeError, interface_class, to_dict, to_message
-from astiop.ros2.printing import (
-    echo_text,
-    list_text,
-    node_info_text,
-    param_list_text,
-    ros2cli_yaml,
-)
+from astiop.ros2.printing import ros2cli_yaml
 from astiop.ros2.render import STAMPED
 from astiop.ros2.validation import Checked
+from astiop.ros2.verbs import VERBS
 from astiop.transports.base import BackendError
 from astiop.transports.inflight import ENDED, Job
 from astiop.transports.rclpy.graph import full_name, hidden, latched, matched_qos, read_params
 from astiop.transports.rclpy.node import RosTimeout
-from astiop.transports.verb_table import ServesVerbs, runs
 
 # action_msgs/msg/GoalStatus -> send_goal.py's _goal_status_to_string
 STATUS = {
@@ -38,93 +31,47 @@ STATUS = {
     5: "CANCELED",
     6: "ABORTED",
 }
-PARAM_WORDS = {
-    1: "Boolean value is:",
-    2: "Integer value is:",
-    3: "Double value is:",
-    4: "String value is:",
-}
 PARAM_FIELDS = {1: "bool_value", 2: "integer_value", 3: "double_value", 4: "string_value"}
 
 
-class RclpyVerbs(ServesVerbs):
+class RclpyVerbs:
     """Mixed into RclpyBackend: uses its proc, catalog, watches, goals and events."""
 
     def execute(self, checked: Checked, timeout: float) -> tuple[str, Any]:
-        cmd = checked.command
-        handler = self.verb_handler(cmd.key)
-        if handler is None:
-            raise BackendError(
-                f"ros2 {cmd.verb} {cmd.sub} is not served through rclpy (the CLI transport, "
-                "--ros2-transport cli, runs it)"
-            )
         try:
             with self.actuating(checked):  # refused while the E-STOP holds, ended by it
-                return handler(checked, timeout)
+                return VERBS[checked.command.key].run(self, checked, timeout)
         except RosTimeout as exc:
             raise BackendError(str(exc)) from None
         except MessageTypeError as exc:
             raise BackendError(str(exc)) from None
 
-    # -- listings ---------------------------------------------------------------------------
-    def _listing(self, kind: str, c: Checked) -> tuple[str, list[str]]:
-        return list_text(self._lists[kind], c.command.flags)
+    # -- the graph ------------------------------------------------------------------------
+    def graph(self, kind: str) -> list[tuple[str, str]]:
+        return self._lists[kind]
 
-    @runs("topic list")
-    def _topic_list(self, c: Checked, timeout: float):
-        return self._listing("topic", c)
+    def endpoint_counts(self, topic: str) -> tuple[int, int]:
+        return self.proc.node.count_publishers(topic), self.proc.node.count_subscribers(topic)
 
-    @runs("service list")
-    def _service_list(self, c: Checked, timeout: float):
-        return self._listing("service", c)
-
-    @runs("action list")
-    def _action_list(self, c: Checked, timeout: float):
-        return self._listing("action", c)
-
-    @runs("node list")
-    def _node_list(self, c: Checked, timeout: float):
-        names = [n for n, _ in self._lists["node"]]
-        return "".join(f"{n}\n" for n in names), names
-
-    @runs("topic type", "service type")
-    def _topic_type(self, c: Checked, timeout: float):
-        return c.type + "\n", c.type
-
-    @runs("topic info")
-    def _topic_info(self, c: Checked, timeout: float):
-        node, name = self.proc.node, c.command.name
-        pubs, subs = node.count_publishers(name), node.count_subscribers(name)
-        text = f"Type: {c.type}\nPublisher count: {pubs}\nSubscription count: {subs}\n"
-        return text, {"type": c.type, "publishers": pubs, "subscribers": subs}
-
-    @runs("action info")
-    def _action_info(self, c: Checked, timeout: float):
+    def action_servers(self, action: str) -> list[str]:
         from rclpy.action import get_action_server_names_and_types_by_node
 
-        servers = [
+        return [
             full_name(ns, n)
             for n, ns in self.proc.node.get_node_names_and_namespaces()
             if any(
-                a == c.command.name
+                a == action
                 for a, _ in get_action_server_names_and_types_by_node(self.proc.node, n, ns)
             )
         ]
-        lines = [
-            f"Action: {c.command.name}",
-            "Action clients: 0",
-            f"Action servers: {len(servers)}",
-        ]
-        return "\n".join(lines + [f"    {s}" for s in servers]) + "\n", {"servers": servers}
 
-    @runs("node info")
-    def _node_info(self, c: Checked, timeout: float):
+    def node_info(self, target: str) -> dict:
         from rclpy.action import (
             get_action_client_names_and_types_by_node,
             get_action_server_names_and_types_by_node,
         )
 
-        node, target = self.proc.node, c.command.name
+        node = self.proc.node
         ns, _, leaf = target.rpartition("/")
         ns = ns or "/"
         sections = {
@@ -135,20 +82,19 @@ class RclpyVerbs(ServesVerbs):
             "Action Servers": get_action_server_names_and_types_by_node(node, leaf, ns),
             "Action Clients": get_action_client_names_and_types_by_node(node, leaf, ns),
         }
-        info = {
+        return {
             k: sorted((n, ", ".join(t)) for n, t in v if not hidden(n)) for k, v in sections.items()
         }
-        return node_info_text(target, info), info
 
-    @runs("interface show")
-    def _interface_show(self, c: Checked, timeout: float):
-        return interface_show(c.command.args["type"]), None
+    def interfaces(self) -> list[str]:
+        raise BackendError(
+            "ros2 interface list is not served through rclpy (the CLI transport, "
+            "--ros2-transport cli, runs it)"
+        )
 
     # -- topics -----------------------------------------------------------------------------
-    @runs("topic echo")
-    def _topic_echo(self, c: Checked, timeout: float):
+    def take(self, c: Checked, timeout: float) -> dict[str, Any]:
         name = c.command.name
-        timeout = c.command.options.get("timeout", timeout)
         w = self._watches.get(name)
         spec = self.catalog.topics.get(name)
         if w is not None and spec is not None and spec.rate_hz > 0:
@@ -163,13 +109,7 @@ class RclpyVerbs(ServesVerbs):
             msg = self._one_message(name, c.type, timeout)
         if msg is None:
             raise BackendError(f"no reading from {name} in {timeout:g} s")
-        values = to_dict(msg)
-        field = c.command.options.get("field")
-        if field:
-            for part in field.split("."):
-                values = values[part]
-            return ros2cli_yaml(values) + "---\n", values
-        return echo_text(values, c.command), values
+        return to_dict(msg)
 
     def _one_message(self, name: str, type_: str, timeout: float) -> Any:
         from astiop.transports.rclpy.watch import TopicWatch
@@ -180,45 +120,25 @@ class RclpyVerbs(ServesVerbs):
         finally:
             w.close()
 
-    @runs("topic hz")
-    def _topic_hz(self, c: Checked, timeout: float):
-        name, windows = c.command.name, 2
-        times: list[float] = []
+    def samples(
+        self, topic: str, type_: str, enough: Callable[[list], bool], timeout: float
+    ) -> list[tuple[float, int]]:
+        """Each message's arrival and its serialized size (taken raw, as ros2 topic bw does)."""
+        got: list[tuple[float, int]] = []
         sub = self.proc.node.create_subscription(
-            interface_class(c.type), name, lambda _m: times.append(time.monotonic()),
-            qos_profile_sensor_data,
+            interface_class(type_), topic, lambda data: got.append((time.monotonic(), len(data))),
+            qos_profile_sensor_data, raw=True,
         )  # fmt: skip
-        lines, rates = [], []
         deadline = time.monotonic() + timeout
         try:
-            printed_at = None
-            while len(rates) < windows and time.monotonic() < deadline:
+            while time.monotonic() < deadline and not enough(list(got)):
                 time.sleep(0.05)
-                if len(times) < 2:
-                    continue
-                if printed_at is None:
-                    printed_at = times[-1]
-                    continue
-                if times[-1] < printed_at + 1.0:
-                    continue
-                deltas = [b - a for a, b in zip(times, times[1:])]
-                mean = sum(deltas) / len(deltas)
-                std = math.sqrt(sum((d - mean) ** 2 for d in deltas) / len(deltas))
-                rate = 1.0 / mean if mean > 0 else 0.0
-                rates.append(rate)
-                lines.append(
-                    f"average rate: {rate:.3f}\n\tmin: {min(deltas):.3f}s max: {max(deltas):.3f}s "
-                    f"std dev: {std:.5f}s window: {len(deltas)}"
-                )
-                printed_at = times[-1]
         finally:
             self.proc.node.destroy_subscription(sub)
-        if not rates:
-            raise BackendError(f"{name} is not being published (no rate within {timeout:g} s)")
-        return "\n".join(lines) + "\n", {"average_rate": round(rates[-1], 3), "windows": len(rates)}
+        return list(got)
 
-    @runs("topic pub")
-    def _topic_pub(self, c: Checked, timeout: float):
+    # -- actuation ---------------------------------------------------------------------------
+    def publish(self, c: Checked, timeout: float) -> tuple[str, Any]:
         cmd = c.command
         name, times = cmd.name, 1 if "once" in cmd.flags else cmd.options.get("times", 1)
         rate = cmd.options.get("rate", 1.0)
@@ -260,9 +180,7 @@ class RclpyVerbs(ServesVerbs):
             values["twist"] = twist
         return "\n".join(lines) + "\n", values
 
-    # -- services -----------------------------------------------------------------------------
-    @runs("service call")
-    def _service_call(self, c: Checked, timeout: float):
+    def call(self, c: Checked, timeout: float) -> tuple[str, Any]:
         name = c.command.name
         srv = interface_class(c.type)
         request = to_message(srv.Request, c.message or {})
@@ -280,9 +198,7 @@ class RclpyVerbs(ServesVerbs):
             self.cancel_goals()
         return "\n".join(lines) + "\n", to_dict(response)
 
-    # -- the action ----------------------------------------------------------------------------
-    @runs("action send_goal")
-    def _action_send_goal(self, c: Checked, timeout: float):
+    def send_goal(self, c: Checked, timeout: float) -> tuple[str, Any]:
         """Return at acceptance; the goal is followed to its end in the background."""
         action = interface_class(c.type)
         goal = to_message(action.Goal, c.message or {})
@@ -335,39 +251,30 @@ class RclpyVerbs(ServesVerbs):
             handle.cancel_goal_async()
 
     # -- parameters ----------------------------------------------------------------------------
-    @runs("param list")
-    def _param_list(self, c: Checked, timeout: float):
+    def list_params(self, named: str | None, timeout: float) -> list[tuple[str, str, str]]:
         # asked of each node now, as ros2cli does (ros2param/verb/list.py)
         served = {n for n, _ in self._lists["service"]}
         nodes = [n for n, _ in self._lists["node"] if f"{n}/list_parameters" in served]
-        named = c.command.args.get("node")
         read = read_params(self.proc, [named] if named else nodes, timeout)
-        params = [(*key.split(" ", 1), type_) for key, type_ in read]
-        return param_list_text(params, named, c.command.flags, c.command.options)
+        return [(*key.split(" ", 1), type_) for key, type_ in read]
 
-    @runs("param get")
-    def _param_get(self, c: Checked, timeout: float):
+    def get_param(self, node: str, param: str, timeout: float) -> Any:
         from rcl_interfaces.srv import GetParameters
 
-        node, param = c.command.args["node"], c.command.args["param"]
         response = self._param_call(
             GetParameters, f"{node}/get_parameters", GetParameters.Request(names=[param]), timeout
         )
         if not response.values or response.values[0].type == 0:
             raise BackendError(f"parameter {param} is not set on {node}")
         value = response.values[0]
-        if value.type not in PARAM_WORDS:
+        if value.type not in PARAM_FIELDS:
             raise BackendError(f"parameter {param} has a type astiop does not read ({value.type})")
-        v = getattr(value, PARAM_FIELDS[value.type])
-        return f"{PARAM_WORDS[value.type]} {v}\n", {"value": v}
+        return getattr(value, PARAM_FIELDS[value.type])
 
-    @runs("param set")
-    def _param_set(self, c: Checked, timeout: float):
+    def set_param(self, node: str, param: str, value: Any, timeout: float) -> str:
         from rcl_interfaces.msg import Parameter, ParameterValue
         from rcl_interfaces.srv import SetParameters
 
-        node, param = c.command.args["node"], c.command.args["param"]
-        value = c.message["value"]
         kind = {bool: 1, int: 2, float: 3, str: 4}[type(value)]
         pv = ParameterValue(type=kind, **{PARAM_FIELDS[kind]: value})
         request = SetParameters.Request(parameters=[Parameter(name=param, value=pv)])
@@ -377,9 +284,7 @@ class RclpyVerbs(ServesVerbs):
             raise BackendError(
                 "Setting parameter failed" + (f": {result.reason}" if result.reason else "")
             )
-        return "Set parameter successful" + (
-            f": {result.reason}" if result.reason else ""
-        ) + "\n", {"value": value}
+        return result.reason
 
     def _param_call(self, srv: Any, name: str, request: Any, timeout: float) -> Any:
         try:

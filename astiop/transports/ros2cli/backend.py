@@ -19,6 +19,8 @@ from astiop.ros2.profile import ProfileSpec
 from astiop.ros2.render import STAMPED, flow_yaml, sent_argv
 from astiop.ros2.transforms import STALE_S, TransformTable
 from astiop.ros2.validation import CANCEL_SUFFIX, Checked
+from astiop.ros2.verbs import VERBS
+from astiop.ros2.verbs.base import CALL, GOAL, SAMPLE, TAKE
 from astiop.transports import live_robot
 from astiop.transports.base import BackendError, RobotBackend
 from astiop.transports.event_log import Contact, EstopWork, EventLog
@@ -495,20 +497,20 @@ class Ros2Backend(RobotBackend):
                 raise
 
     def _execute(self, checked: Checked, timeout: float) -> tuple[str, Any]:
+        verb = VERBS[checked.command.key]
+        means = {TAKE: self._echo, SAMPLE: self._sample, GOAL: self._send_goal}
+        return means.get(verb.means, self._once)(checked, sent_argv(checked), timeout)
+
+    def _once(self, checked: Checked, argv: list[str], timeout: float) -> tuple[str, Any]:
+        """A verb ros2 ends by itself: a query, a publish, a service call."""
         cmd = checked.command
-        argv = sent_argv(checked)
-        if cmd.key == ("topic", "echo"):
-            return self._echo(checked, argv, timeout)
-        if cmd.key == ("topic", "hz"):
-            return self._hz(checked, argv, timeout)
-        if cmd.key == ("action", "send_goal"):
-            return self._send_goal(checked, argv, timeout)
         if cmd.key == ("topic", "pub") and "times" in cmd.options:
             # never stop a publisher that validation allowed to run this long
             rate = cmd.options.get("rate", 1.0)
             timeout = max(timeout, (cmd.options["times"] - 1) / rate + timeout)
         run = self._run(argv, timeout)
-        if cmd.key == ("service", "call") and _waited_for_service(run.out):
+        calls = VERBS[cmd.key].means == CALL
+        if calls and _waited_for_service(run.out):
             raise BackendError(f"service {cmd.name} is not available (waited {timeout:g} s)")
         if run.stopped:
             raise BackendError(f"ros2 {' '.join(argv[:3])} timed out after {timeout:g} s")
@@ -517,7 +519,7 @@ class Ros2Backend(RobotBackend):
         failed = FAILED_WITH_STATUS_0.search(run.out)
         if failed:  # rclcpp refuses on stdout and ros2 still exits 0: it did not happen
             raise BackendError(failed[0].strip()[:300])
-        if cmd.key == ("service", "call"):
+        if calls:
             values = parse_response(run.out)
             if checked.local_name == "/stop":
                 self.cancel_goals()
@@ -540,19 +542,16 @@ class Ros2Backend(RobotBackend):
         doc = decode_bytes(checked.type, doc)
         return echo_text(doc, checked.command), doc
 
-    def _hz(self, checked: Checked, argv: list[str], timeout: float):
-        windows = 2
-
-        def enough(out: str) -> bool:
-            return out.count("average rate:") >= windows
-
-        run = self._run(argv, timeout, until=enough)
-        rates = re.findall(r"average rate: ([0-9.]+)", run.out)
-        if not rates:
+    def _sample(self, checked: Checked, argv: list[str], timeout: float):
+        """A verb ros2 runs until stopped (hz, bw): read until the verb has enough of it."""
+        verb = VERBS[checked.command.key]
+        run = self._run(argv, timeout, until=verb.enough)
+        values = verb.read(run.out)
+        if values is None:
             raise BackendError(
-                f"{checked.command.name} is not being published (no rate within {timeout:g} s)"
+                f"{checked.command.name} is not being published (nothing within {timeout:g} s)"
             )
-        return run.out, {"average_rate": float(rates[-1]), "windows": len(rates)}
+        return run.out, values
 
     def _send_goal(self, checked: Checked, argv: list[str], timeout: float):
         """Return at acceptance; the client keeps running and is followed to the end."""

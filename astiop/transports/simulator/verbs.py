@@ -1,44 +1,37 @@
-"""The ros2 verbs served by the simulator: each checked command answered as `ros2` would,
-from the simulator's state (topic, service, action, node, interface, param)."""
+"""The simulator as a transport the verbs run on (ros2/verbs/transport.py): the graph from its
+catalog, messages from its state, a publish driving it, its services, its goals, parameters."""
 
 from __future__ import annotations
 
 import time
 import uuid
+from collections.abc import Callable
 from typing import Any
 
-from astiop.ros2.interfaces import interface_show, python_repr
-from astiop.ros2.printing import (
-    echo_text,
-    indent_yaml,
-    interface_list_text,
-    list_text,
-    node_info_text,
-    param_list_text,
-    type_of,
-)
+from astiop.ros2.cdr import serialized_size
+from astiop.ros2.interfaces import python_repr
+from astiop.ros2.printing import indent_yaml, type_of
 from astiop.ros2.validation import Checked
+from astiop.ros2.verbs import VERBS
 from astiop.sim.simulator import GoalError
 from astiop.store import LocationError
 from astiop.transports.base import BackendError
 from astiop.transports.state import yaw_of
-from astiop.transports.verb_table import ServesVerbs, runs
+
+# a topic's arrivals are followed this long of robot time at most
+SAMPLE_S = 5.0
 
 
-class SimVerbs(ServesVerbs):
+class SimVerbs:
     """Mixed into SimBackend: uses its sim, store, catalog, params and topic messages."""
 
-    # -- execution ------------------------------------------------------------------
     def execute(self, checked: Checked, timeout: float = 10.0) -> tuple[str, Any]:
         cmd = checked.command
         if checked.kind == "actuate" and self.sim.e_stopped and cmd.name != "/stop":
             raise BackendError("the E-STOP is engaged: nothing was sent")
-        handler = self.verb_handler(cmd.key)
-        if handler is None:
-            raise BackendError(f"ros2 {cmd.verb} {cmd.sub} is not served by the simulator")
         try:
             with self.actuating(checked):  # refused while the E-STOP holds, ended by it
-                return handler(checked, timeout)
+                return VERBS[cmd.key].run(self, checked, timeout)
         except (GoalError, LocationError) as exc:
             raise BackendError(str(exc)) from None
         except BackendError:
@@ -46,48 +39,51 @@ class SimVerbs(ServesVerbs):
         except Exception as exc:  # the simulator must never take the caller down
             raise BackendError(f"the simulator failed: {type(exc).__name__}: {exc}") from None
 
-    @runs("topic list")
-    def _topic_list(self, c: Checked, timeout: float):
-        return self._listing(self.catalog.topics, c)
-
-    @staticmethod
-    def _listing(entries: dict, c: Checked) -> tuple[str, list[str]]:
-        return list_text(sorted((n, e.type) for n, e in entries.items()), c.command.flags)
-
-    @runs("topic type", "service type")
-    def _topic_type(self, c: Checked, timeout: float):
-        return c.type + "\n", c.type
-
-    @runs("topic info")
-    def _topic_info(self, c: Checked, timeout: float):
-        spec = self.catalog.topics[c.command.name]
-        pubs, subs = int(bool(spec.publisher)), int(bool(spec.subscriber))
-        text = f"Type: {spec.type}\nPublisher count: {pubs}\nSubscription count: {subs}\n"
-        return text, {"type": spec.type, "publishers": pubs, "subscribers": subs}
-
-    @runs("topic echo")
-    def _topic_echo(self, c: Checked, timeout: float):
-        timeout = c.command.options.get("timeout", timeout)
-        msg = self._wait_for_message(c.command.name, timeout)
-        return echo_text(msg, c.command), msg
-
-    @runs("topic hz")
-    def _topic_hz(self, c: Checked, timeout: float):
-        spec = self.catalog.topics[c.command.name]
-        if spec.rate_hz == 0 or (c.command.name == "/plan" and self.sim.goal is None):
-            raise BackendError(f"{spec.name} is not being published at a rate right now")
-        window = c.command.options.get("window", int(spec.rate_hz * 2) + 1)
-        duration = min((window - 1) / spec.rate_hz, 5.0)
-        self.advance(duration, timeout)
-        period = 1.0 / spec.rate_hz
-        text = (
-            f"average rate: {spec.rate_hz:.3f}\n\tmin: {period:.3f}s max: {period:.3f}s "
-            f"std dev: 0.00000s window: {window}\n"
+    # -- the graph ----------------------------------------------------------------------
+    def graph(self, kind: str) -> list[tuple[str, str]]:
+        if kind == "node":
+            return [(n, "") for n in self.catalog.nodes]
+        entries = {"topic": self.catalog.topics, "service": self.catalog.services}.get(
+            kind, self.catalog.actions
         )
-        return text, {"average_rate": spec.rate_hz, "window": window}
+        return sorted((n, e.type) for n, e in entries.items())
 
-    @runs("topic pub")
-    def _topic_pub(self, c: Checked, timeout: float):
+    def endpoint_counts(self, topic: str) -> tuple[int, int]:
+        spec = self.catalog.topics[topic]
+        return int(bool(spec.publisher)), int(bool(spec.subscriber))
+
+    def action_servers(self, action: str) -> list[str]:
+        return [self.catalog.actions[action].node]
+
+    def node_info(self, node: str) -> dict:
+        return self.catalog.node_info(node)
+
+    def interfaces(self) -> list[str]:
+        from astiop.ros2.definitions import DEFINITIONS
+
+        return list(DEFINITIONS)
+
+    # -- topics ---------------------------------------------------------------------------
+    def take(self, c: Checked, timeout: float) -> dict[str, Any]:
+        return self._wait_for_message(c.command.name, timeout)
+
+    def samples(
+        self, topic: str, type_: str, enough: Callable[[list], bool], timeout: float
+    ) -> list[tuple[float, int]]:
+        """Each publication of the topic at its rate, on the simulator's clock."""
+        spec = self.catalog.topics[topic]
+        if spec.rate_hz == 0 or (topic == "/plan" and self.sim.goal is None):
+            raise BackendError(f"{spec.name} is not being published at a rate right now")
+        got: list[tuple[float, int]] = []
+        start = self.sim.t
+        while not enough(got) and self.sim.t - start <= SAMPLE_S:
+            if got:
+                self.advance(1.0 / spec.rate_hz, timeout)
+            got.append((self.sim.t, serialized_size(type_, self.message(topic))))
+        return got
+
+    # -- actuation ----------------------------------------------------------------
+    def publish(self, c: Checked, timeout: float) -> tuple[str, Any]:
         cmd = c.command
         twist = c.message
         times = 1 if "once" in cmd.flags else cmd.options["times"]
@@ -103,12 +99,7 @@ class SimVerbs(ServesVerbs):
                 self.advance(1.0 / rate, timeout + 1.0 / rate)
         return "\n".join(lines) + "\n", {"published": times, "twist": twist}
 
-    @runs("service list")
-    def _service_list(self, c: Checked, timeout: float):
-        return self._listing(self.catalog.services, c)
-
-    @runs("service call")
-    def _service_call(self, c: Checked, timeout: float):
+    def call(self, c: Checked, timeout: float) -> tuple[str, Any]:
         name, req = c.command.name, c.message
         response = self.serve(name, req)
         text = (
@@ -174,18 +165,7 @@ class SimVerbs(ServesVerbs):
             raise LocationError(f"no location named '{name}'")
         return (*st.pose, st.name)
 
-    @runs("action list")
-    def _action_list(self, c: Checked, timeout: float):
-        return self._listing(self.catalog.actions, c)
-
-    @runs("action info")
-    def _action_info(self, c: Checked, timeout: float):
-        spec = self.catalog.actions[c.command.name]
-        text = f"Action: {spec.name}\nAction clients: 0\nAction servers: 1\n    {spec.node}\n"
-        return text, {"servers": [spec.node]}
-
-    @runs("action send_goal")
-    def _action_send_goal(self, c: Checked, timeout: float):
+    def send_goal(self, c: Checked, timeout: float) -> tuple[str, Any]:
         goal_msg = c.message
         pose = goal_msg["pose"]["pose"]
         x, y = pose["position"]["x"], pose["position"]["y"]
@@ -243,43 +223,15 @@ class SimVerbs(ServesVerbs):
             "final_pose": {"x": px, "y": py, "theta": pth},
         }
 
-    @runs("node list")
-    def _node_list(self, c: Checked, timeout: float):
-        return "\n".join(self.catalog.nodes) + "\n", list(self.catalog.nodes)
+    # -- parameters ---------------------------------------------------------------------
+    def list_params(self, node: str | None, timeout: float) -> list[tuple[str, str, str]]:
+        return [(n, name, type_of(value)) for (n, name), value in self.params.items()]
 
-    @runs("node info")
-    def _node_info(self, c: Checked, timeout: float):
-        info = self.catalog.node_info(c.command.name)
-        return node_info_text(c.command.name, info), info
+    def get_param(self, node: str, name: str, timeout: float) -> Any:
+        return self.params[(node, name)]
 
-    @runs("interface show")
-    def _interface_show(self, c: Checked, timeout: float):
-        return interface_show(c.command.args["type"]), None
-
-    @runs("interface list")
-    def _interface_list(self, c: Checked, timeout: float):
-        from astiop.ros2.definitions import DEFINITIONS
-
-        return interface_list_text(list(DEFINITIONS), c.command.flags)
-
-    @runs("param list")
-    def _param_list(self, c: Checked, timeout: float):
-        params = [(node, name, type_of(value)) for (node, name), value in self.params.items()]
-        return param_list_text(params, c.command.args.get("node"), c.command.flags,
-                               c.command.options)  # fmt: skip
-
-    @runs("param get")
-    def _param_get(self, c: Checked, timeout: float):
-        key = (c.command.args["node"], c.command.args["param"])
-        value = self.params[key]
-        word = {float: "Double", int: "Integer", str: "String", bool: "Boolean"}[type(value)]
-        return f"{word} value is: {value}\n", value
-
-    @runs("param set")
-    def _param_set(self, c: Checked, timeout: float):
-        key = (c.command.args["node"], c.command.args["param"])
-        value = c.message["value"]
-        self.params[key] = value
-        if key[1] == "max_linear_speed":
+    def set_param(self, node: str, name: str, value: Any, timeout: float) -> str:
+        self.params[(node, name)] = value
+        if name == "max_linear_speed":
             self.sim.gains = type(self.sim.gains)(v_max=value, w_max=self.sim.gains.w_max)
-        return "Set parameter successful\n", value
+        return ""

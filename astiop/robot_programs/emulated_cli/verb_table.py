@@ -1,4 +1,4 @@
-"""Which method runs which ros2 verb on an in-process robot (the simulator, rclpy): declared on
+"""Which method runs which ros2 verb in the emulated `ros2` over DDS: declared on
 the method itself, `@runs("topic hz")`, and looked up by the command's key. A verb a transport
 does not serve is refused in one line, never an AttributeError."""
 

@@ -1,0 +1,59 @@
+"""What a ros2 verb is to astiop: its arguments as ros2cli declares them, the checks against the
+robot's catalog, and how it runs in process over a transport. Stdlib only: the emulated `ros2`
+builds its parser from these at every call."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from astiop.ros2.catalog import Catalog
+    from astiop.ros2.grammar import Ros2Command
+    from astiop.ros2.verbs.checks import Checked
+    from astiop.ros2.verbs.transport import Transport
+
+VerbKey = tuple[str, str]
+Output = tuple[str, Any]  # what ros2 prints, and the values astiop reads from it
+
+# How a verb's work is done, as each transport names its means (a transport without the verb's
+# means refuses it in one line): the CLI transport reads ros2's output by it.
+QUERY = "query"  # asks the graph or the robot once and prints
+TAKE = "take"  # takes one message (echo)
+SAMPLE = "sample"  # follows a topic's arrivals for a while (hz, bw): ros2 runs until stopped
+PUBLISH = "publish"
+CALL = "call"
+GOAL = "goal"
+
+
+class BackendError(Exception):
+    """The command was valid but running it failed (timeout, no message, process error)."""
+
+
+def _valid(cmd: Ros2Command, catalog: Catalog) -> Checked:
+    from astiop.ros2.verbs.checks import Checked
+
+    return Checked(cmd.text, cmd, True)
+
+
+@dataclass(frozen=True)
+class Verb:
+    key: VerbKey
+    arguments: Callable[[Any, str], None]  # (argparse subparser, distro): as ros2cli declares it
+    run: Callable[[Transport, Checked, float], Output]  # in process, over a transport
+    check: Callable[[Ros2Command, Catalog], Checked] = _valid  # against the robot's catalog
+    means: str = QUERY
+    example: str = ""  # shown with a parse error
+    flags: Mapping[str, str] = field(default_factory=dict)  # argparse dest -> astiop's flag
+    options: Mapping[str, str] = field(default_factory=dict)  # argparse dest -> astiop's option
+    values_from: str = ""  # the argparse dest holding YAML values (pub, call, send_goal)
+    normalize: Callable[[dict, dict], None] | None = None  # (argparse namespace, options)
+    measures: bool = False  # what it prints the robot measured now (provenance)
+    # a SAMPLE verb's output read as ros2 prints it: enough of it yet, and its values
+    enough: Callable[[str], bool] | None = None
+    read: Callable[[str], Any] | None = None
+
+    @property
+    def name(self) -> str:
+        return " ".join(self.key)

@@ -1,0 +1,20 @@
+"""`ros2 interface list` (ros2interface/verb/list.py)."""
+
+from __future__ import annotations
+
+from astiop.ros2.verbs.base import Verb
+
+
+def arguments(p, distro: str) -> None:
+    p.add_argument("-m", "--only-msgs", action="store_true")
+    p.add_argument("-s", "--only-srvs", action="store_true")
+    p.add_argument("-a", "--only-actions", action="store_true")
+
+
+def run(t, c, timeout: float):
+    from astiop.ros2.printing import interface_list_text
+
+    return interface_list_text(t.interfaces(), c.command.flags)
+
+
+VERB = Verb(("interface", "list"), arguments, run)

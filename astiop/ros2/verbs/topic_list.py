@@ -1,0 +1,23 @@
+"""`ros2 topic list` (ros2topic/verb/list.py)."""
+
+from __future__ import annotations
+
+from astiop.ros2.verbs.arguments import strategy
+from astiop.ros2.verbs.base import Verb
+
+
+def arguments(p, distro: str) -> None:
+    p.add_argument("-t", "--show-types", action="store_true")
+    p.add_argument("-c", "--count-topics", action="store_true")
+    p.add_argument("--include-hidden-topics", action="store_true")
+    p.add_argument("-v", "--verbose", action="store_true")
+    strategy(p)
+
+
+def run(t, c, timeout: float):
+    from astiop.ros2.printing import list_text
+
+    return list_text(t.graph("topic"), c.command.flags)
+
+
+VERB = Verb(("topic", "list"), arguments, run)
