@@ -9,14 +9,12 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import threading
-from collections.abc import Iterable
 from dataclasses import replace
 from functools import partial
 from pathlib import Path
 from typing import Any
 
-from textual.app import App, SystemCommand
+from textual.app import App
 from textual.binding import Binding
 from textual.worker import Worker, WorkerState
 
@@ -27,18 +25,18 @@ from astiop.robot.factory import make_robot_gateway, make_sim_gateway
 from astiop.robot.fleet_watch import FleetRow, FleetWatch, control_of, row_from
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.sampler import StateSampler
-from astiop.ros2.render import goto_command, sent_text
-from astiop.ros2.validation import Checked
-from astiop.screens import control, mission_commands
+from astiop.ros2.render import goto_command
+from astiop.screens import control
 from astiop.screens.approvals import ApprovalDesk
 from astiop.screens.bench import BenchScreen
 from astiop.screens.chat import ChatScreen
+from astiop.screens.console_palette import ConsolePalette
+from astiop.screens.console_safety import ConsoleSafety
 from astiop.screens.dashboard import DashboardScreen, motion_key
 from astiop.screens.fleet import FleetScreen
 from astiop.screens.locations import LocationsScreen
 from astiop.screens.logs import LogsScreen
 from astiop.screens.messages import RobotStateSampled, TurnFinished
-from astiop.screens.modals import ConfirmModal
 from astiop.screens.teleop import TeleopScreen
 from astiop.services import Services
 from astiop.store import Store
@@ -47,7 +45,7 @@ from astiop.transports.state import RobotState, TopicStat
 STILL_HZ = 4.0  # a still robot's sampling: only its clock, scan noise and battery change
 
 
-class AstiopApp(App):
+class AstiopApp(ConsoleSafety, ConsolePalette, App):
     TITLE = "astiop"
     CSS_PATH = "app.tcss"
     MODES = {
@@ -256,65 +254,6 @@ class AstiopApp(App):
     def action_replay_speed(self, up: int) -> None:
         self.services.gateway.playback.faster(bool(up))
 
-    # -- the command palette ---------------------------------------------------------------
-    def get_system_commands(self, screen) -> Iterable[SystemCommand]:
-        """The console's own commands beside Textual's (ctrl+p)."""
-        yield from super().get_system_commands(screen)
-        yield SystemCommand("E-STOP", "Stop all motion now (ctrl+e)", self.action_estop)
-        # every screen's key has a second way here: a browser or a tablet may lack F-keys
-        for key, mode in enumerate(self.MODES, start=1):
-            yield SystemCommand(
-                f"Screen: {mode.title()}", f"Show the {mode} screen (f{key})",
-                partial(self.switch_mode, mode),
-            )  # fmt: skip
-        yield from mission_commands.palette(self)
-        yield SystemCommand(
-            "Release the E-STOP",
-            "Let the robot move again, after a y/n (ctrl+r)",
-            self.action_release_estop,
-        )
-        llm = self.services.settings.llm
-        for spec in dict.fromkeys([llm.model, "rules", "embedded", *llm.endpoints]):
-            yield SystemCommand(
-                f"Model: {spec}",
-                "Answer in Chat with this model",
-                partial(self._in_chat, "model", spec),
-            )
-        for mode in ("tool", "command"):
-            yield SystemCommand(
-                f"Reply mode: {mode}",
-                "How the model writes its plan",
-                partial(self._in_chat, "mode", mode),
-            )
-        for loc in self.services.store.list_locations():
-            yield SystemCommand(
-                f"Go to {loc.name}",
-                f"Drive to ({loc.x:.1f}, {loc.y:.1f}) after a y/n",
-                partial(self.goto_location, loc.name),
-            )
-        lease = self.services.gateway.lease
-        if lease is not None:  # ctrl+t's second way: a browser never hands ctrl+t to a page
-            title = "Let go of control" if lease.held else "Take control"
-            yield SystemCommand(
-                f"{title} of {lease.name}", "Asked first (ctrl+t)", self.action_take_control
-            )
-        if self.recorder is None:
-            yield SystemCommand(
-                "Start recording",
-                "The session as MCAP, under the data dir's sessions/",
-                self.start_recording,
-            )
-        else:
-            yield SystemCommand(
-                "Stop recording", f"Close {self.recorder.path}", self.stop_recording
-            )
-        for fmt in ("csv", "json"):
-            yield SystemCommand(
-                f"Export logs as {fmt.upper()}",
-                "Interactions and events, to a file",
-                partial(self._export_logs, fmt),
-            )
-
     # -- recording --------------------------------------------------------------------------
     def start_recording(self, path: Path | None = None) -> None:
         if self.recorder is not None:
@@ -356,29 +295,6 @@ class AstiopApp(App):
             markup=False,
         )
 
-    def _in_chat(self, what: str, value: str) -> None:
-        self.switch_mode("chat")
-
-        def apply() -> None:
-            chat = self.screen
-            if not isinstance(chat, ChatScreen):
-                return
-            if what == "model":
-                chat.switch_model(value)
-            else:
-                chat.switch_reply_mode(value)
-
-        self.call_after_refresh(apply)
-
-    def _export_logs(self, fmt: str) -> None:
-        self.switch_mode("logs")
-
-        def export() -> None:
-            if isinstance(self.screen, LogsScreen):
-                self.screen.action_export(fmt)
-
-        self.call_after_refresh(export)
-
     def goto_location(self, name: str) -> None:
         """Drive to a named location: the same y/n as every actuation, off the UI thread."""
         cmd = goto_command(name)
@@ -393,121 +309,8 @@ class AstiopApp(App):
             why = result.reason or result.error or values.get("message", "refused")
             self.call_from_thread(self.notify, why, severity="error", markup=False)
 
-    # -- safety -------------------------------------------------------------------------
-    def action_estop(self) -> None:
-        if isinstance(self.screen, ConfirmModal):
-            self.screen.dismiss(False)  # the E-STOP answers any open question with "no"
-        self.run_worker(self._estop, thread=True, group="estop", exit_on_error=False)
-
-    def _estop(self) -> None:
-        fleet: dict[str, list[str]] = {}
-        others = None
-        if self.fleet is not None:  # every robot of the fleet, each by its own gateway, at once
-            current = self.current_robot
-            others = threading.Thread(target=lambda: fleet.update(self.fleet.estop_all(current)))
-            others.start()
-        failures = self.services.gateway.estop()
-        text = "E-STOP engaged: all motion stopped. ctrl+r releases it."
-        if others is not None:
-            others.join()
-            failures += [f"{name}: {'; '.join(f)}" for name, f in fleet.items() if f]
-            text = f"E-STOP engaged on {len(fleet) + 1} robots. ctrl+r releases them."
-        if failures:
-            text += "\n" + "\n".join(failures)
-        self.call_from_thread(self.notify, text, severity="error", title="E-STOP", markup=False)
-
-    def action_release_estop(self) -> None:
-        robot_holds = self.robot_state.state_word == "e_stopped"
-        if not (self.services.gateway.e_stopped or robot_holds):  # a /stop the robot latched
-            self.notify("The e-stop is not engaged.")
-            return
-
-        def done(ok: bool | None) -> None:
-            if ok:
-                self.run_worker(self._release, thread=True, group="estop", exit_on_error=False)
-
-        question = "Release the e-stop? The robot may move again."
-        if self.fleet is not None:
-            names = ", ".join(name for name, _, _ in self.fleet.robots)
-            question = f"Release the e-stop of {names}? They may move again."
-        self.push_screen(ConfirmModal(question), done)
-
     def action_take_control(self) -> None:
         control.take_over(self)
-
-    def _release(self) -> None:
-        # the latch of every robot goes too: this console's robots are all it holds
-        self.services.store.release_estop("console")
-        failures = self.services.gateway.release_estop()
-        if self.fleet is not None:
-            failures += self.fleet.release_all(self.current_robot)
-        if failures:  # the latch let go; the robot's own stop did not
-            text = "E-stop released here; the robot still holds:\n" + "\n".join(failures)
-            self.call_from_thread(self.notify, text, severity="error", markup=False)
-        else:
-            self.call_from_thread(self.notify, "E-stop released.")
-
-    def confirm_from_thread(
-        self, checked: Checked, timeout_s: float | None = None, robot: str = ""
-    ) -> bool:
-        """The gateway's confirmation hook, called from a worker thread: ask with a modal that
-        shows the command as it will be sent (after clamping), naming the robot in a fleet."""
-        robot = robot or checked.namespace.strip("/") or (self.current_robot if self.fleet else "")
-        on = f" on {robot}" if robot else ""
-        return self._ask_from_thread(
-            f"Run this command{on}? It moves the robot.\n\n{sent_text(checked)}", timeout_s
-        )
-
-    def confirm_mission_from_thread(self, steps, forever: bool = False) -> bool:
-        """A mission is approved whole, every step shown, before its first step runs (as each
-        command is, unless the operator turned confirmation off)."""
-        from astiop.missions.steps import describe
-
-        if not self.services.settings.robot.confirm_actuation:
-            return True
-
-        listed = describe(steps, forever).replace("; ", "\n")
-        return self._ask_from_thread(
-            f"Start this mission of {len(steps)} steps? It moves the robot.\n\n{listed}", None
-        )
-
-    def replace_mission_from_thread(self, running: str, steps, forever: bool = False) -> bool:
-        """A new mission while one runs: asked always (confirmation off too), every step of the
-        new one shown; yes ends the running one as replaced, then starts the new one."""
-        from astiop.missions.steps import describe
-
-        listed = describe(steps, forever).replace("; ", "\n")
-        return self._ask_from_thread(
-            f"{running[:1].upper()}{running[1:]}. Replace it?\n\nThe new mission of "
-            f"{len(steps)} steps (it moves the robot):\n{listed}",
-            None,
-        )
-
-    def _ask_from_thread(self, question: str, timeout_s: float | None) -> bool:
-        timeout_s = self.confirm_timeout_s if timeout_s is None else timeout_s
-        answer: list[bool] = []
-        ready = threading.Event()
-        modal = ConfirmModal(question)
-
-        def done(ok: bool | None) -> None:
-            answer.append(bool(ok))
-            ready.set()
-
-        self.call_from_thread(self.push_screen, modal, done)
-        if ready.wait(timeout_s):
-            return bool(answer and answer[0])
-
-        def expire() -> None:
-            if self.screen is modal:  # dismiss() closes whatever is on top
-                modal.dismiss(False)
-            self.notify(
-                f"No answer within {timeout_s:g} s: the command was not sent.",
-                severity="warning",
-                title="confirmation timed out",
-            )
-
-        self.call_from_thread(expire)
-        return False
 
     # -- one handler for every worker's failure --------------------------------------------
     def on_worker_state_changed(self, event: Worker.StateChanged) -> None:

@@ -25,8 +25,9 @@ from astiop.config import load_settings
 from astiop.mcp.approval import NO_CONSOLE, Policy
 from astiop.mcp.server import AstiopMCP
 from astiop.mcp.tools import CALL, TOOL_CLASSES, Call, Refused, RobotTools
+from astiop.robot.estop_latch import ESTOP_REASON
 from astiop.robot.factory import make_safety, make_sim_gateway
-from astiop.robot.gateway import ESTOP_REASON, RobotGateway
+from astiop.robot.gateway import RobotGateway
 from astiop.sim.simulator import Simulator
 from astiop.store import Store
 from astiop.transports.simulator.backend import SimBackend

@@ -318,7 +318,7 @@ def test_a_misspelt_reading_is_never_offered_a_name_that_moves_the_robot():
 def test_every_state_topic_of_a_turtlebot3_can_be_recorded():
     """The recording writes each state topic with its ros2msg schema: a type astiop has no
     definition for would fail every poll of that topic (a TurtleBot3's /amcl_pose did)."""
-    from astiop.recording.writer import ros2msg
+    from astiop.recording.schemas import ros2msg
 
     profile = match_profile(tb3_graph())
     types = {profile.matches[r].type for r in profile.matches if profile.matches[r].kind == "topic"}

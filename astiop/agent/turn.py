@@ -1,5 +1,5 @@
 """One agent turn: plan commands with the model (`planner`), check and run them, explain the
-results, the interaction written to the store as it goes (`recorder`).
+results (`interpretation`), the interaction written to the store as it goes (`recorder`).
 
 Only the planning reply, written before any robot output is seen, is turned into commands; the
 interpretation reply never is. So nothing a robot prints can make a command run. The intent
@@ -18,24 +18,20 @@ from typing import Any
 from astiop.agent import (
     gate,
     goals,
-    grounding,
     intent,
     local_save,
     mission_turn,
     planner,
-    prompts,
     roles,
     rules,
 )
-from astiop.agent.answer_grammar import answer_grammar
-from astiop.agent.facts import facts_of
 from astiop.agent.intent import Intent
+from astiop.agent.interpretation import InterpretingMixin
 from astiop.agent.models.llm import LLMError, LLMHTTPError, LLMTimeout, LLMUnavailable
 from astiop.agent.models.reply_stream import Completion
 from astiop.agent.models.specs import LLMEndpoint
 from astiop.agent.recorder import Recorder
 from astiop.agent.result import TurnResult
-from astiop.agent.summaries import summarize
 from astiop.missions.runner import MissionRunner
 from astiop.robot.gateway import Confirm, RobotGateway
 from astiop.robot.safety import Review
@@ -48,7 +44,7 @@ HISTORY_TURNS = 3
 DEADLINE_S = 120.0  # no reply streams longer than this, whatever the server does
 
 
-class Agent:
+class Agent(InterpretingMixin):
     def __init__(
         self,
         gateway: RobotGateway,
@@ -359,72 +355,6 @@ class Agent:
                 result.started = await asyncio.to_thread(goals.started_text, self.gateway, ex)
                 result.target = goals.target_of(ex, self.places())
 
-    # -- interpretation ------------------------------------------------------------------
-    async def _interpret(self, request: str, result: TurnResult, emit, fallback: bool) -> str:
-        if self.endpoint.is_rules or fallback:
-            answer = rules.interpret(request, result.commands, self._waited_lines(result))
-            if result.started:
-                answer += f" | {result.started}"
-            if fallback:
-                answer = "[rules fallback] " + answer
-            result.grounding = "rules"
-            emit("answer_token", answer)
-            return answer
-        reason = grounding.nothing_ran(result.commands)
-        if reason is not None:  # nothing to interpret: the reason, not a model's story
-            result.grounding = "nothing ran"
-            emit("answer_token", reason)
-            return reason
-        results = "\n".join(summarize(ex) for ex in result.commands)  # some command ran
-        results += "".join(f"\n{line}" for line in self._waited_lines(result))
-        if result.started:
-            results += f"\n{result.started} (the robot is on its way; it has not arrived)"
-        outcome = "succeeded" if "succeeded" in result.waited.values() else None
-        facts = facts_of(
-            request, result.commands, outcome, [result.started, *self._waited_lines(result)]
-        )
-        messages = prompts.interpret_messages(request, results)
-        grammar = None  # llama.cpp servers: the words and figures this turn's results allow
-        if self.interpretation == "grounded" and self.endpoint.local:
-            ran = [ex for ex in result.commands if ex.executed and not ex.error]
-            commanded = all(ex.provenance == "commanded" for ex in ran)
-            grammar = answer_grammar(request, results, facts.words, facts.kinds, commanded)
-        c = await self._ask(
-            messages,
-            None,
-            result,
-            emit,
-            "answer_token",
-            grammar=grammar,
-            max_tokens=self.interpret_tokens,
-        )
-        text = result.model_answer = c.text.strip()
-        if self.interpretation == "raw":
-            result.grounding = "raw"
-            return _with_started(text, result.started)
-        dropped = 0
-        if c.finish_reason in grounding.REPLY_CUT:
-            reason = f"the reply was cut: {grounding.REPLY_CUT[c.finish_reason]}"
-        else:
-            text, reason, dropped = grounding.grounded(text, facts, result.commands)
-        if reason is None:
-            result.grounding = f"kept, {dropped} part(s) dropped" if dropped else "kept"
-            if dropped:
-                emit("answer_trimmed", text)
-            return _with_started(text, result.started)
-        result.grounding = f"replaced: {reason}"
-        answer = grounding.factual_answer(
-            result.commands, result.started, self._waited_lines(result)
-        )
-        emit("answer_replaced", answer)
-        return answer
-
-    def _waited_lines(self, result: TurnResult) -> list[str]:
-        return [
-            f"{result.commands[seq].command}: goal {outcome}"
-            for seq, outcome in result.waited.items()
-        ]
-
     # -- the follow-up -------------------------------------------------------------------
     async def follow_up(self, result: TurnResult, timeout_s: float | None = None) -> str:
         """Wait for the goal the turn started to end; record and return how it ended."""
@@ -442,7 +372,3 @@ def _check_mode(endpoint: LLMEndpoint, mode: str) -> None:
 def _keep_partial(result: TurnResult, exc: LLMError) -> None:
     if exc.partial and f"{exc.partial} [cut off]" not in result.raw_replies:
         result.raw_replies.append(f"{exc.partial} [cut off]")
-
-
-def _with_started(text: str, started: str) -> str:
-    return f"{text}\n{started}" if started else text

@@ -16,7 +16,7 @@ from astiop.bench.case_turn import case_agent, scored
 from astiop.bench.on_robot import on_robot
 from astiop.config import Settings
 from astiop.robot.gateway import RobotGateway
-from astiop.ros2.profile import TRIGGER
+from astiop.ros2.roles import TRIGGER
 
 GOAL_WAIT_S = 600.0
 CONVEYOR_WAIT_S = 10.0

@@ -146,8 +146,8 @@ def estop(
     latch it in the database, as the console's ctrl+e does; every astiop process on that
     database then refuses motion until it is released. --robot-name NAME stops one robot of
     the fleet, --all every one."""
+    from astiop.robot.estop_latch import HELD_FOR_ALL
     from astiop.robot.factory import make_robot_gateway
-    from astiop.robot.gateway import HELD_FOR_ALL
 
     st = state(ctx)
     if every and st.robot_name is not None:

@@ -9,7 +9,8 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 
-from astiop.robot.gateway import ESTOP_REASON, RobotGateway
+from astiop.robot.estop_latch import ESTOP_REASON
+from astiop.robot.gateway import RobotGateway
 from astiop.robot.safety import Review, always_allowed
 from astiop.ros2.catalog import RELEASE
 from astiop.ros2.render import sent_text

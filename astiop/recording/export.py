@@ -17,7 +17,8 @@ from typing import Any
 from mcap.writer import Writer
 
 from astiop.recording.reader import Recording
-from astiop.recording.writer import JSON_SCHEMAS, RecordingError
+from astiop.recording.schemas import JSON_SCHEMAS
+from astiop.recording.writer import RecordingError
 
 RELATIVE = re.compile(r"^-(\d+(?:\.\d+)?)([smhd])$")
 UNITS = {"s": 1, "m": 60, "h": 3600, "d": 86400}

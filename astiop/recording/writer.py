@@ -7,7 +7,7 @@ each step's end, their end: /astiop/mission). Log time is the robot's clock: whe
 the message was published (sim time on the simulator) or received (on the robot).
 
 A chunk is closed and flushed at least every FLUSH_S, so a recording killed at any moment keeps
-everything up to its last chunk; `repair` rewrites what such a file still holds.
+everything up to its last chunk; `repair` (files.py) rewrites what such a file still holds.
 """
 
 from __future__ import annotations
@@ -21,37 +21,20 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from mcap.reader import make_reader
-from mcap.records import Channel, Message, Schema
-from mcap.stream_reader import StreamReader
 from mcap.writer import Writer
 
 from astiop.bounded import one_line
 from astiop.recording import missions
-from astiop.ros2.definitions import definitions
-from astiop.ros2.interfaces import normalize_type, used_types
+from astiop.recording.schemas import JSON_SCHEMAS, ros2msg
 
 FLUSH_S = 2.0
 POLL_HZ = 20.0
 STOP_WAIT_S = 5.0  # for the thread's last poll; the file is finished either way
 MAX_NOTICES = 5  # different failures said per recording; the same one is said once
-SEPARATOR = "=" * 80
 
 
 class RecordingError(Exception):
     """The recording could not be written or read; one line says why."""
-
-
-def ros2msg(type_name: str, distro: str | None = None) -> str:
-    """The type's definition followed by every type it uses, as rosbag2 writes `ros2msg`
-    schemas: each dependency after a line of '=' and 'MSG: pkg/msg/Name'."""
-    from astiop.ros2.grammar import current_distro
-
-    defs = definitions(distro or current_distro())
-    text = [defs[normalize_type(type_name)].strip()]
-    for dep in used_types(type_name, distro):
-        text.append(f"{SEPARATOR}\nMSG: {dep}\n{defs[dep].strip()}")
-    return "\n".join(text) + "\n"
 
 
 def session_metadata(gateway, fleet: list[tuple[str, str]] | None = None) -> dict[str, str]:
@@ -68,34 +51,6 @@ def session_metadata(gateway, fleet: list[tuple[str, str]] | None = None) -> dic
     if fleet:
         meta["fleet"] = json.dumps([list(robot) for robot in fleet])
     return meta
-
-
-JSON_SCHEMAS = {
-    "/astiop/interactions": {
-        "type": "object",
-        "title": "astiop interaction",
-        "properties": {
-            "id": {"type": "integer"},
-            "prompt": {"type": "string"},
-            "model": {"type": "string"},
-            "answer": {"type": ["string", "null"]},
-            "grounding": {"type": ["string", "null"]},
-            "commands": {"type": "array"},
-            "total_s": {"type": ["number", "null"]},
-            "status": {"type": "string"},
-        },
-    },
-    "/astiop/events": {
-        "type": "object",
-        "title": "astiop robot event",
-        "properties": {
-            "kind": {"type": "string"},
-            "severity": {"type": "string"},
-            "message": {"type": "string"},
-        },
-    },
-    missions.TOPIC: missions.SCHEMA,
-}
 
 
 class SessionRecorder:
@@ -358,58 +313,6 @@ def _finite_floats(value: Any) -> Any:
     if isinstance(value, str) and value in (".inf", "-.inf", ".nan", "inf", "-inf", "nan"):
         return float(value.replace(".", ""))
     return value
-
-
-def summary(path: Path) -> dict[str, int]:
-    """Message count per topic, from the file's own summary."""
-    try:
-        with Path(path).open("rb") as fh:
-            info = make_reader(fh).get_summary()
-    except Exception as exc:  # the mcap reader raises its own kinds
-        raise RecordingError(f"{path}: not a readable MCAP file ({exc})") from None
-    if info is None or info.statistics is None:
-        raise RecordingError(f"{path}: the file has no summary (try --repair)")
-    return {
-        info.channels[cid].topic: count
-        for cid, count in info.statistics.channel_message_counts.items()
-    }
-
-
-def repair(path: Path, out: Path) -> dict[str, int]:
-    """Copy every whole record of a cut-off recording into a new, finished file."""
-    schemas: dict[int, int] = {}
-    channels: dict[int, int] = {}
-    counts: dict[str, int] = {}
-    topics: dict[int, str] = {}
-    with Path(path).open("rb") as src, Path(out).open("wb") as dst:
-        writer = Writer(dst)
-        writer.start(profile="ros2", library="astiop repair")
-        try:
-            for record in StreamReader(src, skip_magic=False).records:
-                if isinstance(record, Schema) and record.id not in schemas:
-                    schemas[record.id] = writer.register_schema(
-                        record.name, record.encoding, record.data
-                    )
-                elif isinstance(record, Channel) and record.id not in channels:
-                    channels[record.id] = writer.register_channel(
-                        record.topic, record.message_encoding, schemas.get(record.schema_id, 0)
-                    )
-                    topics[record.id] = record.topic
-                elif isinstance(record, Message) and record.channel_id in channels:
-                    writer.add_message(
-                        channels[record.channel_id],
-                        record.log_time,
-                        record.data,
-                        record.publish_time,
-                    )
-                    topic = topics[record.channel_id]
-                    counts[topic] = counts.get(topic, 0) + 1
-        except Exception:  # the cut: everything before it is kept
-            pass
-        writer.finish()
-    if not counts:
-        raise RecordingError(f"{path}: no whole message could be recovered")
-    return counts
 
 
 def default_path(data_dir: Path) -> Path:

@@ -57,7 +57,7 @@ def find_robots(
     """The fleet's robots: the settings' list, or every robot namespace on the domain, read
     until the graph has shown no new robot for `settle_s` (SETTLED_S; or robot.ros2_timeout_s);
     `on_found(robot)` as each is found."""
-    from astiop.robot.gateway import SETTLED_S
+    from astiop.robot.graph_reading import SETTLED_S
 
     on_found = on_found or (lambda _robot: None)
     if settings.fleet.discover == "list":

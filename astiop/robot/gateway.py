@@ -7,22 +7,22 @@ before anything is sent.
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import threading
 import time
 from collections.abc import Callable
 from typing import Any
 
+from astiop.robot.command_journal import CommandJournal
+from astiop.robot.estop_latch import ESTOP_REASON, EstopLatch
+from astiop.robot.graph_reading import GraphReading
 from astiop.robot.latch_watch import LatchWatcher
-from astiop.robot.safety import Review, SafetyPolicy, always_allowed
-from astiop.ros2.catalog import Catalog
+from astiop.robot.safety import Review, SafetyPolicy
 from astiop.ros2.fleet_names import robot_under
-from astiop.ros2.profile import Profile, match_profile
 from astiop.ros2.render import STAMPED
 from astiop.ros2.validation import Checked, validate
 from astiop.ros2.verbs import VERBS
-from astiop.store import Store, StoreError
+from astiop.store import Store
 from astiop.transports.base import BackendError, Execution, MapGeometry, RobotBackend
 from astiop.transports.playback import Playback, PlaysBack
 from astiop.transports.state import RobotEvent, RobotState, TopicStat
@@ -30,14 +30,9 @@ from astiop.transports.state import RobotEvent, RobotState, TopicStat
 Confirm = Callable[[Checked], bool]
 log = logging.getLogger("astiop.robot")
 MAX_STAMP_AGE_S = 86400.0  # a stamp older than a day is on another clock, not a day-old reading
-SETTLED_S = 2.0  # a robot graph unchanged this long has been read whole
-HELD_FOR_ALL = (
-    "the E-STOP of every robot on this database still holds it: astiop estop --release --all"
-)
-ESTOP_REASON = "the E-STOP is engaged: no motion command runs until the operator releases it"
 
 
-class RobotGateway:
+class RobotGateway(EstopLatch, GraphReading):
     def __init__(
         self,
         backend: RobotBackend,
@@ -78,52 +73,6 @@ class RobotGateway:
         )
 
     @property
-    def catalog(self) -> Catalog:
-        return self.backend.catalog
-
-    def settled_profile(self, timeout_s: float) -> Profile:
-        """The profile once the robot's graph has been read whole: read again until two reads
-        SETTLED_S apart match the same names (a new process discovers a robot in rounds, and a
-        role matched on half a graph is a wrong answer), or `timeout_s`."""
-        deadline = time.monotonic() + timeout_s
-        names = {r: m.name for r, m in self.profile.matches.items()}
-        while time.monotonic() < deadline:
-            time.sleep(min(SETTLED_S, max(0.0, deadline - time.monotonic())))
-            self.backend.refresh()
-            now = {r: m.name for r, m in self.profile.matches.items()}
-            if now == names and any(now.values()):
-                break
-            names = now
-        self.use_map()
-        return self.profile
-
-    def confirm_missing(self) -> Profile:
-        """Before saying a robot lacks something: a process still discovering it reads its
-        graph until it has settled (a role missing from half a graph is a wrong answer)."""
-        if self.backend.discovering():
-            return self.settled_profile(self.timeout_s)
-        return self.profile
-
-    def use_map(self) -> None:
-        """The robot's map from its profile: the store's places are that map's, and goals are
-        fenced by the profile's geofence, else by the extent of the robot's own map."""
-        profile = self.profile
-        fence = profile.map.geofence
-        if fence is None:
-            geometry = self.backend.map_geometry()
-            fence = geometry.bounds if geometry is not None else None
-        if fence is not None:
-            self.safety.geofence = fence
-        if self.store is not None:
-            self.store.use_map(profile.map_name, fence)
-
-    @property
-    def profile(self) -> Profile:
-        """Which of the robot's names play which role (ros2/profile.py)."""
-        cat = self.backend.catalog
-        return cat.profile if cat.profile is not None else match_profile(cat)
-
-    @property
     def kind(self) -> str:
         """Which robot: sim, ros2 or replay."""
         return self.backend.name
@@ -132,60 +81,6 @@ class RobotGateway:
     def label(self) -> str:
         """How the robot is named to the operator (its transport, distro and domain)."""
         return self.backend.label or self.backend.name
-
-    # -- E-STOP -----------------------------------------------------------------------------
-    @property
-    def latched(self) -> bool:
-        """The store's latch: every robot's, or this robot's own."""
-        store = self.store
-        if store is None:
-            return False
-        own = self.latch_key and store.robot_latch(self.latch_key) is not None
-        return bool(own) or store.estop_latch() is not None
-
-    @property
-    def e_stopped(self) -> bool:
-        return self.backend.e_stopped or self.latched
-
-    def estop(self) -> list[str]:
-        """Stop the robot, then latch it for every process; returns steps that failed."""
-        failures = self.backend.estop()  # the robot first: the record must never delay it
-        if self.store is not None:
-            try:
-                with self._latch_lock:  # the sampler's follow_latch must not undo it
-                    if self.latch_key:
-                        self.store.latch_robot(self.latch_key, self.who)
-                    else:
-                        self.store.latch_estop(self.who)
-                    self._latch_seen = True
-            except Exception as exc:  # noqa: BLE001 - reported, the stop itself went out
-                failures.append(f"the E-STOP is not latched for other processes: {exc}")
-        return failures
-
-    def zero_now(self) -> None:
-        """A zero velocity sent at once, nothing else (a fleet's E-STOP sends every robot's
-        before the rest of each one's stop); never raises: the E-STOP that follows says why."""
-        with contextlib.suppress(Exception):
-            self.backend.zero_now()
-
-    def settle_estop(self, timeout_s: float) -> list[str]:
-        """Wait for what the E-STOP started in the background to go out (a process about to
-        exit); the failures that came meanwhile."""
-        return self.backend.settle_estop(timeout_s)
-
-    def release_estop(self) -> list[str]:
-        """Release the latch for every process, then this process's robot; the failures. A
-        fleet's robot releases its own latch; one on every robot still holds it."""
-        if self.store is not None:
-            with self._latch_lock:
-                if self.latch_key:
-                    self.store.release_robot(self.latch_key)
-                    if self.store.estop_latch() is not None:
-                        return [HELD_FOR_ALL]
-                else:
-                    self.store.release_estop(self.who)
-                self._latch_seen = False
-        return self.backend.release_estop()
 
     # -- live state ------------------------------------------------------------------------
     def start(self) -> None:
@@ -225,35 +120,6 @@ class RobotGateway:
         ):
             self.use_map()  # its /map came in, or its make was recognised on a fuller graph
         return self.backend.state().with_e_stop(latched)
-
-    def follow_latch(self) -> bool:
-        """Whether the E-STOP is latched; when another process (a second console, `astiop
-        estop`) latched or released it since the last look, this process's robot follows."""
-        if self.store is None:
-            return False
-        with self._latch_lock:  # read and acted on together: an estop() meanwhile waits
-            latched = self.latched
-            if latched != self._latch_seen:
-                self._latch_seen = latched
-                if latched and not self.backend.e_stopped:
-                    self.backend.estop()
-                elif not latched and self.backend.e_stopped:
-                    self.backend.release_estop(robot=False)  # the releaser told the robot
-            if not latched:
-                self._end_what_moves_latched_robots()
-        return latched
-
-    def _end_what_moves_latched_robots(self) -> None:
-        """What this process has in flight on another robot of the fleet, reached by its names,
-        ends when that robot's own E-STOP latches (in any process)."""
-        inflight = self.backend.inflight
-        if not inflight.busy:
-            return
-        latched = self._latched_robots()
-        if latched:
-            ended = inflight.end_where(lambda name: any(_under(name, ns) for ns in latched))
-            for failure in ended:
-                log.error(failure)
 
     def events_since(self, seq: int) -> list[RobotEvent]:
         """The robot's events after `seq`. Each is kept in the store the first time any reader
@@ -308,28 +174,6 @@ class RobotGateway:
                 self.use_map()
         return self.safety.review(checked, self.e_stopped)
 
-    def serves(self, name: str, timeout_s: float) -> bool:
-        """Whether the robot serves `name`, reading its graph again until it appears: a new
-        process's first read may have found only part of it. False once the robot's base is
-        seen and its services stay the same for SETTLED_S without it, or after `timeout_s`."""
-        deadline = time.monotonic() + timeout_s
-        seen, since = None, time.monotonic()
-        while name not in self.catalog.services:
-            services = set(self.catalog.services)
-            if services != seen:
-                seen, since = services, time.monotonic()
-            settled = time.monotonic() - since > SETTLED_S
-            if time.monotonic() > deadline or ("/cmd_vel" in self.catalog.topics and settled):
-                return False
-            time.sleep(0.3)
-            self.backend.refresh()
-        return True
-
-    def _refresh(self) -> bool:
-        if time.monotonic() - self.backend.refreshed_at < self.backend.refresh_every_s:
-            return False
-        return self.backend.refresh()
-
     def run(
         self,
         text: str,
@@ -341,14 +185,14 @@ class RobotGateway:
         """Run one command. Nothing reaches the backend unless it is valid, safe and confirmed.
         With a `source` (exec, teleop), a valid command is recorded in the store, whether it
         ran or safety, the E-STOP or the operator held it; text that is not a command is not."""
-        journal = _Journal(self, source) if source else None
+        journal = CommandJournal(self, source) if source else None
         result = self._run(text, confirm, timeout, review, journal)
         if journal is not None and result.valid:
             journal.finish(result)
         return result
 
     def record(self, ex: Execution, source: str) -> None:
-        _Journal(self, source).finish(ex)
+        CommandJournal(self, source).finish(ex)
 
     def _say_store_error(self, message: str) -> None:
         """A record the store could not keep: said once per reason (the robot was driven all the
@@ -363,7 +207,7 @@ class RobotGateway:
         confirm: Confirm | None,
         timeout: float | None,
         review: Review | None,
-        journal: _Journal | None = None,
+        journal: CommandJournal | None = None,
     ) -> Execution:
         t0 = time.perf_counter()
         if review is None or review.checked.text != text:
@@ -487,20 +331,6 @@ class RobotGateway:
             result.error = str(exc)
         return result
 
-    def _held_by_estop(self, checked: Checked) -> bool:
-        """Latched (this robot, or the fleet's robot the command is sent to), and not a command
-        the E-STOP always lets through (/stop)."""
-        if always_allowed(checked):
-            return False
-        if self.e_stopped:
-            return True
-        name = checked.command.name if checked.command else None
-        return bool(name) and any(_under(name, ns) for ns in self._latched_robots())
-
-    def _latched_robots(self) -> list[str]:
-        """The namespaces of every robot whose own E-STOP is latched (none without a store)."""
-        return self.store.latched_robots() if self.store is not None else []
-
     def _other_robot(self, checked: Checked) -> str:
         """The namespace of another robot of the graph a command is sent to by its names ("":
         this gateway's own robot)."""
@@ -527,48 +357,3 @@ class RobotGateway:
             self.safety.max_linear = checked.message["value"]
         elif cmd.args["param"] == "max_angular_speed":
             self.safety.max_angular = checked.message["value"]
-
-
-class _Journal:
-    """One command's row in the store: written as sent before the robot is told, completed
-    after; a command that never went out is written once, with why."""
-
-    UNFINISHED = "sent to the robot; astiop ended before it finished"
-
-    def __init__(self, gateway: RobotGateway, source: str):
-        self.gateway = gateway
-        self.source = source
-        self.row: int | None = None
-
-    def sent(self, ex: Execution) -> None:
-        store = self.gateway.store
-        if store is None:
-            return
-        try:
-            fields = {**ex.record(), "executed": 1, "reason": self.UNFINISHED}
-            self.row = store.add_command(None, seq=0, source=self.source, **fields)
-        except StoreError as exc:
-            self._failed(ex, exc)
-
-    def finish(self, ex: Execution) -> None:
-        store = self.gateway.store
-        if store is None:
-            return
-        try:
-            if self.row is None:
-                store.add_command(None, seq=0, source=self.source, **ex.record())
-            else:
-                store.finish_command(self.row, **ex.record())
-        except StoreError as exc:
-            self._failed(ex, exc)
-
-    def _failed(self, ex: Execution, exc: StoreError) -> None:
-        note = f"not in astiop's record of commands: {exc}"
-        if note not in ex.notes:
-            ex.notes.append(note)
-        self.gateway._say_store_error(note)
-
-
-def _under(name: str, namespace: str) -> bool:
-    """Whether `name` is inside `namespace` ("/tb3_1/cmd_vel" is inside "/tb3_1")."""
-    return name.startswith(namespace.rstrip("/") + "/")

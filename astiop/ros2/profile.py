@@ -8,140 +8,19 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
+from astiop.ros2.roles import (
+    AMCL_POSE,
+    NAVIGATE_TO_POSE,  # noqa: F401 - read from here by transports/live_catalog.py
+    ROLE_BY_NAME,
+    ROLE_NAMES,
+    ROLES,
+    TF,
+    TF_ROLES,
+    Role,
+)
+
 if TYPE_CHECKING:
     from astiop.ros2.catalog import Catalog
-
-POSE2D = "geometry_msgs/msg/Pose2D"
-AMCL_POSE = "geometry_msgs/msg/PoseWithCovarianceStamped"
-ODOMETRY = "nav_msgs/msg/Odometry"
-TWIST = "geometry_msgs/msg/Twist"
-TWIST_STAMPED = "geometry_msgs/msg/TwistStamped"
-TRIGGER = "std_srvs/srv/Trigger"
-NAVIGATE_TO_POSE = "nav2_msgs/action/NavigateToPose"
-TF = "tf2_msgs/msg/TFMessage"
-TF_ROLES = ("transforms", "static_transforms")  # watched only for a pose that needs them
-
-
-@dataclass(frozen=True)
-class Role:
-    """How one role is found: the kinds and types that may play it (in order of preference),
-    names preferred among several candidates, and names that never play it."""
-
-    name: str
-    kinds: tuple[tuple[str, str], ...]  # (topic | service | action, type), best first
-    names: tuple[str, ...] = ()  # conventional names, best first, without the namespace
-    never: tuple[str, ...] = ()  # a name holding one of these words is not a candidate
-    state: bool = False  # the live state is built from it: watched, recorded
-    by_name_only: bool = False  # its type is too common (Trigger): only its names play it
-    description: str = ""
-
-
-ROLES: tuple[Role, ...] = (
-    Role(
-        "pose",
-        (("topic", POSE2D), ("topic", AMCL_POSE), ("topic", TF), ("topic", ODOMETRY)),
-        ("/robot_pose", "/amcl_pose", "/pose", "/tf", "/odom"),
-        never=("initial", "goal", "static"),
-        state=True,
-        description="where the robot is in the map",
-    ),
-    Role("odometry", (("topic", ODOMETRY),), ("/odom",), state=True, description="velocity"),
-    Role(
-        "transforms",
-        (("topic", TF),),
-        ("/tf",),
-        state=True,
-        by_name_only=True,
-        description="map → odom → base: the map pose between a localiser's updates",
-    ),
-    Role("static_transforms", (("topic", TF),), ("/tf_static",), state=True, by_name_only=True),
-    Role(
-        "battery",
-        (("topic", "sensor_msgs/msg/BatteryState"),),
-        ("/battery_status", "/battery_state", "/battery"),
-        state=True,
-        description="charge, voltage, current",
-    ),
-    Role(
-        "scan",
-        (("topic", "sensor_msgs/msg/LaserScan"),),
-        ("/scan",),
-        never=("filtered_out",),
-        state=True,
-        description="the lidar",
-    ),
-    Role(
-        "map",
-        (("topic", "nav_msgs/msg/OccupancyGrid"),),
-        ("/map",),
-        never=("costmap", "updates"),
-        description="the occupancy grid the robot navigates on",
-    ),
-    Role(
-        "velocity_command",
-        (("topic", TWIST), ("topic", TWIST_STAMPED)),
-        ("/cmd_vel",),
-        never=("_nav", "smoothed", "teleop", "unstamped"),
-        description="drives the base",
-    ),
-    Role(
-        "navigation",
-        (
-            ("action", NAVIGATE_TO_POSE),
-            ("service", "astiop_msgs/srv/GotoPosition"),
-            ("topic", "geometry_msgs/msg/PoseStamped"),
-        ),
-        ("/navigate_to_pose", "/goto_position", "/goal_pose"),
-        never=("initial", "waypoint", "through"),
-        description="sends the robot to a pose",
-    ),
-    Role(
-        "plan",
-        (("topic", "nav_msgs/msg/Path"),),
-        ("/plan",),
-        never=("local", "received", "unsmoothed", "transformed"),
-        state=True,
-    ),
-    Role("stop", (("service", TRIGGER),), ("/stop",), by_name_only=True, description="stops"),
-    Role("release", (("service", TRIGGER),), ("/release",), by_name_only=True),
-    Role(
-        "dock",
-        (("service", TRIGGER), ("action", "nav2_msgs/action/DockRobot")),
-        ("/dock", "/dock_robot"),
-        by_name_only=True,
-    ),
-    Role(
-        "undock",
-        (("service", TRIGGER), ("action", "nav2_msgs/action/UndockRobot")),
-        ("/undock", "/undock_robot"),
-        by_name_only=True,
-    ),
-    Role(
-        "status",
-        (("topic", "astiop_msgs/msg/RobotStatus"),),
-        ("/robot_status",),
-        state=True,
-        description="state, mode, goal, fault, speed",
-    ),
-    Role(
-        "diagnostics",
-        (("topic", "diagnostic_msgs/msg/DiagnosticArray"),),
-        ("/diagnostics",),
-        never=("agg", "toplevel"),
-        description="health and faults",
-    ),
-    Role("obstacles", (("topic", "astiop_msgs/msg/ObstacleArray"),), ("/obstacles",), state=True),
-    Role(
-        "conveyor",
-        (("topic", "astiop_msgs/msg/ConveyorStatus"),),
-        ("/conveyor/status",),
-        state=True,
-    ),
-    Role("save_location", (("service", "astiop_msgs/srv/SaveLocation"),), ("/save_location",)),
-    Role("list_locations", (("service", "astiop_msgs/srv/ListLocations"),), ("/list_locations",)),
-)
-ROLE_NAMES = tuple(r.name for r in ROLES)
-_BY_NAME = {r.name: r for r in ROLES}
 
 
 @dataclass(frozen=True)
@@ -251,7 +130,9 @@ class Profile:
             {
                 m.name
                 for m in self.matches.values()
-                if m.kind == "topic" and _BY_NAME[m.role].state and (tf or m.role not in TF_ROLES)
+                if m.kind == "topic"
+                and ROLE_BY_NAME[m.role].state
+                and (tf or m.role not in TF_ROLES)
             }
         )
 
@@ -346,7 +227,7 @@ def _fixed(role: str, name: str, catalog: Catalog, entries: dict, source: str) -
     for kind, table in entries.items():
         if name in table:
             return Match(role, kind, name, table[name], f"set by {source}")
-    kind, typ = _BY_NAME[role].kinds[0]
+    kind, typ = ROLE_BY_NAME[role].kinds[0]
     return Match(role, kind, name, typ, f"set by {source} (not on the graph yet)", False)
 
 

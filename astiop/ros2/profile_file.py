@@ -13,7 +13,8 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from astiop.ros2.profile import ROLE_NAMES, Limits, MapSpec, Profile, ProfileSpec, Units
+from astiop.ros2.profile import Limits, MapSpec, Profile, ProfileSpec, Units
+from astiop.ros2.roles import ROLE_NAMES
 
 try:
     import tomllib

@@ -10,15 +10,13 @@ from __future__ import annotations
 import collections
 import math
 import threading
-import time
-from dataclasses import dataclass
 
 import numpy as np
-import pymunk
 
 from astiop.sim import lidar
 from astiop.sim.battery import Battery
 from astiop.sim.body import ASTIBOT_BODY, Body
+from astiop.sim.commands import CommandsMixin, Teleop
 from astiop.sim.controller import ControllerGains, tracking_error
 from astiop.sim.conveyor import Conveyor
 from astiop.sim.geometry import wrap_angle
@@ -26,9 +24,7 @@ from astiop.sim.goal import Goal, GoalResult
 from astiop.sim.kinematics import (
     ASTIBOT,
     MecanumParams,
-    achievable_velocity,
     inverse_kinematics,
-    wheel_speeds,
 )
 from astiop.sim.navigation import (
     BLOCKED_GIVE_UP_S,
@@ -38,26 +34,16 @@ from astiop.sim.navigation import (
     NavigationMixin,
 )
 from astiop.sim.path_planner import PathPlanner
-from astiop.sim.perception import DetectedObstacle, detect
+from astiop.sim.perception import DetectedObstacle
 from astiop.sim.state import Event, SimState, lamp, state_word
-from astiop.sim.world import CT_OBSTACLE, CT_STATIC, ROBOT_OWNER, World
+from astiop.sim.stepping import SteppingMixin
+from astiop.sim.world import CT_OBSTACLE, CT_STATIC, World
 from astiop.warehouse import WarehouseMap, default_map
 
 ROBOT_MASS = ASTIBOT_BODY.mass
-TELEOP_TIMEOUT_S = 0.5
-STOP_LATCHED = "the stop is latched: /release to move again"
-A_LIN, A_ANG = 1.0, 2.0  # m/s², rad/s² the base ramps with
-_SET_VELOCITY = pymunk.Body.velocity.fset
-_SET_ANGULAR_VELOCITY = pymunk.Body.angular_velocity.fset
 
 
-@dataclass
-class _Teleop:
-    v: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    until: float = -1.0
-
-
-class Simulator(NavigationMixin):
+class Simulator(NavigationMixin, CommandsMixin, SteppingMixin):
     def __init__(
         self,
         warehouse: WarehouseMap | None = None,
@@ -115,7 +101,7 @@ class Simulator(NavigationMixin):
         self._v = [0.0, 0.0, 0.0]  # body velocity being applied (robot frame), floats: per step
         self._applied = (0.0, 0.0, 0.0)
         self._target = (0.0, 0.0, 0.0)
-        self._teleop = _Teleop()
+        self._teleop = Teleop()
         self.goal: Goal | None = None
         self.plan: tuple[tuple[float, float], ...] = ()
         self.last_result: GoalResult | None = None
@@ -270,258 +256,3 @@ class Simulator(NavigationMixin):
                 collisions=self.collisions,
                 event_seq=self._event_seq,
             )
-
-    # -- commands --------------------------------------------------------------------
-    def _check_can_move(self) -> None:
-        if self.e_stopped:
-            raise GoalError("the robot is e-stopped; release the e-stop first")
-        if self.stop_latched:
-            raise GoalError(STOP_LATCHED)
-        if self.fault:
-            raise GoalError(f"the robot has a fault ({self.fault}); call /stop to acknowledge it")
-
-    def stop(self) -> str:
-        """Stop all motion, cancel the goal and acknowledge a collision fault; then hold the
-        base (no /cmd_vel, goal, dock or conveyor job) until /release."""
-        with self.lock:
-            had_goal = self.cancel("stopped by /stop")
-            self._teleop = _Teleop()
-            self._target = (0.0, 0.0, 0.0)
-            if self.fault:
-                self._event("fault", f"fault acknowledged: {self.fault}")
-                self.fault = ""
-            if not self.stop_latched:
-                self.stop_latched = True
-                self._event("stop", "stop latched: /release to move again", "warning")
-            return "stopped; goal canceled" if had_goal else "stopped"
-
-    def release(self) -> str:
-        """/release: let go of a latched /stop and of the E-STOP input."""
-        with self.lock:
-            if not self.held:
-                return "released; nothing was held"
-            if self.e_stopped:
-                self.e_stopped = False
-                self._event("estop", "e-stop released")
-            if self.stop_latched:
-                self.stop_latched = False
-                self._event("stop", "stop released: the robot may move again")
-            self._ignored_said = False  # the next hold says it again
-            return "released: the robot may move again"
-
-    def set_cmd_vel(
-        self, vx: float, vy: float, wz: float, timeout: float = TELEOP_TIMEOUT_S
-    ) -> None:
-        """Teleop velocity in the robot frame; it lapses unless repeated within `timeout`.
-        Held (E-STOP, latched /stop), the base stays at rest: a zero Twist agrees with that,
-        any other is refused and said once per hold."""
-        with self.lock:
-            if self.held:
-                if vx == vy == wz == 0.0:
-                    return
-                self._say_ignored()
-            self._check_can_move()
-            if self.goal is not None:
-                self.cancel("overridden by /cmd_vel")
-            self._teleop = _Teleop((float(vx), float(vy), float(wz)), self.t + timeout)
-
-    def clear_fault(self) -> None:
-        """For a base with no fault latch (a TurtleBot3's motors just stall against a wall):
-        its next command moves it again."""
-        with self.lock:
-            if self.fault:
-                self._event("fault", f"cleared by the next command: {self.fault}")
-                self.fault = ""
-
-    def _say_ignored(self) -> None:
-        if not self._ignored_said:
-            self._ignored_said = True
-            why = "the robot is e-stopped" if self.e_stopped else "the stop is latched"
-            self._event("stop", f"/cmd_vel ignored: {why} (/release to move again)", "warning")
-
-    def _clear_teleop(self) -> None:
-        self._teleop = _Teleop()
-
-    def estop(self) -> None:
-        with self.lock:
-            if not self.e_stopped:
-                self.e_stopped = True
-                self.cancel("e-stop")
-                self.conveyor.abort()
-                self._teleop = _Teleop()
-                self._v[:] = (0.0, 0.0, 0.0)
-                self.control.velocity, self.control.angular_velocity = (0, 0), 0.0
-                self._applied = (0.0, 0.0, 0.0)
-                self._event("estop", "E-STOP engaged", "error")
-
-    def release_estop(self) -> None:
-        """The E-STOP's release is the robot's /release: it lets go of a latched /stop too."""
-        self.release()
-
-    def conveyor_transfer(self, direction: int) -> str:
-        with self.lock:
-            self._check_can_move()
-            word = "load" if direction > 0 else "unload"
-            if self.conveyor.running:
-                raise GoalError("the conveyor is already running")
-            if self.goal is not None or self.speed() > 0.02:
-                raise GoalError(f"cannot {word} while moving")
-            st, dist = self.world.nearest_station(*self.pose[:2])
-            if st is None or st.kind != "conveyor" or dist > 0.3:
-                raise GoalError(
-                    f"cannot {word} here: not at a conveyor station "
-                    "(assembly_station, cps_storage, shipping)"
-                )
-            if direction > 0 and self.conveyor.loaded:
-                raise GoalError("the conveyor already carries a load")
-            if direction < 0 and not self.conveyor.loaded:
-                raise GoalError("the conveyor is empty: nothing to unload")
-            self.conveyor.start(direction)
-            self._event("conveyor", f"{word}ing at {st.name}")
-            return f"{word}ing at {st.name}"
-
-    def add_obstacle(self, kind: str, x: float, y: float, theta: float = 0.0):
-        with self.lock:
-            ob = self.world.add_obstacle(kind, x, y, theta)
-            self._event("world", f"{kind} {ob.id} placed at ({x:.1f}, {y:.1f})")
-            return ob
-
-    def remove_obstacle(self, obstacle_id: int):
-        with self.lock:
-            ob = self.world.remove_obstacle(obstacle_id)
-            self._event("world", f"{ob.kind} {ob.id} removed")
-            return ob
-
-    # -- time ------------------------------------------------------------------------
-    def step(self, duration: float) -> None:
-        if self.in_fleet:
-            raise RuntimeError("a fleet's robot is stepped by its fleet (SimFleet.step)")
-        with self.lock:
-            self._carry += duration
-            n = int(self._carry / self.dt + 1e-9)
-            self._carry -= n * self.dt
-            before, world_step, dt = self._before_physics, self.world.step, self.dt
-            for _ in range(n):  # _substep, with its lookups made once
-                before()
-                world_step(dt)
-                if self._contact is not None:  # _after_physics
-                    self._on_collision(self._contact)
-        for observe in self.after_step:  # e.g. a recorder, in fast mode
-            observe()
-
-    def run_until(self, predicate, max_sim_s: float, chunk: float = 0.1) -> bool:
-        end = self.t + max_sim_s
-        while self.t < end:
-            if predicate():
-                return True
-            self.step(chunk)
-        return predicate()
-
-    def run_goal(self, max_sim_s: float = 900.0) -> GoalResult | None:
-        """Step until the active goal ends (fast mode); returns its result."""
-        self.run_until(lambda: self.goal is None, max_sim_s)
-        if self.goal is not None:
-            with self.lock:
-                self._finish("aborted", f"timed out after {max_sim_s:.0f} s")
-        return self.last_result
-
-    def _substep(self) -> None:
-        self._before_physics()
-        self.world.step(self.dt)
-        self._after_physics()
-
-    def _before_physics(self) -> None:
-        """The robot's share of a substep before the world moves: control, lidar, its motors.
-        100 Hz: written for speed (min(d, max(-d, x)) spelled as comparisons, same values)."""
-        tick = self._tick = self._tick + 1
-        dt = self.dt
-        self.t = tick * dt
-        if tick % self._control_every == 0:
-            self._control(dt * self._control_every)
-        if self.lidar_enabled and tick % self._lidar_every == 0:
-            self._scan()
-            if self.goal is not None:
-                self._check_path()
-        v = self._v
-        if self.e_stopped or self.fault:
-            v[:] = vx, vy, wz = (0.0, 0.0, 0.0)
-        else:
-            tx, ty, tw = self._target
-            vx, vy, wz = v
-            dl, da = A_LIN * dt, A_ANG * dt
-            d = tx - vx
-            vx += d if -dl < d < dl else (dl if d >= dl else -dl)
-            d = ty - vy
-            vy += d if -dl < d < dl else (dl if d >= dl else -dl)
-            d = tw - wz
-            wz += d if -da < d < da else (da if d >= da else -da)
-            v[:] = vx, vy, wz
-        th = self.body.angle
-        c, s = math.cos(th), math.sin(th)
-        command = (c * vx - s * vy, s * vx + c * vy, wz)
-        applied = self._applied
-        if command != applied:  # pymunk's attribute setters cost more than the check
-            self._applied = command
-            # the properties' own setters (pymunk.Body's __setattr__ hook doubles their cost);
-            # setting a kinematic body's velocity to the value it has is no change: skipped
-            if command[:2] != applied[:2]:
-                _SET_VELOCITY(self.control, command[:2])
-            if wz != applied[2]:
-                _SET_ANGULAR_VELOCITY(self.control, wz)
-
-    def _after_physics(self) -> None:
-        if self._contact is not None:
-            self._on_collision(self._contact)
-
-    def _on_collision(self, kind: str) -> None:
-        self._contact = None
-        if self.fault or self.speed() < 0.05 and self.goal is None and self._teleop.until < self.t:
-            return
-        self.collisions += 1
-        self.fault = f"collision with {kind.split(':')[0]}"
-        self._v[:] = (0.0, 0.0, 0.0)
-        self._target = (0.0, 0.0, 0.0)
-        self._teleop = _Teleop()
-        self.control.velocity, self.control.angular_velocity = (0, 0), 0.0
-        self._applied = (0.0, 0.0, 0.0)
-        self._finish("aborted", self.fault)
-        self._event("fault", f"{self.fault} at ({self.pose[0]:.2f}, {self.pose[1]:.2f})", "error")
-
-    # -- 20 Hz: control, battery, conveyor -----------------------------------------------
-    def _control(self, dt: float) -> None:
-        if self.goal is not None:
-            self._target = self._navigate()
-            if self.chassis.differential:  # the small wheels' top speed bounds the controller
-                self._target = achievable_velocity(*self._target, self.params)
-        elif self._teleop.until >= self.t:
-            vx, vy, wz = self._teleop.v
-            if self.chassis.differential:
-                vy = 0.0  # no lateral motion; the wheels' limit bounds the rest
-            self._target = achievable_velocity(vx, vy, wz, self.params)
-        else:
-            self._target = (0.0, 0.0, 0.0)
-        w = wheel_speeds(*self._v, self.params)
-        self._motor_power = self.chassis.motor_power(w)
-        self.battery.update(dt, self._motor_power, on_charger=self.docked())
-        done = self.conveyor.update(dt)
-        if done:
-            self._event("conveyor", f"{done}")
-
-    # -- 10 Hz: lidar, obstacles, re-planning -----------------------------------------------
-    def _scan(self) -> None:
-        t0 = time.perf_counter()
-        edges, owner, unmapped_edges = self.world.lidar_edges(self.body)
-        x, y, th = self.pose
-        ranges, hit = lidar.cast_edges(x, y, th, edges, self.lidar_spec, hits=unmapped_edges)
-        self.lidar_ms.append((time.perf_counter() - t0) * 1e3)
-        self.scan_ranges = lidar.add_noise(ranges, self.rng, self.lidar_spec)
-        self.scan_stamp = self.t
-        if not unmapped_edges:  # every edge is the map's: nothing to detect
-            self.detected = []
-            return
-        owners = owner[np.maximum(hit, 0)]
-        unmapped = (hit >= 0) & (owners >= 0)
-        robots = None
-        if len(self.world.robots) > 1:
-            robots = np.where(unmapped & (owners >= ROBOT_OWNER), owners - ROBOT_OWNER, -1)
-        self.detected = detect(self.scan_ranges, unmapped, self._beam_angles, (x, y, th), robots)
