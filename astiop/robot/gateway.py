@@ -22,6 +22,7 @@ from astiop.ros2.fleet_names import robot_under
 from astiop.ros2.render import STAMPED
 from astiop.ros2.validation import Checked, validate
 from astiop.ros2.verbs import VERBS
+from astiop.ros2.verbs.base import TAKE
 from astiop.store import Store
 from astiop.transports.base import BackendError, Execution, MapGeometry, RobotBackend
 from astiop.transports.playback import Playback, PlaysBack
@@ -242,7 +243,7 @@ class RobotGateway(EstopLatch, GraphReading):
             result.executed = True
             result.provenance = self._provenance(checked)
             self._name_role(checked.command.name, result)
-            if checked.command.verb == "topic" and checked.command.sub == "echo":
+            if VERBS[checked.command.key].means == TAKE:  # one message: its age is known
                 self._date_reading(checked.command.name, result)
         except BackendError as exc:
             result.executed = True

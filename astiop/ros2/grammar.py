@@ -11,7 +11,6 @@ import argparse
 import difflib
 import re
 import shlex
-from dataclasses import dataclass
 from functools import cache
 from typing import Any
 
@@ -26,6 +25,7 @@ from astiop.bounded import (
 )
 from astiop.distro import DISTROS, current_distro  # noqa: F401 - its callers read it here
 from astiop.ros2.cli_args import build_parser
+from astiop.ros2.command import Ros2Command
 from astiop.ros2.verbs import VERBS
 
 SHELL_OPERATORS = {"|", "||", "&", "&&", ";", ";;", ">", ">>", "<", "<<", "$(", "`", "(", ")"}
@@ -106,29 +106,6 @@ def _suggest(distro: str, key: tuple[str, str], message: str) -> str:
     close = difflib.get_close_matches(m[1].split("=")[0], options, n=1, cutoff=0.6)
     hint = f"; did you mean {close[0]}?" if close else ""
     return message.replace("ros2: error:", f"ros2 {key[0]} {key[1]} ({distro}): error:") + hint
-
-
-@dataclass(frozen=True)
-class Ros2Command:
-    text: str
-    verb: str
-    sub: str
-    args: dict[str, Any]  # name (full), type, values (parsed YAML), node, param, value
-    flags: frozenset[str]
-    options: dict[str, Any]
-    argv: tuple[str, ...]  # what was typed after `ros2`
-    distro: str = "jazzy"
-
-    @property
-    def key(self) -> tuple[str, str]:
-        return (self.verb, self.sub)
-
-    @property
-    def name(self) -> str | None:
-        return self.args.get("name")
-
-    def display(self) -> str:
-        return "ros2 " + shlex.join(self.argv)
 
 
 def normalize_name(name: str) -> str:

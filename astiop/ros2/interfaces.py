@@ -9,6 +9,7 @@ from functools import cache
 from typing import Any
 
 from astiop.bounded import preview
+from astiop.distro import current_distro
 from astiop.ros2.definitions import DEFINITIONS, definitions
 
 INT_RANGES = {
@@ -105,8 +106,6 @@ def _parse_block(name: str, text: str) -> MessageType:
 
 def _distro(distro: str | None) -> str:
     if distro is None:
-        from astiop.ros2.grammar import current_distro
-
         return current_distro()
     return distro
 

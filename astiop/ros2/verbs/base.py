@@ -6,13 +6,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
-
-if TYPE_CHECKING:
-    from astiop.ros2.catalog import Catalog
-    from astiop.ros2.grammar import Ros2Command
-    from astiop.ros2.verbs.checks import Checked
-    from astiop.ros2.verbs.transport import Transport
+from typing import Any
 
 VerbKey = tuple[str, str]
 Output = tuple[str, Any]  # what ros2 prints, and the values astiop reads from it
@@ -31,8 +25,8 @@ class BackendError(Exception):
     """The command was valid but running it failed (timeout, no message, process error)."""
 
 
-def _valid(cmd: Ros2Command, catalog: Catalog) -> Checked:
-    from astiop.ros2.verbs.checks import Checked
+def _valid(cmd: Any, catalog: Any) -> Any:
+    from astiop.ros2.verbs.checks import Checked  # noqa: PLC0415 - checks loads the catalog
 
     return Checked(cmd.text, cmd, True)
 
@@ -41,8 +35,8 @@ def _valid(cmd: Ros2Command, catalog: Catalog) -> Checked:
 class Verb:
     key: VerbKey
     arguments: Callable[[Any, str], None]  # (argparse subparser, distro): as ros2cli declares it
-    run: Callable[[Transport, Checked, float], Output]  # in process, over a transport
-    check: Callable[[Ros2Command, Catalog], Checked] = _valid  # against the robot's catalog
+    run: Callable[[Any, Any, float], Output]  # (Transport, Checked, timeout): in process
+    check: Callable[[Any, Any], Any] = _valid  # (Ros2Command, Catalog) -> Checked
     means: str = QUERY
     example: str = ""  # shown with a parse error
     flags: Mapping[str, str] = field(default_factory=dict)  # argparse dest -> astiop's flag

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from astiop.ros2.catalog import Catalog, ServiceSpec
-from astiop.ros2.grammar import Ros2Command
+from astiop.ros2.command import Ros2Command
 from astiop.ros2.interfaces import InterfaceError, normalize_type
 
 MAX_PUBLISH_S = 30.0

@@ -1,0 +1,30 @@
+"""A ros2 command as astiop parsed it: its verb, names, flags and options, and what was typed."""
+
+from __future__ import annotations
+
+import shlex
+from dataclasses import dataclass
+from typing import Any
+
+
+@dataclass(frozen=True)
+class Ros2Command:
+    text: str
+    verb: str
+    sub: str
+    args: dict[str, Any]  # name (full), type, values (parsed YAML), node, param, value
+    flags: frozenset[str]
+    options: dict[str, Any]
+    argv: tuple[str, ...]  # what was typed after `ros2`
+    distro: str = "jazzy"
+
+    @property
+    def key(self) -> tuple[str, str]:
+        return (self.verb, self.sub)
+
+    @property
+    def name(self) -> str | None:
+        return self.args.get("name")
+
+    def display(self) -> str:
+        return "ros2 " + shlex.join(self.argv)
