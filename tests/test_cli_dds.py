@@ -212,6 +212,14 @@ def test_the_astibot_program_through_the_ros2_cli(monkeypatch, tmp_path):
             msg = gateway.run(f"ros2 topic echo {roles['pose']['name']} --once").values
             x = msg["x"] if "x" in msg else msg["pose"]["pose"]["position"]["x"]
             assert f"x {x:.2f} m" in result.answer, result.answer
+            # ros2 topic bw through the CLI: the bytes DDS carried, as the verb's module says
+            from astiop.ros2.cdr import serialized_size
+
+            scan = gateway.run("ros2 topic echo /scan --once").values
+            bw = gateway.run("ros2 topic bw /scan", timeout=15)
+            assert bw.executed and not bw.error and bw.values["reports"] >= 2, bw.error
+            size = serialized_size("sensor_msgs/msg/LaserScan", scan)
+            assert f"Message size mean: {size / 1000:.2f} KB" in bw.output, (size, bw.output)
         finally:
             gateway.close()
             store.close()

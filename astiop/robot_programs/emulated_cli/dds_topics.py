@@ -176,6 +176,30 @@ class TopicVerbs:
         finally:
             self.node.destroy_subscription(sub)
 
+    @runs("topic bw")
+    def _topic_bw(self, call: Call, a: dict):
+        from astiop.ros2.verbs.topic_bw import report_text
+
+        name = a["topic_name"]
+        while not (types := dict(self._topics(True)).get(name)):
+            call.wait(0.1)  # get_msg_class(blocking=True), silently (bw.py)
+        cls = load_class(types[0], "msg")
+        got: list[tuple[float, int]] = []
+        sub = self.node.create_subscription(
+            cls, name, lambda data: got.append((time.monotonic(), len(data))),
+            qos_profile_sensor_data, raw=True,
+        )  # fmt: skip
+        call.out(f"Subscribed to [{name}]\n")
+        try:
+            while True:  # bw.py's timer: a report each second once two messages came
+                call.wait(1.0)
+                seen, now = got[-a["window_size"] :], time.monotonic()
+                if len(seen) >= 2:
+                    rate = sum(size for _, size in seen) / (now - seen[0][0])
+                    call.out(report_text(rate, [size for _, size in seen]) + "\n")
+        finally:
+            self.node.destroy_subscription(sub)
+
     @runs("topic pub")
     def _topic_pub(self, call: Call, a: dict):
         cls = load_class(a["message_type"], "msg")

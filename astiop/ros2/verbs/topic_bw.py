@@ -51,6 +51,16 @@ def _units(bytes_per_s: float):
     return lambda n: f"{n / 1000 / 1000:.2f} MB"
 
 
+def report_text(bytes_per_s: float, sizes: list[int]) -> str:
+    """One report as bw.py prints it, in the unit of the rate (B, KB or MB)."""
+    unit = _units(bytes_per_s)
+    mean = sum(sizes) / len(sizes)
+    return (
+        f"{unit(bytes_per_s)}/s from {len(sizes)} messages\n\tMessage size mean: "
+        f"{unit(mean)} min: {unit(min(sizes))} max: {unit(max(sizes))}"
+    )
+
+
 def run(t, c, timeout: float):
     from astiop.ros2.verbs.base import BackendError
 
@@ -60,13 +70,7 @@ def run(t, c, timeout: float):
     if not found:
         raise BackendError(f"{name} is not being published (no bandwidth within {timeout:g} s)")
     lines = [f"Subscribed to [{name}]"]
-    for bytes_per_s, sizes in found:
-        unit = _units(bytes_per_s)
-        mean = sum(sizes) / len(sizes)
-        lines.append(
-            f"{unit(bytes_per_s)}/s from {len(sizes)} messages\n\tMessage size mean: "
-            f"{unit(mean)} min: {unit(min(sizes))} max: {unit(max(sizes))}"
-        )
+    lines += [report_text(bytes_per_s, sizes) for bytes_per_s, sizes in found]
     text = "\n".join(lines) + "\n"
     return text, read(text)
 
