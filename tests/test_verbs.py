@@ -31,6 +31,17 @@ def test_the_simulator_gives_every_verb_what_it_runs_on():
     assert not missing, missing
 
 
+@pytest.mark.ros
+def test_rclpy_gives_every_verb_what_it_runs_on():
+    from tests.ros import require_ros
+
+    require_ros()
+    from astiop.transports.rclpy.backend import RclpyBackend
+
+    missing = [name for name in PRIMITIVES if not callable(getattr(RclpyBackend, name, None))]
+    assert not missing, missing
+
+
 def test_bw_parses_as_ros2cli_declares_it_on_both_distros():
     for distro in ("humble", "jazzy"):
         cmd = parse("ros2 topic bw /scan -w 5", distro)

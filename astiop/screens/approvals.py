@@ -9,6 +9,7 @@ import sqlite3
 import threading
 import time
 
+from astiop.screens.base import services_of
 from astiop.screens.modals import ConfirmModal
 from astiop.store import StoreError
 
@@ -24,7 +25,7 @@ class ApprovalDesk(threading.Thread):
         self._open: dict[int, ConfirmModal] = {}  # the UI thread's: dialogs still up
 
     def run(self) -> None:
-        store = self.app.services.store
+        store = services_of(self.app).store
         try:
             while not self.halt.wait(POLL_S):
                 try:
@@ -89,7 +90,7 @@ class ApprovalDesk(threading.Thread):
         )
 
     def _decide(self, approval_id: int, approved: bool) -> None:
-        store = self.app.services.store
+        store = services_of(self.app).store
         try:
             if not store.decide_approval(approval_id, approved, "console"):
                 return  # no longer pending: expired or answered elsewhere

@@ -2,17 +2,22 @@
 
 from __future__ import annotations
 
+from textual.app import App
 from textual.screen import Screen
 from textual.worker import Worker
 
 from astiop.services import Services
 
 
+def services_of(app: App) -> Services:
+    """The app's services, typed (the app is AstiopApp; Textual types it App)."""
+    return app.services  # type: ignore[attr-defined]
+
+
 class ConsoleScreen(Screen):
     @property
     def services(self) -> Services:
-        """The app's services, typed (the app is AstiopApp; `self.app` is typed App)."""
-        return self.app.services  # type: ignore[attr-defined]
+        return services_of(self.app)
 
     def on_mount(self) -> None:
         self.app.listeners.append(self)

@@ -4,12 +4,13 @@ a console whose robot was taken over is told at once and watches from then on.""
 
 from __future__ import annotations
 
+from astiop.screens.base import services_of
 from astiop.screens.modals import ConfirmModal
 
 
 def start(app) -> None:
     """Take control of the current robot if it is free (off the app's thread: a store write)."""
-    lease = app.services.gateway.lease
+    lease = services_of(app).gateway.lease
     if lease is None:
         return
 
@@ -21,7 +22,7 @@ def start(app) -> None:
 
     def take() -> None:
         try:
-            refused = app.services.gateway.take_control()
+            refused = services_of(app).gateway.take_control()
         finally:  # the header says how it ended, even by an error
             app.call_from_thread(app.refresh_subtitle)
         if refused:
@@ -50,7 +51,7 @@ def words(gateway) -> str:
 def take_over(app) -> None:
     """ctrl+t: control of the current robot taken from whoever has it, once the operator said;
     held here already, let go of (asked too)."""
-    gateway = app.services.gateway
+    gateway = services_of(app).gateway
     lease = gateway.lease
     if lease is None:
         app.notify("This robot is this console's own: there is no control to take.")
@@ -107,7 +108,7 @@ def use_robot(app, name: str) -> None:
         return
     old = app._sampler
     old.halt.set()  # its thread ends at its next tick; its robot stays watched by the fleet
-    services = app.services
+    services = services_of(app)
     services.gateway.watch_lightly(True)  # a row of the fleet's from now
     gateway.watch_lightly(False)
     services.gateway = gateway

@@ -12,12 +12,13 @@ from textual.app import SystemCommand
 
 from astiop.missions import view
 from astiop.missions.runner import robot_key
+from astiop.screens.base import services_of
 
 
 def live_mission(app: Any) -> dict[str, Any] | None:
     """The robot's running, paused or queued mission, as the views show it; None: none."""
-    store = app.services.store
-    row = store.running_mission(robot_key(app.services.gateway))
+    store = services_of(app).store
+    row = store.running_mission(robot_key(services_of(app).gateway))
     return view.as_json(store, row["id"]) if row else None
 
 
@@ -52,7 +53,7 @@ def control(app: Any, what: str) -> None:
 
 
 def _control(app: Any, what: str) -> None:
-    store = app.services.store
+    store = services_of(app).store
     m = live_mission(app)
     if m is None:
         app.call_from_thread(app.notify, "no mission is running", title="mission")
