@@ -6,8 +6,9 @@ from __future__ import annotations
 import pytest
 
 from astiop.ros2.catalog import astibot_catalog
-from astiop.ros2.profile import match_profile, normalise_namespace
+from astiop.ros2.profile import match_profile
 from astiop.ros2.profile_file import ProfileError, parse, read_spec, shipped_names, write_profile
+from astiop.ros2.profile_types import normalise_namespace
 from astiop.transports.live_catalog import describe_graph, nothing_listed
 
 # A TurtleBot3 Burger under Nav2 on Jazzy, the parts of its graph that matter here (beside the

@@ -7,6 +7,7 @@ import asyncio
 import typer
 
 from astiop.cli.common import Ending, fail, interactive, print_json, state, take_control
+from astiop.cli.mission_follow import follow_mission
 
 
 def _robot_named(st, text: str, as_json: bool) -> str | None:
@@ -220,18 +221,6 @@ def chat(
     Ending.at_once = settings.robot.backend != "ros2"
     if result.error:
         raise typer.Exit(1)
-
-
-def follow_mission(runner, mission_id: int) -> str:
-    """Wait for the mission to end (each step is printed as it ends); Ctrl-C cancels it."""
-    try:
-        while not runner.wait(0.5):
-            pass
-    except KeyboardInterrupt:
-        runner.cancel()
-        runner.wait(30)
-    row = runner.store.mission(mission_id) or {}
-    return f"mission {mission_id} {row.get('status', '?')}: {row.get('reason') or ''}".rstrip(": ")
 
 
 def models(ctx: typer.Context, as_json: bool = typer.Option(False, "--json")) -> None:

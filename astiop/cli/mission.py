@@ -10,6 +10,7 @@ from pathlib import Path
 import typer
 
 from astiop.cli.common import Ending, fail, print_json, state, take_control
+from astiop.cli.mission_follow import follow_mission
 
 app = typer.Typer(help="List, show, pause, resume and cancel missions.", no_args_is_help=True)
 
@@ -109,7 +110,6 @@ def resume(
     """Go on with a mission. A paused one: its own process goes on with the next step (no
     --from). An interrupted one (its process ended): this process drives it from the step it
     was on, or --from, and waits for it to end."""
-    from astiop.cli.agent import follow_mission
     from astiop.cli.common import interactive
     from astiop.missions import view
     from astiop.missions.runner import MissionError, MissionRunner

@@ -8,6 +8,7 @@ from typing import Any
 from astiop.bounded import escape_controls, one_line
 from astiop.mcp.approval import NO_CONSOLE, wait_for_decision
 from astiop.mcp.audit import CALL
+from astiop.mcp.refusals import Refused
 from astiop.missions import view
 from astiop.missions.runner import MissionError, MissionRunner
 from astiop.missions.steps import KINDS, Condition, Step, describe
@@ -78,8 +79,6 @@ class MissionTools:
     def start_mission(
         self, steps: list[dict], replace: bool = False, until_stopped: bool = False
     ) -> str:
-        from astiop.mcp.tools import Refused
-
         known = {loc.name for loc in self.store.list_locations()}
         try:
             parsed = parse_steps(steps, known)
@@ -122,8 +121,6 @@ class MissionTools:
         )
 
     def _approve_mission(self, plan: str, replaces: str = "") -> None:
-        from astiop.mcp.tools import Refused
-
         if self.gateway.e_stopped:
             raise Refused("the E-STOP is engaged: nothing was sent")
         if self.policy.approve_actuation:
@@ -145,8 +142,6 @@ class MissionTools:
             raise Refused(f"no answer from the operator within {self.policy.timeout_s:g} s")
 
     def mission_status(self, mission_id: int = 0) -> dict:
-        from astiop.mcp.tools import Refused
-
         if mission_id == 0:
             row = self.store.latest_mission()
             if row is None:
@@ -158,8 +153,6 @@ class MissionTools:
         return {**m, "summary": view.summary(m)}
 
     def cancel_mission(self, mission_id: int = 0) -> str:
-        from astiop.mcp.tools import Refused
-
         row = self.store.running_mission(self._missions().robot)
         if mission_id == 0:
             if row is None:

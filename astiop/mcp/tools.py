@@ -16,6 +16,7 @@ from astiop.bounded import MAX_COMMAND_CHARS, has_controls, one_line, preview
 from astiop.mcp.approval import Policy, clear, needs_approval
 from astiop.mcp.audit import CALL, AuditTrail, Call
 from astiop.mcp.mission_tools import MissionTools
+from astiop.mcp.refusals import Refused
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.safety import Review
 from astiop.ros2.render import STAMPED, goto_command
@@ -50,10 +51,6 @@ DRIVE_PERIOD_S = 0.1  # well inside the teleop lapse
 TOPIC_RE = re.compile(r"^/?[A-Za-z_][A-Za-z0-9_/]{0,254}$")
 NAME_RE = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
 TRIGGER = "std_srvs/srv/Trigger"
-
-
-class Refused(Exception):
-    """The call was refused or failed; the reason says what, if anything, was sent."""
 
 
 def finite(name: str, value: float, limit: float = 1e6) -> float:

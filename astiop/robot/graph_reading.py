@@ -8,7 +8,8 @@ from typing import TYPE_CHECKING, Protocol
 
 from astiop.robot.safety import SafetyPolicy
 from astiop.ros2.catalog import Catalog
-from astiop.ros2.profile import Profile, match_profile
+from astiop.ros2.profile import match_profile
+from astiop.ros2.profile_types import Profile
 from astiop.store import Store
 from astiop.transports.base import RobotBackend
 

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from astiop.ros2.profile import Profile
+    from astiop.ros2.profile_types import Profile
 
 # The robot's release of its own latched stop: the operator's to call, never the model's
 RELEASE = "/release"

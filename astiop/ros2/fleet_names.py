@@ -4,7 +4,8 @@ namespaces hold a robot, and which robot a name is under."""
 from __future__ import annotations
 
 from astiop.ros2.catalog import Catalog
-from astiop.ros2.profile import ProfileSpec, match_profile
+from astiop.ros2.profile import match_profile
+from astiop.ros2.profile_types import ProfileSpec
 
 
 def namespaces(catalog: Catalog) -> list[str]:

@@ -13,7 +13,14 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from astiop.ros2.profile import Limits, MapSpec, Profile, ProfileSpec, Units
+from astiop.ros2.profile_types import (
+    Limits,
+    MapSpec,
+    Profile,
+    ProfileSpec,
+    Units,
+    normalise_namespace,
+)
 from astiop.ros2.roles import ROLE_NAMES
 
 try:
@@ -48,8 +55,6 @@ def shipped(make: str) -> ProfileSpec | None:
 def read_spec(setting: str, namespace: str = "") -> ProfileSpec:
     """`robot.profile` as set: "auto" (matched on the graph), a shipped profile's name, or a
     file's path; `namespace` (robot.namespace, --namespace) wins over the file's."""
-    from astiop.ros2.profile import normalise_namespace
-
     try:
         ns = normalise_namespace(namespace)
     except ValueError as exc:
@@ -95,8 +100,6 @@ def parse(text: str, source: str) -> ProfileSpec:
             f"{source}: units.battery_percentage is fraction or percent, not {pct!r}"
         )
     limits = _table(data, "limits", source, dict.fromkeys(Limits.__dataclass_fields__, float))
-    from astiop.ros2.profile import normalise_namespace
-
     try:
         ns = normalise_namespace(robot.get("namespace", ""))
     except ValueError as exc:

@@ -19,6 +19,7 @@ from astiop.store.approvals import ApprovalTables
 from astiop.store.bench import BenchTables
 from astiop.store.journal import JournalTables
 from astiop.store.leases import LeaseTables
+from astiop.store.liveness import _alive
 from astiop.store.locations import LocationTables
 from astiop.store.missions import MissionTables
 from astiop.store.records import Location, LocationError, StoreError
@@ -33,18 +34,6 @@ from astiop.warehouse import Rect, default_map
 BUSY_TIMEOUT_MS = 10_000  # how long a write waits for another process's
 
 __all__ = ["SCHEMA_VERSION", "Location", "LocationError", "Store", "StoreError"]
-
-
-def _alive(pid: int) -> bool:
-    if pid == os.getpid():
-        return True
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
 
 
 def _writable(path: Path) -> bool:

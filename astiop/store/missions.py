@@ -12,6 +12,8 @@ import os
 import time
 from typing import Any
 
+from astiop.store.liveness import _alive
+
 # a mission in one of these is over; `interrupted` may still be resumed or dropped
 ENDED = ("succeeded", "failed", "canceled", "stopped", "dropped", "replaced")
 LIVE = ("running", "paused", "queued")  # one of these per robot at a time
@@ -235,8 +237,6 @@ class MissionTables:
 
     def mark_missions_interrupted(self) -> None:
         """Missions left `running` by a process that is gone: `interrupted` at their step."""
-        from astiop.store import _alive  # the store's own liveness check
-
         rows = self.db.conn.execute(
             "SELECT id, pid, step, status FROM missions WHERE status IN ('running', 'paused') "
             "OR (status = 'queued' AND created_at < ?)",
