@@ -6,6 +6,8 @@ profile is (its dataclasses) is in profile_types.py."""
 
 from __future__ import annotations
 
+from typing import Any, Protocol
+
 from astiop.ros2.profile_file import shipped
 from astiop.ros2.profile_types import (  # ProfileSpec also read from here by transports/
     Match,
@@ -21,11 +23,18 @@ from astiop.ros2.roles import (
     Role,
 )
 
-# `Catalog` (ros2/catalog.py) is named in annotations only, not imported: catalog.py imports
-# this module (astibot_catalog matches its profile), and the modules form a line
+
+class Graph(Protocol):
+    """What matching reads of a robot's catalog (ros2/catalog.py's Catalog, which imports this
+    module to match the ASTIbot's own profile)."""
+
+    topics: dict[str, Any]
+    services: dict[str, Any]
+    actions: dict[str, Any]
+    nodes: tuple[str, ...]
 
 
-def _entries(catalog: Catalog, kind: str) -> dict[str, str]:  # noqa: F821
+def _entries(catalog: Graph, kind: str) -> dict[str, str]:
     table = {"topic": catalog.topics, "service": catalog.services, "action": catalog.actions}
     return {name: spec.type for name, spec in table[kind].items()}
 
@@ -39,7 +48,7 @@ def _local(name: str, namespace: str) -> str | None:
     return None
 
 
-def _match(role: Role, catalog: Catalog, namespace: str, entries: dict) -> Match:  # noqa: F821
+def _match(role: Role, catalog: Graph, namespace: str, entries: dict) -> Match:
     for kind, typ in role.kinds:
         found = []
         for name, t in entries[kind].items():
@@ -74,7 +83,7 @@ def _match(role: Role, catalog: Catalog, namespace: str, entries: dict) -> Match
 def _fixed(
     role: str,
     name: str,
-    catalog: Catalog,  # noqa: F821
+    catalog: Graph,
     entries: dict,
     source: str,
 ) -> Match:
@@ -89,7 +98,7 @@ def _fixed(
     return Match(role, kind, name, typ, f"set by {source} (not on the graph yet)", False)
 
 
-def recognise(catalog: Catalog) -> str:  # noqa: F821
+def recognise(catalog: Graph) -> str:
     """The robot's make from its graph: a node or a type only that make has."""
     nodes = {n.rsplit("/", 1)[-1] for n in catalog.nodes}
     types = {s.type for s in catalog.topics.values()}
@@ -100,7 +109,7 @@ def recognise(catalog: Catalog) -> str:  # noqa: F821
     return "unknown"
 
 
-def match_profile(catalog: Catalog, spec: ProfileSpec | None = None) -> Profile:  # noqa: F821
+def match_profile(catalog: Graph, spec: ProfileSpec | None = None) -> Profile:
     """The profile of the robot on `catalog`: what `spec` fixes, over what astiop ships for the
     robot's make (recognised on the graph unless `spec` names it), over what matching finds."""
     spec = spec or ProfileSpec()
