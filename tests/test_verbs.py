@@ -152,3 +152,33 @@ def test_the_computed_size_is_the_size_rclpy_serializes():
             continue
         wire = serialize_message(to_message(interface_class(spec.type), message))
         assert serialized_size(spec.type, message) == len(wire), name
+
+
+def test_find_lists_the_topics_of_a_type_as_ros2cli_prints_them():
+    """A verb added as one module and this test: the grammar, validation and every transport
+    take it from the registry (the simulator here; the emulated ros2 runs it the same way)."""
+    gateway = sim_gateway()
+    try:
+        r = gateway.run("ros2 topic find sensor_msgs/msg/LaserScan")
+        assert r.executed and not r.error and r.output == "/scan\n", (r.error, r.output)
+        tf = gateway.run("ros2 topic find tf2_msgs/msg/TFMessage -c")
+        assert tf.output == "2\n" and tf.values == ["/tf", "/tf_static"], tf.output
+        assert gateway.run("ros2 topic find no_pkg/msg/None").output == ""
+    finally:
+        gateway.close()
+
+
+def test_find_on_the_cli_transport_runs_the_same_verb_in_the_emulated_ros2(monkeypatch):
+    from astiop.transports.ros2cli.backend import Ros2Backend
+    from tests.emulator import emulated_robot, on_path, ros2_calls
+
+    with emulated_robot() as folder:
+        on_path(monkeypatch, folder)
+        gateway = RobotGateway(Ros2Backend("ros2", 10.0, stream=False), SafetyPolicy())
+        gateway.start()
+        try:
+            r = gateway.run("ros2 topic find nav_msgs/msg/Odometry")
+            assert r.executed and not r.error and r.output == "/odom\n", (r.error, r.output)
+            assert ["topic", "find", "nav_msgs/msg/Odometry"] in ros2_calls(folder)
+        finally:
+            gateway.close()
