@@ -10,31 +10,23 @@ from typing import Any
 
 from astiop.ros2.catalog import Catalog
 from astiop.ros2.grammar import current_distro
-from astiop.ros2.message_objects import interface_class, to_dict, to_message
+from astiop.ros2.message_objects import to_dict
 from astiop.ros2.profile import ProfileSpec
-from astiop.ros2.render import velocity_message, zero_twist
-from astiop.ros2.validation import CANCEL_SUFFIX
 from astiop.transports import live_robot
-from astiop.transports.base import BackendError, RobotBackend
+from astiop.transports.base import RobotBackend
 from astiop.transports.event_log import Contact, EstopWork, EventLog
 from astiop.transports.inflight import InFlight, Job
-from astiop.transports.live_catalog import (
-    CANCEL_GOAL,
-    NAVIGATE,
-    RELEASE,
-    GraphLists,
-    describe_graph,
-    navigation_actions,
-    stop_service_type,
-)
+from astiop.transports.live_catalog import GraphLists, describe_graph
 from astiop.transports.live_robot import MOVING, without_finished_plan
 from astiop.transports.rclpy.empty_calls import EmptyCalls
+from astiop.transports.rclpy.estop import RclpyEstop
 from astiop.transports.rclpy.graph import read_lists, read_params
 from astiop.transports.rclpy.node import ros_process
+from astiop.transports.rclpy.state_watches import RclpyStateWatches
+from astiop.transports.rclpy.teleop import RclpyTeleop
 from astiop.transports.rclpy.verbs import RclpyVerbs
-from astiop.transports.rclpy.watch import TopicWatch, watch, watch_transforms
+from astiop.transports.rclpy.watch import TopicWatch, watch
 from astiop.transports.state import (
-    GOAL_STATUS,
     OccupancyGrid,
     RobotEvent,
     RobotState,
@@ -47,24 +39,15 @@ from astiop.transports.state import (
 
 GRAPH_POLL_S = 1.0
 DISCOVERY_S = 3.0  # at most this long for a new process's discovery to settle
-SCAN_TYPES = frozenset({"sensor_msgs/msg/LaserScan", "sensor_msgs/msg/PointCloud2"})
 SHARED_READ_S = 0.1  # a graph read this recent serves every gateway of the process
 DISCOVERY_QUIET_S = 1.0  # no change in the graph for this long: discovery has settled
 DISCOVERY_YOUNG_S = 10.0  # a process this young may not have discovered the whole robot
 PARAMS_REFRESH_S = 30.0
 SILENT_S = 3.0  # a state topic's last message older than this is no longer the robot's state
-TELEOP_HZ = 10.0
-LAPSE_S = 0.5
-ESTOP_BURST_S = 1.0
-# Watched only while wanted: /odom at 50 Hz was most of the console's rclpy cost, and what the
-# state takes from it, /robot_status (speed) and /robot_pose (pose) carry too. Wanted while this
-# process drives, while the robot moves (its status says so), and while a reader (a recording)
-# asks for its messages; always where the robot lacks /robot_pose or /robot_status.
-WANTED_S = 2.0  # an on-demand topic stays watched this long after it was last wanted
 MOVING_SPEED = 0.005  # m/s: /robot_status's speed above this is a robot that moves
 
 
-class RclpyBackend(RclpyVerbs, RobotBackend):
+class RclpyBackend(RclpyEstop, RclpyTeleop, RclpyStateWatches, RclpyVerbs, RobotBackend):
     name = "ros2"
     capabilities = frozenset({"commands", "teleop"})
     refresh_every_s = 0.0  # the graph is this process's discovery cache: reading it is free
@@ -238,77 +221,6 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
             if not self._closed.is_set():
                 raise
 
-    def _watch_state_topics(self) -> None:
-        with self._watch_lock:
-            self._watch_state_topics_locked()
-
-    def _watch_state_topics_locked(self) -> None:
-        if self._closed.is_set():
-            return  # a refresh that outlived close(): no watch the process would keep
-        map_name = self._name("map")
-        for name in self.catalog.state_topics() + ([map_name] if map_name else []):
-            spec = self.catalog.topics.get(name)
-            if spec is None or name in self._watches or (name == map_name and self._map_watch):
-                continue
-            if name == self._name("odometry") and not self._is_wanted(name):
-                continue
-            if self._light_skips(name, spec.type):
-                continue
-            if not self.proc.node.get_publishers_info_by_topic(name):
-                continue  # subscribed when a publisher appears, with its QoS
-            if name == map_name:
-                self._map_watch = watch(self.proc, name, spec.type, self._on_map)
-                continue
-            on_message = self._on_message if name == self._name("status") else None  # events
-            if name in (self._name("transforms"), self._name("static_transforms")):
-                static = name == self._name("static_transforms")
-                w = watch_transforms(self.proc, name, spec.type, static)
-            else:
-                w = watch(self.proc, name, spec.type, on_message)
-            if w is not None:  # a new dict: the sampler may be iterating the old one
-                self._watches = {**self._watches, name: w}
-        goals = goal_status_topic(self.catalog.profile)
-        if (
-            goals
-            and goals not in self._watches
-            and self.proc.node.get_publishers_info_by_topic(goals)
-        ):
-            w = watch(self.proc, goals, GOAL_STATUS)
-            if w is not None:
-                self._watches = {**self._watches, goals: w}
-
-    # -- topics watched on demand -------------------------------------------------------------
-    def _want(self, name: str) -> None:
-        """Keep an on-demand topic watched for WANTED_S from now (the graph thread subscribes it:
-        never the caller, who may be the executor's callback or a key press)."""
-        if name == self._name("odometry"):
-            self._wanted[name] = time.monotonic() + WANTED_S
-            if name not in self._watches:
-                self._poke.set()
-
-    def _is_wanted(self, name: str) -> bool:
-        profile = self.catalog.profile
-        if profile and (profile.name("pose") == name or not profile.has("status")):
-            return True  # the robot's pose or speed has no other source
-        return time.monotonic() < self._wanted.get(name, 0.0)
-
-    def watch_lightly(self, light: bool) -> None:
-        self.light = light
-        self._poke.set()  # subscribed, or dropped at the graph thread's next read
-
-    def _light_skips(self, name: str, type_: str) -> bool:
-        """A scan not subscribed for a fleet's robot watched for its row (unless wanted)."""
-        return self.light and type_ in SCAN_TYPES and not self._is_wanted(name)
-
-    def _drop_unwanted(self) -> None:
-        with self._watch_lock:
-            scans = [n for n, w in self._watches.items() if self._light_skips(n, w.type)]
-            for name in [self._name("odometry"), *scans]:
-                w = self._watches.get(name)
-                if w is not None and not self._is_wanted(name):
-                    self._watches = {n: v for n, v in self._watches.items() if n != name}
-                    w.close()
-
     def close(self) -> None:
         self._closed.set()
         self._poke.set()
@@ -422,177 +334,3 @@ class RclpyBackend(RclpyVerbs, RobotBackend):
             state=state,
             outcome=lambda: self._last_outcome,
         )
-
-    # -- teleop and the E-STOP ------------------------------------------------------------------
-    def _publisher(self) -> tuple[Any, Any, str]:
-        with self._lock:
-            return self._publisher_locked()
-
-    def _publisher_locked(self) -> tuple[Any, Any, str]:
-        if self._cmd_vel is None:
-            type_ = self._cmd_vel_type()
-            cls = interface_class(type_)
-            name = self._name("velocity_command", "/cmd_vel")
-            self._cmd_vel = (self.proc.node.create_publisher(cls, name, 10), cls, type_)
-        return self._cmd_vel
-
-    def _cmd_vel_type(self) -> str:
-        name = self._name("velocity_command", "/cmd_vel")
-        spec = self.catalog.topics.get(name)
-        if spec is not None:
-            return spec.type
-        # a process that did not wait for discovery (astiop estop): the base's subscription
-        infos = self.proc.node.get_subscriptions_info_by_topic(name)
-        if infos:
-            return infos[0].topic_type
-        raise BackendError(f"the robot has no {name}")
-
-    def _send_twist(self, twist: dict) -> None:
-        pub, cls, type_ = self._publisher()
-        pub.publish(self._stamped(cls, velocity_message(type_, twist)))
-
-    def _stamped(self, cls: Any, message: dict) -> Any:
-        """The message object, a TwistStamped's header stamped now by this node's clock (what
-        `header: auto` asks of ros2topic's pub)."""
-        msg = to_message(cls, message)
-        if hasattr(msg, "header"):
-            msg.header.stamp = self.proc.node.get_clock().now().to_msg()
-        return msg
-
-    def drive(self, twist: dict) -> None:
-        with self._lock:
-            if self._teleop_job is None:  # refused while the E-STOP holds
-                self._teleop_job = self.inflight.start("teleop", self._drop_hold)
-            job = self._teleop_job
-            self._hold, self._hold_until = twist, time.monotonic() + LAPSE_S
-            self._holding.set()
-        with job.sending():
-            self._send_twist(twist)  # now, not at the next tick
-        self._want(self._name("odometry"))  # the velocity it makes, after it is sent
-
-    def _drop_hold(self) -> None:
-        with self._lock:
-            self._hold, self._teleop_job = None, None
-
-    def _teleop_loop(self) -> None:
-        """Repeat the held velocity at 10 Hz; when the keys stop, one zero Twist. Asleep while
-        nothing is held (no wake-up ten times a second for nothing)."""
-        while self._holding.wait() and not self._closed.wait(1.0 / TELEOP_HZ):
-            with self._lock:
-                twist, until, job = self._hold, self._hold_until, self._teleop_job
-                lapsed = twist is not None and time.monotonic() > until
-                if lapsed:
-                    self._hold, self._teleop_job = None, None
-                if self._hold is None:
-                    self._holding.clear()  # drive() sets it again, under this lock
-            try:
-                if lapsed:
-                    self._send_twist(zero_twist())
-                elif twist is not None and job is not None:
-                    with job.sending():
-                        self._send_twist(twist)
-            except Exception as exc:  # noqa: BLE001
-                if job is None or not job.ended_by_estop:  # else: its own zero Twists follow
-                    self.events.add("teleop", "error", f"velocity command: {exc}")
-            finally:
-                if lapsed and job is not None:
-                    job.done()
-
-    @property
-    def e_stopped(self) -> bool:
-        return self.inflight.held
-
-    def zero_now(self) -> None:
-        if self._name("velocity_command"):
-            self._send_twist(zero_twist())
-
-    def estop(self) -> list[str]:
-        """Everything in flight ended first (timed publishes, goals, teleop), then the zero Twist
-        now and /stop called, neither waiting on the other; failures that come later arrive as
-        events (`settle_estop`)."""
-        failures = self.inflight.stop_all()
-        self._estop.begin()
-        try:
-            self.zero_now()  # matched already in a running console
-            self._estop.start(self._zero_burst, "estop-zero")
-        except Exception as exc:  # noqa: BLE001 - /stop and the cancels go out regardless
-            failures.append(f"{exc}: no zero Twist was sent")
-        # The graph this process holds may be partial (a new process's E-STOP does not wait
-        # for it): a stop service it shows is called; one it does not show is still tried, and
-        # only a robot seen without it has none (said, not failed). Then every NavigateToPose
-        # goal on the robot is cancelled, another client's too (a TurtleBot3 has no /stop).
-        stop = self._name("stop")
-        stop_type = stop_service_type(self.catalog)
-        if stop:
-            self._estop.start(lambda: self._calls.call(stop, stop_type, "E-STOP"), "estop-stop")
-        else:
-            name = self._fixed.namespace + "/stop"
-            self._estop.start(
-                lambda: self._calls.call_if_served(name, stop_type, "E-STOP", self._base_seen),
-                "estop-stop",
-            )
-            actions = navigation_actions(self.catalog, self._fixed.namespace) or [
-                self._fixed.namespace + NAVIGATE
-            ]
-            for action in actions:
-                self._estop.start(lambda a=action: self._cancel_every_goal(a), "estop-cancel")
-        self._estop.said(failures)
-        return failures
-
-    def _cancel_every_goal(self, action: str) -> None:
-        """A CancelGoal with a zero goal id and a zero stamp cancels every goal of the action
-        server (ros2/rcl_interfaces action_msgs/srv/CancelGoal.srv, humble and jazzy)."""
-        name, what = f"{action}{CANCEL_SUFFIX}", "E-STOP cancel"
-        if action in self.catalog.actions:
-            self._calls.call(name, CANCEL_GOAL, what)
-        else:  # not on the graph this process holds (yet)
-            self._calls.call_if_served(name, CANCEL_GOAL, what, self._base_seen)
-
-    def _base_seen(self) -> bool:
-        """The robot's base is on the graph: its velocity command has a subscriber."""
-        velocity = self._name("velocity_command", "/cmd_vel")
-        return bool(self.proc.node.get_subscriptions_info_by_topic(velocity))
-
-    def _zero_burst(self) -> None:
-        """A zero Twist at 10 Hz for a second from when the base listens (in a new process,
-        discovery may take a moment: the first one may have found no one)."""
-        try:
-            deadline = time.monotonic() + self.timeout_s
-            while True:
-                try:
-                    pub, _cls, _type = self._publisher()
-                    break
-                except BackendError:  # not discovered yet
-                    if time.monotonic() > deadline:
-                        velocity = self._name("velocity_command", "/cmd_vel")
-                        raise BackendError(
-                            f"no {velocity} on the robot's graph in {self.timeout_s:g} s"
-                        ) from None
-                    time.sleep(0.01)
-            while pub.get_subscription_count() < 1:
-                if time.monotonic() > deadline:
-                    raise BackendError(
-                        f"nothing subscribed to {pub.topic_name} in {self.timeout_s:g} s"
-                    )
-                time.sleep(0.01)
-            end = time.monotonic() + ESTOP_BURST_S
-            while time.monotonic() < end and self.inflight.held and not self._closed.is_set():
-                self._send_twist(zero_twist())
-                time.sleep(1.0 / TELEOP_HZ)
-        except Exception as exc:  # noqa: BLE001 - said, never raised: /stop goes on
-            self.events.add("estop", "error", f"E-STOP zero Twist: {exc}")
-
-    def settle_estop(self, timeout_s: float) -> list[str]:
-        # /stop waits for its server, then for the answer: each may take the timeout (the
-        # burst ends sooner: its timeout and a second)
-        return self._estop.settle(2 * timeout_s)
-
-    def release_estop(self, *, robot: bool = True) -> list[str]:
-        self.inflight.release()
-        name = self._name("release", RELEASE)  # under the robot's namespace
-        spec = self.catalog.services.get(name)
-        if spec is None or not robot:
-            return []
-        seq = self.events.seq  # a robot that latches its own stop lets go too
-        self._calls.call(name, spec.type, "release")
-        return [e.message for e in self.events.since(seq) if e.kind == "estop"]

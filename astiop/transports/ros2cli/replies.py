@@ -1,5 +1,5 @@
-"""What `ros2` prints back: service responses, failures it reports with status 0, and the
-display options that shape only its text."""
+"""What `ros2` prints back: service responses, a call still waiting for its server, failures it
+reports with status 0, and the display options that shape only its text."""
 
 from __future__ import annotations
 
@@ -13,6 +13,16 @@ FAILED_WITH_STATUS_0 = re.compile(
     r"Failed to populate (message )?fields?.*|Goal was rejected.*)$",
     re.MULTILINE,
 )
+
+
+def waited_for_service(out: str) -> bool:
+    """`ros2 service call` found no server of its type (ros2service/verb/call.py waits)."""
+    return "waiting for service" in out and "response:" not in out
+
+
+def unsent(out: str) -> bool:
+    """A `ros2 service call` still waiting for its server: it sent no request yet."""
+    return "requester:" not in out
 
 
 def parse_response(text: str) -> dict[str, Any]:
