@@ -217,7 +217,7 @@ class RobotGateway(EstopLatch, GraphReading):
         result = Execution(
             text.strip(), checked.valid, checked.reason, checked.kind, notes=list(checked.notes)
         )
-        if "commands" not in self.backend.capabilities:
+        if not self.backend.runs_commands:
             result.reason = self.read_only_reason
             return result
         if not review.allowed:
@@ -311,7 +311,7 @@ class RobotGateway(EstopLatch, GraphReading):
         text = f'ros2 topic pub --once {name} {type_} "{values}"'
         review = self.review(text)
         result = Execution(text, review.checked.valid, review.reason, "actuate")
-        if "teleop" not in self.backend.capabilities:
+        if not self.backend.drives:
             result.reason = self.read_only_reason
             return result
         if not review.allowed:

@@ -75,7 +75,8 @@ class RobotBackend(ABC):
 
     name: str  # sim | ros2 | replay
     catalog: Catalog
-    capabilities: frozenset[str]  # "commands", "teleop"; a replay has neither
+    runs_commands: bool = True  # a replay runs none
+    drives: bool = True  # teleop: a replay has none
     label: str = ""  # how the header names it, when `name` alone is not enough
     read_only: str = ""  # why commands are refused, when they are
     refreshed_at: float = 0.0  # time.monotonic() of the last read of the robot's graph

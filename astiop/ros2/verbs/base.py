@@ -44,6 +44,7 @@ class Verb:
     values_from: str = ""  # the argparse dest holding YAML values (pub, call, send_goal)
     normalize: Callable[[dict, dict], None] | None = None  # (argparse namespace, options)
     measures: bool = False  # what it prints the robot measured now (provenance)
+    lasts: Callable[[Any], float] | None = None  # (Ros2Command) -> s it runs by its arguments
     # a SAMPLE verb's output read as ros2 prints it: enough of it yet, and its values
     enough: Callable[[str], bool] | None = None
     read: Callable[[str], Any] | None = None

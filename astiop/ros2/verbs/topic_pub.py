@@ -63,6 +63,13 @@ def check(cmd, catalog):
     return Checked(cmd.text, cmd, True, kind="actuate", type=spec.type, message=msg)
 
 
+def lasts(cmd) -> float:
+    """-t TIMES at -r RATE publishes for this long."""
+    if "once" in cmd.flags:
+        return 0.0
+    return (cmd.options["times"] - 1) / cmd.options.get("rate", 1.0)
+
+
 def run(t, c, timeout: float):
     return t.publish(c, timeout)
 
@@ -76,4 +83,5 @@ VERB = Verb(
     example='ros2 topic pub --once /cmd_vel geometry_msgs/msg/Twist "{linear: {x: 0.2}}"',
     values_from="values",
     normalize=normalize,
+    lasts=lasts,
 )

@@ -49,7 +49,6 @@ MOVING_SPEED = 0.005  # m/s: /robot_status's speed above this is a robot that mo
 
 class RclpyBackend(RclpyEstop, RclpyTeleop, RclpyStateWatches, RclpyVerbs, RobotBackend):
     name = "ros2"
-    capabilities = frozenset({"commands", "teleop"})
     refresh_every_s = 0.0  # the graph is this process's discovery cache: reading it is free
 
     def __init__(

@@ -111,7 +111,7 @@ def recorded_catalog(recording: Recording) -> Catalog:
 
 class ReplayBackend(RobotBackend):
     name = "replay"
-    capabilities: frozenset[str] = frozenset()  # no commands, no teleop
+    runs_commands = drives = False
     read_only = READ_ONLY
 
     def __init__(

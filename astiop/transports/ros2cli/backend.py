@@ -46,7 +46,6 @@ NO_GOAL_AFTER_S = 5.0  # a latched goal status echoed this long and none came: n
 
 class Ros2Backend(CliEstop, CliCommands, RobotBackend):
     name = "ros2"
-    capabilities = frozenset({"commands", "teleop"})
 
     def __init__(
         self,

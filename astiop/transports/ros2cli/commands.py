@@ -64,13 +64,11 @@ class CliCommands(_Host):
 
     def _once(self, checked: Checked, argv: list[str], timeout: float) -> tuple[str, Any]:
         """A verb ros2 ends by itself: a query, a publish, a service call."""
-        cmd = checked.command
-        if cmd.key == ("topic", "pub") and "times" in cmd.options:
-            # never stop a publisher that validation allowed to run this long
-            rate = cmd.options.get("rate", 1.0)
-            timeout = max(timeout, (cmd.options["times"] - 1) / rate + timeout)
+        cmd, verb = checked.command, VERBS[checked.command.key]
+        if verb.lasts is not None:  # never stop what validation allowed to run this long
+            timeout += verb.lasts(cmd)
         run = self._run(argv, timeout)
-        calls = VERBS[cmd.key].means == CALL
+        calls = verb.means == CALL
         if calls and waited_for_service(run.out):
             raise BackendError(f"service {cmd.name} is not available (waited {timeout:g} s)")
         if run.stopped:

@@ -21,7 +21,6 @@ from astiop.transports.state import RobotEvent, RobotState, TopicStat, from_mess
 
 class SimBackend(SimVerbs, RobotBackend):
     name = "sim"
-    capabilities = frozenset({"commands", "teleop"})
 
     def __init__(
         self,
