@@ -220,6 +220,8 @@ def test_the_astibot_program_through_the_ros2_cli(monkeypatch, tmp_path):
             assert bw.executed and not bw.error and bw.values["reports"] >= 2, bw.error
             size = serialized_size("sensor_msgs/msg/LaserScan", scan)
             assert f"Message size mean: {size / 1000:.2f} KB" in bw.output, (size, bw.output)
+            found = gateway.run("ros2 topic find sensor_msgs/msg/LaserScan")  # the graph's
+            assert found.executed and found.output == "/scan\n", (found.error, found.output)
         finally:
             gateway.close()
             store.close()

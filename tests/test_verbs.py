@@ -42,6 +42,18 @@ def test_rclpy_gives_every_verb_what_it_runs_on():
     assert not missing, missing
 
 
+@pytest.mark.ros
+def test_the_emulated_ros2_over_dds_runs_every_verb():
+    """Its own emulation, or (a verb that only reads the graph) the verb's module."""
+    from tests.ros import require_ros
+
+    require_ros()
+    from astiop.robot_programs.emulated_cli.dds import DdsRos2
+
+    unserved = [v.name for k, v in VERBS.items() if k not in DdsRos2.VERBS and v.means != "query"]
+    assert not unserved, unserved
+
+
 def test_bw_parses_as_ros2cli_declares_it_on_both_distros():
     for distro in ("humble", "jazzy"):
         cmd = parse("ros2 topic bw /scan -w 5", distro)
@@ -152,6 +164,12 @@ def test_the_computed_size_is_the_size_rclpy_serializes():
             continue
         wire = serialize_message(to_message(interface_class(spec.type), message))
         assert serialized_size(spec.type, message) == len(wire), name
+    trigger = interface_class("std_srvs/srv/Trigger")  # an empty request; short replies
+    assert serialized_size("std_srvs/srv/Trigger", {}) == len(serialize_message(trigger.Request()))
+    for text in ("", "a", "abc"):
+        reply = {"success": True, "message": text}
+        wire = serialize_message(to_message(trigger.Response, reply))
+        assert serialized_size("std_srvs/srv/Trigger", reply, part=1) == len(wire), text
 
 
 def test_find_lists_the_topics_of_a_type_as_ros2cli_prints_them():
@@ -182,3 +200,28 @@ def test_find_on_the_cli_transport_runs_the_same_verb_in_the_emulated_ros2(monke
             assert ["topic", "find", "nav_msgs/msg/Odometry"] in ros2_calls(folder)
         finally:
             gateway.close()
+
+
+def test_the_line_sent_names_the_topic_where_it_was_typed_after_an_options_value():
+    from astiop.ros2.catalog import astibot_catalog
+    from astiop.ros2.render import sent_argv
+    from astiop.ros2.validation import validate
+
+    checked = validate("ros2 topic hz -w 5 scan", astibot_catalog())
+    assert sent_argv(checked) == ["topic", "hz", "-w", "5", "/scan"]
+    checked = validate("ros2 topic bw --window 3 odom", astibot_catalog())
+    assert sent_argv(checked) == ["topic", "bw", "--window", "3", "/odom"]
+
+
+def test_hz_and_echo_on_the_simulator_run_the_verbs_one_implementation():
+    gateway = sim_gateway()
+    try:
+        hz = gateway.run("ros2 topic hz /odom")  # published at 50 Hz on the simulator's clock
+        assert hz.values == {"average_rate": 50.0, "windows": 2}, hz.output
+        assert hz.output.startswith("average rate: 50.000\n\tmin: 0.020s max: 0.020s")
+        field = gateway.run("ros2 topic echo /robot_pose --once --field x")
+        assert field.output == "1.15\n---\n" and field.values == 1.15, field.output
+        bad = gateway.run("ros2 topic echo /robot_pose --once --field nope")
+        assert bad.error == "/robot_pose has no field nope", bad.error
+    finally:
+        gateway.close()

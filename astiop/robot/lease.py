@@ -5,7 +5,7 @@ actuates nothing until it takes it over. The gateway asks the lease before any m
 
 It holds between processes on one machine through the store (one row per robot, taken in one
 write), and between machines on one ROS 2 domain through the robot's graph where the transport
-can announce it (rclpy: backends/rclpy/control_topic.py). Of two holders the latest take wins:
+can announce it (rclpy: transports/rclpy/control_topic.py). Of two holders the latest take wins:
 a takeover is a take made later. Only a robot reached over ROS 2 is shared: the in-process
 simulator is each console's own. A robot is keyed by its namespace and domain."""
 

@@ -9,6 +9,7 @@ from typing import Any
 from astiop.ros2.interfaces import get_parts
 
 HEADER = 4
+MIN_PAYLOAD = 4  # Fast DDS pads a shorter payload (std_msgs Bool, Empty: 8 bytes on the wire)
 WIDTH = {
     "bool": 1, "byte": 1, "char": 1, "int8": 1, "uint8": 1,
     "int16": 2, "uint16": 2,
@@ -20,7 +21,7 @@ WIDTH = {
 def serialized_size(type_name: str, values: dict[str, Any], part: int = 0) -> int:
     """Bytes on the wire, header included, of `values` as `type_name` (missing fields count at
     their zero)."""
-    return HEADER + _struct(type_name, values, part, 0)
+    return HEADER + max(MIN_PAYLOAD, _struct(type_name, values, part, 0))
 
 
 def _align(offset: int, width: int) -> int:
@@ -37,8 +38,8 @@ def _struct(type_name: str, values: dict[str, Any], part: int, offset: int) -> i
         if f.is_array and not (f.array_size and not f.bounded):
             items = list(value or ())
             offset = _align(offset, 4) + 4  # a sequence's length
-        elif f.is_array:
-            items = list(value or ()) + [None] * max(0, f.array_size - len(value or ()))
+        elif f.is_array:  # a fixed array: exactly its size
+            items = (list(value or ()) + [None] * f.array_size)[: f.array_size]
         else:
             items = [value]
         for item in items:

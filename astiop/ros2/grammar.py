@@ -88,7 +88,7 @@ def _parser(distro: str) -> argparse.ArgumentParser:
     return build_parser(distro, _Parser)
 
 
-def _verb_parser(distro: str, key: tuple[str, str]) -> argparse.ArgumentParser:
+def verb_parser(distro: str, key: tuple[str, str]) -> argparse.ArgumentParser:
     parser = _parser(distro)
     for word in key:
         action = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
@@ -101,7 +101,7 @@ def _suggest(distro: str, key: tuple[str, str], message: str) -> str:
     m = re.search(r"unrecognized arguments: (\S+)", message)
     if not m:
         return message
-    parser = _verb_parser(distro, key)
+    parser = verb_parser(distro, key)
     options = [o for o in parser._option_string_actions if o.startswith("--")]
     close = difflib.get_close_matches(m[1].split("=")[0], options, n=1, cutoff=0.6)
     hint = f"; did you mean {close[0]}?" if close else ""
@@ -196,8 +196,8 @@ def parse(text: str, distro: str | None = None) -> Ros2Command:
             args["type"] = ns[dest]
     if verb.values_from:
         args["values"] = parse_values(ns.get(verb.values_from) or "")
-    flag_names, option_names = {**_FLAGS, **verb.flags}, {**_OPTIONS, **verb.options}
-    flags = frozenset(ours for dest, ours in flag_names.items() if ns.get(dest))
+    option_names = {**_OPTIONS, **verb.options}
+    flags = frozenset(ours for dest, ours in _FLAGS.items() if ns.get(dest))
     options = {ours: ns[dest] for dest, ours in option_names.items() if ns.get(dest) is not None}
     if verb.normalize is not None:
         verb.normalize(ns, options)

@@ -11,6 +11,7 @@ import shlex
 
 import yaml
 
+from astiop.ros2.grammar import verb_parser
 from astiop.ros2.validation import Checked
 
 GOTO_TYPE = "astiop_msgs/srv/GotoPosition"
@@ -94,7 +95,16 @@ def _full_names(cmd) -> list[str]:
     """The typed words with the name as the catalog knows it (`navigator` -> `/navigator`):
     real ros2 matches node names exactly."""
     argv = list(cmd.argv)
-    typed = [i for i, a in enumerate(argv[2:], 2) if not a.startswith("-")]
+    options = verb_parser(cmd.distro, cmd.key)._option_string_actions
+    typed, value_next = [], False
+    for i, word in enumerate(argv[2:], 2):
+        if value_next:  # an option's value (`-w 5`), not a name
+            value_next = False
+        elif word.startswith("-"):
+            action = options.get(word)
+            value_next = action is not None and action.nargs != 0
+        else:
+            typed.append(i)
     if cmd.name and typed:
         argv[typed[0]] = cmd.name
     elif cmd.args.get("node") and typed:

@@ -11,10 +11,8 @@ from astiop.ros2.interfaces import InterfaceError
 from astiop.ros2.verbs import VERBS
 from astiop.ros2.verbs.checks import (  # noqa: F401 - their callers read them here
     CANCEL_SUFFIX,
-    MAX_PUBLISH_S,
     Checked,
     cancel_service,
-    moving_topics,
 )
 
 

@@ -14,6 +14,7 @@ Ctrl-C is status 2 (signal.SIGINT). Only types importable in this install can be
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
 import socket
 import threading
@@ -31,6 +32,7 @@ from rclpy.node import Node
 
 from astiop.robot_programs.emulated_cli.call import Call, Interrupted
 from astiop.robot_programs.emulated_cli.dds_calls import CallVerbs
+from astiop.robot_programs.emulated_cli.dds_query import run_query
 from astiop.robot_programs.emulated_cli.dds_topics import TopicVerbs
 from astiop.robot_programs.emulated_cli.verb_table import ServesVerbs, runs
 from astiop.ros2.definitions import DEFINITIONS
@@ -42,6 +44,8 @@ from astiop.ros2.printing import (
     node_info_text,
     param_list_text,
 )
+from astiop.ros2.verbs import VERBS
+from astiop.ros2.verbs.base import QUERY
 from astiop.transports.rclpy.graph import full_name, hidden, read_params
 from astiop.transports.rclpy.verbs import PARAM_FIELDS
 
@@ -128,7 +132,10 @@ class DdsRos2(TopicVerbs, CallVerbs, ServesVerbs):
     def _handle(self, conn: socket.socket) -> None:
         call = Call(conn)
         args = call.request.get("args", {})
-        handler = self.verb_handler((args.get("command"), args.get("verb")))
+        key = (args.get("command"), args.get("verb"))
+        handler = self.verb_handler(key)
+        if handler is None and key in VERBS and VERBS[key].means == QUERY:
+            handler = functools.partial(run_query, self, argv=call.request.get("argv", []))
         code = 1
         try:
             if handler is None:

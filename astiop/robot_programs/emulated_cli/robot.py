@@ -12,7 +12,6 @@ import contextlib
 import functools
 import json
 import os
-import shlex
 import socket
 import sys
 import threading
@@ -23,6 +22,7 @@ import yaml
 
 from astiop.robot_programs.emulated_cli.call import Call, Interrupted
 from astiop.robot_programs.emulated_cli.topics import HIDDEN_TOPICS, TopicVerbs
+from astiop.robot_programs.emulated_cli.verbs import run_verb
 from astiop.ros2.catalog import astibot_catalog
 from astiop.ros2.definitions import DEFINITIONS
 from astiop.ros2.interfaces import InterfaceError, fill, interface_show, python_repr
@@ -33,9 +33,8 @@ from astiop.ros2.printing import (
     param_list_text,
     type_of,
 )
-from astiop.ros2.validation import validate
 from astiop.ros2.verbs import VERBS
-from astiop.ros2.verbs.base import SAMPLE, BackendError
+from astiop.ros2.verbs.param_get import WORDS
 from astiop.sim import messages as sm
 from astiop.sim.simulator import GoalError, Simulator
 from astiop.store import LocationError, Store
@@ -43,7 +42,6 @@ from astiop.transports.simulator.backend import SimBackend
 from astiop.transports.state import yaw_of
 
 MAP_TYPE = "nav_msgs/msg/OccupancyGrid"
-VERB_TIMEOUT_S = 10.0
 
 
 class EmulatedRobot(TopicVerbs):
@@ -129,24 +127,7 @@ class EmulatedRobot(TopicVerbs):
         call.finish(code)
 
     def _verb(self, call: Call, a: dict, argv: list[str]) -> int:
-        """A verb with no emulation of its own here: run as the simulator in process runs it
-        (astiop/ros2/verbs/), printed as ros2 prints it; one ros2 runs until stopped (hz, bw)
-        waits for its SIGINT after."""
-        checked = validate(shlex.join(["ros2", *argv]), self.catalog, self.distro)
-        if checked.command is not None and checked.command.name in self.missing:
-            call.wait(3600.0)  # ros2 waits for a topic nobody publishes
-        if not checked.valid:
-            call.err(checked.reason + "\n")
-            return 1
-        try:
-            text, _ = self.backend.execute(checked, VERB_TIMEOUT_S)
-        except BackendError as exc:
-            call.err(f"{exc}\n")
-            return 1
-        call.out(text)
-        if VERBS[checked.command.key].means == SAMPLE:
-            call.wait(3600.0)
-        return 0
+        return run_verb(self, call, argv)
 
     # -- service ----------------------------------------------------------------------------
     def _service_list(self, call: Call, a: dict) -> int:
@@ -308,8 +289,7 @@ class EmulatedRobot(TopicVerbs):
             call.out("Parameter not set.\n")
             return 0
         value = self.backend.params[key]
-        word = {float: "Double", int: "Integer", str: "String", bool: "Boolean"}[type(value)]
-        call.out(f"{word} value is: {value}\n")
+        call.out(f"{WORDS[type(value)]} value is: {value}\n")
         return 0
 
     def _param_set(self, call: Call, a: dict) -> int:

@@ -1,6 +1,6 @@
 """Which method runs which ros2 verb in the emulated `ros2` over DDS: declared on
-the method itself, `@runs("topic hz")`, and looked up by the command's key. A verb a transport
-does not serve is refused in one line, never an AttributeError."""
+the method itself, `@runs("topic hz")`, and looked up by the command's key. A verb it does not
+serve is refused in one line, never an AttributeError."""
 
 from __future__ import annotations
 

@@ -8,7 +8,7 @@ import pkgutil
 
 from astiop.ros2.verbs.base import Verb, VerbKey
 
-_NOT_VERBS = {"base", "transport", "checks", "arguments", "windows"}
+_NOT_VERBS = {"base", "transport", "checks", "arguments"}
 
 
 def _gather() -> dict[VerbKey, Verb]:

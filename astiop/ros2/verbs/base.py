@@ -11,8 +11,7 @@ from typing import Any
 VerbKey = tuple[str, str]
 Output = tuple[str, Any]  # what ros2 prints, and the values astiop reads from it
 
-# How a verb's work is done, as each transport names its means (a transport without the verb's
-# means refuses it in one line): the CLI transport reads ros2's output by it.
+# How a verb's work is done: the CLI transport runs `ros2` and reads its output by it.
 QUERY = "query"  # asks the graph or the robot once and prints
 TAKE = "take"  # takes one message (echo)
 SAMPLE = "sample"  # follows a topic's arrivals for a while (hz, bw): ros2 runs until stopped
@@ -39,7 +38,6 @@ class Verb:
     check: Callable[[Any, Any], Any] = _valid  # (Ros2Command, Catalog) -> Checked
     means: str = QUERY
     example: str = ""  # shown with a parse error
-    flags: Mapping[str, str] = field(default_factory=dict)  # argparse dest -> astiop's flag
     options: Mapping[str, str] = field(default_factory=dict)  # argparse dest -> astiop's option
     values_from: str = ""  # the argparse dest holding YAML values (pub, call, send_goal)
     normalize: Callable[[dict, dict], None] | None = None  # (argparse namespace, options)
@@ -48,7 +46,13 @@ class Verb:
     # a SAMPLE verb's output read as ros2 prints it: enough of it yet, and its values
     enough: Callable[[str], bool] | None = None
     read: Callable[[str], Any] | None = None
+    none_came: str = ""  # a SAMPLE verb's words when nothing came: "no rate"
 
     @property
     def name(self) -> str:
         return " ".join(self.key)
+
+    def nothing_came(self, topic: str, timeout: float) -> BackendError:
+        return BackendError(
+            f"{topic} is not being published ({self.none_came} within {timeout:g} s)"
+        )

@@ -62,13 +62,11 @@ def report_text(bytes_per_s: float, sizes: list[int]) -> str:
 
 
 def run(t, c, timeout: float):
-    from astiop.ros2.verbs.base import BackendError
-
     name, window = c.command.name, c.command.options.get("window", ROS2_WINDOW)
     arrivals = t.samples(name, c.type, lambda got: len(reports(got, window)) >= REPORTS, timeout)
     found = reports(arrivals, window)[:REPORTS]
     if not found:
-        raise BackendError(f"{name} is not being published (no bandwidth within {timeout:g} s)")
+        raise VERB.nothing_came(name, timeout)
     lines = [f"Subscribed to [{name}]"]
     lines += [report_text(bytes_per_s, sizes) for bytes_per_s, sizes in found]
     text = "\n".join(lines) + "\n"
@@ -108,4 +106,5 @@ VERB = Verb(
     measures=True,
     enough=enough,
     read=read,
+    none_came="no bandwidth",
 )

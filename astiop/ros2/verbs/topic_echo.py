@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from astiop.ros2.verbs.arguments import nonnegative_int, positive_float, qos, strategy
-from astiop.ros2.verbs.base import TAKE, Verb
+from astiop.ros2.verbs.base import TAKE, BackendError, Verb
 
 
 def arguments(p, distro: str) -> None:
@@ -47,6 +47,8 @@ def run(t, c, timeout: float):
     field = c.command.options.get("field")
     if field:
         for part in field.split("."):
+            if not isinstance(values, dict) or part not in values:
+                raise BackendError(f"{c.command.name} has no field {field}")
             values = values[part]
         return ros2cli_yaml(values) + "---\n", values
     return echo_text(values, c.command), values

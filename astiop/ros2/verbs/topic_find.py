@@ -15,7 +15,7 @@ def arguments(p, distro: str) -> None:
 
 def run(t, c, timeout: float):
     wanted = c.command.args["type"]
-    names = [name for name, type_ in t.graph("topic") if type_ == wanted]
+    names = [name for name, types in t.graph("topic") if wanted in types.split(", ")]
     if "count_topics" in c.command.flags:
         return f"{len(names)}\n", names
     return "".join(f"{n}\n" for n in names), names

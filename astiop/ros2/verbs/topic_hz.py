@@ -50,8 +50,6 @@ def windows(times: list[float], window: int | None = None) -> list[tuple[float, 
 
 
 def run(t, c, timeout: float):
-    from astiop.ros2.verbs.base import BackendError
-
     window = c.command.options.get("window")
     arrivals = t.samples(
         c.command.name, c.type, lambda got: len(windows([a for a, _ in got], window)) >= WINDOWS,
@@ -59,9 +57,7 @@ def run(t, c, timeout: float):
     )  # fmt: skip
     found = windows([a for a, _ in arrivals], window)[:WINDOWS]
     if not found:
-        raise BackendError(
-            f"{c.command.name} is not being published (no rate within {timeout:g} s)"
-        )
+        raise VERB.nothing_came(c.command.name, timeout)
     lines = []
     for rate, deltas in found:
         mean = sum(deltas) / len(deltas)
@@ -93,4 +89,5 @@ VERB = Verb(
     measures=True,
     enough=enough,
     read=read,
+    none_came="no rate",
 )

@@ -4,6 +4,7 @@ cannot do one raises BackendError saying so."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any, Protocol
 
 from astiop.ros2.verbs.base import Output
@@ -27,8 +28,10 @@ class Transport(Protocol):
     def take(self, checked: Any, timeout: float) -> dict[str, Any]:
         """The next message on the command's topic (its latest, where that is the next)."""
 
-    def samples(self, topic: str, type_: str, seconds: float, timeout: float) -> list[Sample]:
-        """The arrivals on a topic for `seconds` (after the first, within `timeout`)."""
+    def samples(
+        self, topic: str, type_: str, enough: Callable[[list[Sample]], bool], timeout: float
+    ) -> list[Sample]:
+        """The arrivals on a topic until `enough` of them came (or `timeout` passed)."""
 
     def publish(self, checked: Any, timeout: float) -> Output: ...
 

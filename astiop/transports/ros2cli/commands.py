@@ -107,9 +107,7 @@ class CliCommands(_Host):
         run = self._run(argv, timeout, until=verb.enough)
         values = verb.read(run.out)
         if values is None:
-            raise BackendError(
-                f"{checked.command.name} is not being published (nothing within {timeout:g} s)"
-            )
+            raise verb.nothing_came(checked.command.name, timeout)
         return run.out, values
 
     def _send_goal(self, checked: Checked, argv: list[str], timeout: float):

@@ -25,13 +25,14 @@ SAMPLE_S = 5.0
 class SimVerbs:
     """Mixed into SimBackend: uses its sim, store, catalog, params and topic messages."""
 
-    def execute(self, checked: Checked, timeout: float = 10.0) -> tuple[str, Any]:
+    def execute(self, checked: Checked, timeout: float = 10.0, on: Any = None) -> tuple[str, Any]:
+        """`on`: what the verb runs on, if not this simulator alone (a robot program's view)."""
         cmd = checked.command
         if checked.kind == "actuate" and self.sim.e_stopped and cmd.name != "/stop":
             raise BackendError("the E-STOP is engaged: nothing was sent")
         try:
             with self.actuating(checked):  # refused while the E-STOP holds, ended by it
-                return VERBS[cmd.key].run(self, checked, timeout)
+                return VERBS[cmd.key].run(on or self, checked, timeout)
         except (GoalError, LocationError) as exc:
             raise BackendError(str(exc)) from None
         except BackendError:
@@ -70,16 +71,18 @@ class SimVerbs:
     def samples(
         self, topic: str, type_: str, enough: Callable[[list], bool], timeout: float
     ) -> list[tuple[float, int]]:
-        """Each publication of the topic at its rate, on the simulator's clock."""
+        """Each publication of the topic at its rate, at its instant on the simulator's clock
+        (at most SAMPLE_S of robot time, within `timeout` of wall time at real time)."""
         spec = self.catalog.topics[topic]
         if spec.rate_hz == 0 or (topic == "/plan" and self.sim.goal is None):
             raise BackendError(f"{spec.name} is not being published at a rate right now")
         got: list[tuple[float, int]] = []
-        start = self.sim.t
-        while not enough(got) and self.sim.t - start <= SAMPLE_S:
-            if got:
-                self.advance(1.0 / spec.rate_hz, timeout)
-            got.append((self.sim.t, serialized_size(type_, self.message(topic))))
+        start, deadline = self.sim.t, time.monotonic() + timeout
+        while not enough(got) and len(got) / spec.rate_hz <= SAMPLE_S:
+            at = start + len(got) / spec.rate_hz
+            if at > self.sim.t:
+                self.advance(at - self.sim.t, max(0.0, deadline - time.monotonic()))
+            got.append((at, serialized_size(type_, self.message(topic))))
         return got
 
     # -- actuation ----------------------------------------------------------------
