@@ -50,7 +50,10 @@ def test_the_pose_of_a_driving_turtlebot3_keeps_up_where_amcl_pose_lags(tmp_path
         gateway, store = gateway_on(tmp_path)
         try:
             assert gateway.profile.name("pose") == "/amcl_pose"
-            assert "/tf" in gateway.catalog.state_topics()
+            # /tf's publisher may be discovered after the pose's (a loaded machine): the graph
+            # is read again when it changes
+            assert until(lambda: "/tf" in gateway.catalog.state_topics(), 15), gateway.catalog
+
             assert until(lambda: odom and amcl, 10)
             ours, amcl_only, headings, amcl_headings = [], [], [], []
             # straight (a turn would update amcl sooner), then a turn on the spot

@@ -46,7 +46,7 @@ from astiop.ros2.printing import (
 )
 from astiop.ros2.verbs import VERBS
 from astiop.ros2.verbs.base import QUERY
-from astiop.transports.rclpy.graph import full_name, hidden, read_params
+from astiop.transports.rclpy.graph import full_name, hidden, node_sections, read_params
 from astiop.transports.rclpy.verbs import PARAM_FIELDS
 
 NODE_NAME = "_ros2cli_daemon_emulated"  # hidden, as the daemon's node is
@@ -251,21 +251,7 @@ class DdsRos2(TopicVerbs, CallVerbs, ServesVerbs):
         target = a["node_name"]
         if target not in self._nodes(True):
             return f"Unable to find node '{target}'"
-        ns, _, leaf = target.rpartition("/")
-        ns, node = ns or "/", self.node
-        sections = {
-            "Subscribers": node.get_subscriber_names_and_types_by_node(leaf, ns),
-            "Publishers": node.get_publisher_names_and_types_by_node(leaf, ns),
-            "Service Servers": node.get_service_names_and_types_by_node(leaf, ns),
-            "Service Clients": node.get_client_names_and_types_by_node(leaf, ns),
-            "Action Servers": get_action_server_names_and_types_by_node(node, leaf, ns),
-            "Action Clients": get_action_client_names_and_types_by_node(node, leaf, ns),
-        }
-        keep = a.get("include_hidden")
-        info = {
-            k: sorted((n, ", ".join(t)) for n, t in v if keep or not hidden(n))
-            for k, v in sections.items()
-        }
+        info = node_sections(self.node, target, a.get("include_hidden"))
         call.out(node_info_text(target, info))
         return 0
 

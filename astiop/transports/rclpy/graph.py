@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import threading
 import time
+from typing import Any
 
 from rclpy.action.graph import get_action_server_names_and_types_by_node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -37,6 +38,29 @@ def full_name(namespace: str, name: str) -> str:
 
 _read: dict[int, tuple[float, GraphLists]] = {}  # id(proc) -> (when, lists): the last read
 _read_lock = threading.Lock()
+
+
+def node_sections(node: Any, target: str, include_hidden: bool = False) -> dict:
+    """What `ros2 node info` lists of one node (ros2node/api), as (name, types) per section."""
+    from rclpy.action import (
+        get_action_client_names_and_types_by_node,
+        get_action_server_names_and_types_by_node,
+    )
+
+    ns, _, leaf = target.rpartition("/")
+    ns = ns or "/"
+    sections = {
+        "Subscribers": node.get_subscriber_names_and_types_by_node(leaf, ns),
+        "Publishers": node.get_publisher_names_and_types_by_node(leaf, ns),
+        "Service Servers": node.get_service_names_and_types_by_node(leaf, ns),
+        "Service Clients": node.get_client_names_and_types_by_node(leaf, ns),
+        "Action Servers": get_action_server_names_and_types_by_node(node, leaf, ns),
+        "Action Clients": get_action_client_names_and_types_by_node(node, leaf, ns),
+    }
+    return {
+        k: sorted((n, ", ".join(t)) for n, t in v if include_hidden or not hidden(n))
+        for k, v in sections.items()
+    }
 
 
 def read_lists(proc: RosProcess, max_age_s: float = 0.0) -> GraphLists:

@@ -19,7 +19,13 @@ from astiop.ros2.validation import Checked
 from astiop.ros2.verbs import VERBS
 from astiop.transports.base import BackendError
 from astiop.transports.inflight import ENDED, Job
-from astiop.transports.rclpy.graph import full_name, hidden, latched, matched_qos, read_params
+from astiop.transports.rclpy.graph import (
+    full_name,
+    latched,
+    matched_qos,
+    node_sections,
+    read_params,
+)
 from astiop.transports.rclpy.node import RosTimeout
 
 # action_msgs/msg/GoalStatus -> send_goal.py's _goal_status_to_string
@@ -66,25 +72,7 @@ class RclpyVerbs:
         ]
 
     def node_info(self, target: str) -> dict:
-        from rclpy.action import (
-            get_action_client_names_and_types_by_node,
-            get_action_server_names_and_types_by_node,
-        )
-
-        node = self.proc.node
-        ns, _, leaf = target.rpartition("/")
-        ns = ns or "/"
-        sections = {
-            "Subscribers": node.get_subscriber_names_and_types_by_node(leaf, ns),
-            "Publishers": node.get_publisher_names_and_types_by_node(leaf, ns),
-            "Service Servers": node.get_service_names_and_types_by_node(leaf, ns),
-            "Service Clients": node.get_client_names_and_types_by_node(leaf, ns),
-            "Action Servers": get_action_server_names_and_types_by_node(node, leaf, ns),
-            "Action Clients": get_action_client_names_and_types_by_node(node, leaf, ns),
-        }
-        return {
-            k: sorted((n, ", ".join(t)) for n, t in v if not hidden(n)) for k, v in sections.items()
-        }
+        return node_sections(self.proc.node, target)
 
     def interfaces(self) -> list[str]:
         raise BackendError(
