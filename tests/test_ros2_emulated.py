@@ -501,4 +501,3 @@ def test_param_and_interface_lists_print_as_ros2cli_on_the_emulated_and_in_proce
     finally:
         gateway.close()
         sim.close()
-
