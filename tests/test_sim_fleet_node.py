@@ -221,7 +221,13 @@ async def _mcp_sends_astibot_1(db: Path) -> None:
     answering.start()
     try:
         async with Client(server, client_info=Implementation(name="pytest", version="1")) as c:
-            rows = [json.loads(i.text) for i in (await c.call_tool("fleet_status", {})).content]
+            # a new process: DDS may discover astibot_2's participant seconds after astibot_1's
+            for _ in range(30):
+                status = await c.call_tool("fleet_status", {})
+                rows = [json.loads(i.text) for i in status.content]
+                if len(rows) == 2:
+                    break
+                await asyncio.sleep(0.5)
             assert sorted(r["name"] for r in rows) == ["astibot_1", "astibot_2"], rows
             said = await c.call_tool("go_to_location", {"name": "inspection_zone_a"})
             assert said.is_error and "name one (robot: astibot_1, astibot_2)" in (
