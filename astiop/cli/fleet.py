@@ -108,14 +108,11 @@ def list_cmd(ctx: typer.Context, as_json: bool = typer.Option(False, "--json")) 
         )
 
 
-ESTOP_SETTLE_S = 5.0  # a fleet's E-STOP looks for robots until none new appeared this long
-
-
 def estop_all(st) -> None:
     """Every robot of the fleet stopped at once, each through its own zero Twists and stop (or
     its goals cancelled), then the E-STOP latched for every process on this database."""
     from astiop.robot.factory import make_robot_gateway
-    from astiop.robot.fleet import robot_settings
+    from astiop.robot.fleet import FOUND_ONCE_S, robot_settings
 
     settings = st.fleet_settings
     store = st.store
@@ -141,7 +138,7 @@ def estop_all(st) -> None:
 
     # looked for longer than a listing: on a loaded machine one robot's participant was
     # discovered more than 2 s after another's, and the E-STOP must miss none
-    robots = members(st, stop_now, ESTOP_SETTLE_S)
+    robots = members(st, stop_now, FOUND_ONCE_S)
     for thread in threads:
         thread.join()
     failed = False

@@ -117,12 +117,14 @@ def mcp(
 
 def _robots(st) -> dict:
     """The fleet's robots found, each name with its own settings (said on stderr as found)."""
-    from astiop.robot.fleet import FleetError, find_robots, robot_settings
+    from astiop.robot.fleet import FOUND_ONCE_S, FleetError, find_robots, robot_settings
 
     whole = st.fleet_settings
     print("astiop mcp: finding the fleet's robots…", file=sys.stderr)
     try:
-        found = find_robots(whole, lambda r: print(f"  {r.name} ({r.namespace})", file=sys.stderr))
+        found = find_robots(
+            whole, lambda r: print(f"  {r.name} ({r.namespace})", file=sys.stderr), FOUND_ONCE_S
+        )
     except FleetError as exc:
         fail(str(exc))
     return {r.name: robot_settings(whole, r.name) for r in found}

@@ -49,6 +49,11 @@ def discovered(catalog: Catalog) -> list[FleetRobot]:
     return [FleetRobot(name=ns.lstrip("/"), namespace=ns) for ns in namespaces(catalog)]
 
 
+# A fleet found once, for good (estop --all, astiop mcp), is looked for until no new robot
+# appeared this long: DDS may discover one robot's participant seconds after another's
+FOUND_ONCE_S = 5.0
+
+
 def find_robots(
     settings: Settings,
     on_found: Callable[[FleetRobot], None] | None = None,
