@@ -222,8 +222,15 @@ class RosClient:
         self._thread.start()
 
     def _spin(self) -> None:
-        while not self._halt.is_set():
-            self.executor.spin_once(timeout_sec=0.05)
+        # Kilted's ActionClient joins the node's waitables before it has its `_lock`
+        # (kilted rclpy/action/client.py __init__): an executor waiting at that instant raises
+        # AttributeError. The product's spin carries on past it (transports/rclpy/node.py); so
+        # does this one, or the test's client hears nothing more.
+        while not self._halt.is_set() and self.context.ok():
+            try:
+                self.executor.spin_once(timeout_sec=0.05)
+            except Exception:  # noqa: BLE001
+                continue
 
     def close(self) -> None:
         import rclpy
