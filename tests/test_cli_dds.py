@@ -64,9 +64,18 @@ def test_the_dds_ros2_parses_like_ros2cli_and_says_what_it_cannot_run(monkeypatc
 
 def test_a_turtlebot3_through_the_ros2_cli_is_profiled_answered_and_sent(monkeypatch, tmp_path):
     require_ros()
+    from std_srvs.srv import Trigger
+
     from tests.ros import tb3_node
 
-    with tb3_node(speed=8.0), dds_ros2(monkeypatch) as folder:
+    def listed() -> str:
+        return subprocess.run(["ros2", "service", "list"], capture_output=True, text=True).stdout
+
+    with tb3_node(speed=8.0), dds_ros2(monkeypatch) as folder, ros_client("a_console") as other:
+        # another console's kept /stop client: `ros2 service list` names /stop by it (rmw lists
+        # clients too), yet the TurtleBot3 serves none
+        other.node.create_client(Trigger, "/stop")
+        assert until(lambda: "/stop" in listed().split(), 15)
         out = astiop_cli(tmp_path, "robot", "profile", "--json")
         assert out.returncode == 0, out.stderr
         roles = json.loads(out.stdout)["roles"]

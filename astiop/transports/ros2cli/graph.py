@@ -1,5 +1,11 @@
 """The robot's graph as `ros2 ... list` prints it, described with astiop's catalog where the
-names and types match (an unknown service is treated as actuating)."""
+names and types match (an unknown service is treated as actuating).
+
+Services and actions are those their servers offer, as the rclpy transport reads them
+(rclpy/graph.py): `ros2 service list` and `ros2 action list` name one by its clients too (rmw
+lists both), and a client (another console's kept /stop client) is not a service the robot has.
+What each node serves is what `ros2 node info` prints under "Service Servers" and "Action
+Servers" (ros2node/verb/info.py, humble and jazzy): read again only when a list changed."""
 
 from __future__ import annotations
 
@@ -14,6 +20,10 @@ from astiop.transports.live_catalog import VERBS, describe_graph
 
 _LISTED = re.compile(r"^(?P<name>/\S*)\s+\[(?P<type>[^\]]+)\]\s*$")
 _PARAM_LINE = re.compile(r"^  (?P<name>\S+)(?: \(type: (?P<type>[^)]+)\))?\s*$")
+_SECTION = re.compile(r"^  (?P<section>[A-Z][A-Za-z ]+):\s*$")
+_ENTRY = re.compile(r"^    (?P<name>/\S*): ")
+SERVING = {"Service Servers": "service", "Action Servers": "action"}
+NODE_INFO_AT_ONCE = 4  # `ros2 node info` processes at a time (each pays ros2's start-up)
 
 
 class GraphReader:
@@ -21,6 +31,8 @@ class GraphReader:
         self.run = run  # (argv, timeout) -> ros2_process.Run
         self.timeout_s = timeout_s
         self.fixed = fixed  # what the operator fixed of the robot's profile
+        self._served_for: tuple | None = None  # the lists `_served` was read for
+        self._served: dict[str, set[str]] | None = None  # "service"/"action" -> names served
 
     def read(self) -> Catalog:
         """The live graph, described with our catalog where names match. A daemon that was
@@ -38,7 +50,46 @@ class GraphReader:
 
     def lists(self) -> dict[str, list[tuple[str, str]]]:
         with ThreadPoolExecutor(len(VERBS)) as pool:  # each call pays ros2's start-up
-            return dict(zip(VERBS, pool.map(self._listed, VERBS)))
+            lists = dict(zip(VERBS, pool.map(self._listed, VERBS)))
+        return self._served_only(lists)
+
+    def _served_only(self, lists: dict[str, list[tuple[str, str]]]):
+        """The lists with each service and action kept only where a node serves it; as listed
+        when no node's info could be read (the graph still stands, as ros2 lists it)."""
+        key = tuple(tuple(lists[v]) for v in ("node", "service", "action"))
+        if key != self._served_for:
+            self._served_for, self._served = key, self._read_served([n for n, _ in lists["node"]])
+        served = self._served
+        if served is None:
+            return lists
+        return {
+            **lists,
+            **{v: [p for p in lists[v] if p[0] in served[v]] for v in ("service", "action")},
+        }
+
+    def _read_served(self, nodes: list[str]) -> dict[str, set[str]] | None:
+        if not nodes:
+            return None
+        with ThreadPoolExecutor(min(NODE_INFO_AT_ONCE, len(nodes))) as pool:
+            infos = list(pool.map(self._node_info, nodes))
+        read = [i for i in infos if i is not None]
+        if not read:
+            return None
+        return {v: set().union(*(i[v] for i in read)) for v in SERVING.values()}
+
+    def _node_info(self, node: str) -> dict[str, set[str]] | None:
+        """What `node` serves, from `ros2 node info`; None if it could not be read (it left)."""
+        out = self.run(["node", "info", node], self.timeout_s)
+        if out.returncode != 0:
+            return None
+        served: dict[str, set[str]] = {v: set() for v in SERVING.values()}
+        section = None
+        for line in out.out.splitlines():
+            if m := _SECTION.match(line):
+                section = SERVING.get(m["section"])
+            elif section and (m := _ENTRY.match(line)):
+                served[section].add(m["name"])
+        return served
 
     def _listed(self, verb: str) -> list[tuple[str, str]]:
         if verb == "param":
