@@ -246,6 +246,54 @@ async def _mcp_sends_astibot_1(db: Path) -> None:
         store.close()
 
 
+def test_the_mcp_server_serves_a_robot_that_joins_the_fleet_later(tmp_path, monkeypatch):
+    """`astiop --fleet auto mcp` found alpha1 at its start; beta1, started after it, is served
+    from when it is found: listed by fleet_status and answered by name."""
+    require_ros()
+    monkeypatch.setenv("ROS_DOMAIN_ID", str((int(os.environ["ROS_DOMAIN_ID"]) + 25) % 102))
+    with fleet_node("--robots", "1", "--prefix", "alpha"):
+        asyncio.run(_mcp_serves_beta1_once_it_joins(tmp_path / "mcp.db"))
+
+
+async def _mcp_serves_beta1_once_it_joins(db: Path) -> None:
+    from mcp import Client, StdioServerParameters
+    from mcp.types import Implementation
+
+    args = ["-m", "astiop", "--db", str(db), "--robot", "ros2", "--ros2-transport", "rclpy",
+            "--fleet", "auto", "mcp", "--read-only"]  # fmt: skip
+    server = StdioServerParameters(command=sys.executable, args=args, env=dict(os.environ))
+
+    async def names(c, wanted: int) -> list[str]:
+        for _ in range(60):
+            status = await c.call_tool("fleet_status", {})
+            found = sorted(json.loads(i.text)["name"] for i in status.content)
+            if len(found) >= wanted:
+                break
+            await asyncio.sleep(0.5)
+        return found
+
+    async with Client(server, client_info=Implementation(name="pytest", version="1")) as c:
+        assert await names(c, 1) == ["alpha1"]
+        said = await c.call_tool("robot_state", {"robot": "beta1"})
+        assert said.is_error and "its robots: alpha1" in said.content[0].text
+        joining = SimNode(speed=4.0, robot_args=("--robots", "1", "--prefix", "beta"))
+        try:
+            await asyncio.to_thread(joining.wait_ready)
+            assert await names(c, 2) == ["alpha1", "beta1"]
+            said = await c.call_tool("robot_state", {"robot": "beta1"})
+            assert not said.is_error, said.content[0].text
+            state = json.loads(said.content[0].text)
+            for _ in range(20):  # its first pose may come a moment after it was found
+                if state["pose"] is not None:
+                    break
+                await asyncio.sleep(0.5)
+                said = await c.call_tool("robot_state", {"robot": "beta1"})
+                state = json.loads(said.content[0].text)
+            assert abs(state["pose"]["x_m"] - 1.15) < 0.05, state  # on its dock
+        finally:
+            joining.stop()
+
+
 def test_with_domains_each_robot_is_un_namespaced_on_a_domain_of_its_own(tmp_path):
     require_ros()
     base = 100  # above every pytest worker's domain (tests/conftest.py); 101 is the last valid

@@ -5,11 +5,17 @@ from __future__ import annotations
 import ipaddress
 import os
 import sys
+import threading
+from functools import partial
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import typer
 
 from astiop.cli.common import fail, state, take_control
+
+if TYPE_CHECKING:
+    from astiop.robot.fleet import FleetFinder
 
 
 def parse_http(value: str) -> tuple[str, int]:
@@ -80,11 +86,15 @@ def mcp(
     from astiop.mcp.tools import RobotTools
     from astiop.robot.factory import make_robot_gateway
     from astiop.robot.fleet import is_fleet
+    from astiop.robot.fleet_watch import FIND_S
     from astiop.transports.base import BackendError
 
     st = state(ctx)
     policy = Policy(approve_actuation=approve_actuation, timeout_s=approval_timeout)
-    robots = _robots(st) if is_fleet(st.fleet_settings) and st.robot_name is None else None
+    finder = None  # a fleet found on the graph: looked for again while serving
+    robots = None
+    if is_fleet(st.fleet_settings) and st.robot_name is None:
+        robots, finder = _robots(st)
     try:
         gateways = {name: make_robot_gateway(settings, st.store, realtime=True, who="astiop mcp")
                     for name, settings in (robots or {"": st.settings}).items()}  # fmt: skip
@@ -93,7 +103,8 @@ def mcp(
     if robots is None and not read_only:
         take_control(gateways[""], st)  # a fleet's robots: each when first moved, if free
     tools = {name: RobotTools(gw, st.store, policy) for name, gw in gateways.items()}
-    server = AstiopMCP(FleetTools(tools) if robots else tools[""], read_only=read_only)
+    fleet = FleetTools(tools) if robots else None
+    server = AstiopMCP(fleet or tools[""], read_only=read_only)
     if read_only:
         mode = "read-only"
     elif approve_actuation:
@@ -105,26 +116,75 @@ def mcp(
     print(f"astiop mcp: serving on {where}; {what}; {mode}", file=sys.stderr)
     for gateway in gateways.values():
         gateway.start()
+    halt = threading.Event()
+    if fleet is not None and finder is not None:
+        fleet.keep_adding(
+            lambda: [r.name for r in finder.poll()],
+            partial(_joined, st, finder, policy, gateways),
+            FIND_S,
+            halt,
+        )
     try:
         if http is not None:
             serve_http(server, host, port, token)
         else:
             serve_stdio(server)
     finally:
-        for gateway in gateways.values():
+        halt.set()
+        if finder is not None:
+            finder.close()
+        for gateway in list(gateways.values()):
             gateway.close()
 
 
-def _robots(st) -> dict:
-    """The fleet's robots found, each name with its own settings (said on stderr as found)."""
-    from astiop.robot.fleet import FOUND_ONCE_S, FleetError, find_robots, robot_settings
+def _joined(st, finder, policy, gateways: dict, name: str):
+    """The tools of a robot found while serving, its gateway started (and kept in `gateways`,
+    closed at the end); said on stderr. A robot not reached is said and looked for again."""
+    from astiop.mcp.tools import RobotTools
+    from astiop.robot.factory import make_robot_gateway
+    from astiop.robot.fleet import robot_settings
+
+    robot = finder.found[name]
+    try:
+        gateway = make_robot_gateway(
+            robot_settings(st.fleet_settings, name), st.store, realtime=True, who="astiop mcp"
+        )
+    except Exception as exc:
+        finder.found.pop(name, None)
+        print(f"astiop mcp: {name} ({robot.namespace}) found, not reached: {exc}", file=sys.stderr)
+        raise
+    gateways[name] = gateway
+    gateway.start()
+    print(f"astiop mcp: {name} ({robot.namespace}) joined: served from now", file=sys.stderr)
+    return RobotTools(gateway, st.store, policy)
+
+
+def _robots(st) -> tuple[dict, FleetFinder | None]:
+    """The fleet's robots found, each name with its own settings (said on stderr as found), and
+    for a fleet found on the graph its finder, to serve the robots that join later."""
+    from astiop.robot.fleet import (
+        FOUND_ONCE_S,
+        FleetError,
+        FleetFinder,
+        find_robots,
+        robot_settings,
+    )
 
     whole = st.fleet_settings
     print("astiop mcp: finding the fleet's robots…", file=sys.stderr)
+
+    def said(robot) -> None:
+        print(f"  {robot.name} ({robot.namespace})", file=sys.stderr)
+
+    finder = None
     try:
-        found = find_robots(
-            whole, lambda r: print(f"  {r.name} ({r.namespace})", file=sys.stderr), FOUND_ONCE_S
-        )
+        if whole.fleet.discover == "auto":
+            finder = FleetFinder(whole)
+            found = finder.settle(said, FOUND_ONCE_S)
+        else:
+            found = find_robots(whole, said)
     except FleetError as exc:
+        if finder is not None:
+            finder.close()
         fail(str(exc))
-    return {r.name: robot_settings(whole, r.name) for r in found}
+    return {r.name: robot_settings(whole, r.name) for r in found}, finder

@@ -1,10 +1,13 @@
 """Every robot of a fleet served by one MCP server: each tool takes `robot` (its name; left out,
 the only robot, else a refusal that lists them), and `fleet_status` lists every robot as it
-last reported. One robot is a fleet of one."""
+last reported. One robot is a fleet of one. A fleet found on the graph keeps growing: a robot
+that joins later is served from when it is found (`keep_adding`)."""
 
 from __future__ import annotations
 
+import contextlib
 import inspect
+import threading
 import typing
 from collections.abc import Callable
 
@@ -20,21 +23,53 @@ class FleetTools:
         for name, tools in robots.items():
             tools.name = name
 
+    def add(self, name: str, tools: RobotTools) -> None:
+        """A robot found after the start, served from now. The robots are replaced, not changed:
+        a call meanwhile reads them as they were."""
+        tools.name = name
+        self.robots = {**self.robots, name: tools}
+
+    def keep_adding(
+        self,
+        found: Callable[[], list[str]],
+        tools_of: Callable[[str], RobotTools],
+        every_s: float,
+        halt: threading.Event,
+    ) -> threading.Thread:
+        """Every `every_s` until `halt`, each robot `found()` newly is served (`tools_of(name)`
+        makes its tools, started; a robot it fails for is looked for again). On a thread."""
+
+        def run() -> None:
+            while not halt.wait(every_s):
+                try:
+                    names = found()
+                except Exception:  # noqa: BLE001 - a graph not read this time: next time
+                    continue
+                for name in names:
+                    if name not in self.robots and not halt.is_set():
+                        with contextlib.suppress(Exception):  # tools_of says why, and forgets it
+                            self.add(name, tools_of(name))
+
+        thread = threading.Thread(target=run, name="mcp-fleet-find", daemon=True)
+        thread.start()
+        return thread
+
     @property
     def first(self) -> RobotTools:
         return next(iter(self.robots.values()))
 
     def pick(self, robot: str) -> RobotTools:
         """The robot a call names (the only one when it names none)."""
-        names = ", ".join(self.robots)
+        robots = self.robots  # one reading: a robot may join meanwhile
+        names = ", ".join(robots)
         if not robot:
-            if len(self.robots) == 1:
-                return self.first
-            raise Refused(f"this server reaches {len(self.robots)} robots: name one (robot: "
+            if len(robots) == 1:
+                return next(iter(robots.values()))
+            raise Refused(f"this server reaches {len(robots)} robots: name one (robot: "
                           f"{names})")  # fmt: skip
-        if robot not in self.robots:
+        if robot not in robots:
             raise Refused(f"no robot named '{robot[:64]}' here (its robots: {names})")
-        return self.robots[robot]
+        return robots[robot]
 
     def fleet_status(self) -> list[dict]:
         """Every robot: name, state, battery, pose, speed, goal, who controls it, as reported."""

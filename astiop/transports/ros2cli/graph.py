@@ -58,7 +58,8 @@ class GraphReader:
         when no node's info could be read (the graph still stands, as ros2 lists it)."""
         key = tuple(tuple(lists[v]) for v in ("node", "service", "action"))
         if key != self._served_for:
-            self._served_for, self._served = key, self._read_served([n for n, _ in lists["node"]])
+            self._served, whole = self._read_served([n for n, _ in lists["node"]])
+            self._served_for = key if whole else None  # a node not read: read again next time
         served = self._served
         if served is None:
             return lists
@@ -67,15 +68,17 @@ class GraphReader:
             **{v: [p for p in lists[v] if p[0] in served[v]] for v in ("service", "action")},
         }
 
-    def _read_served(self, nodes: list[str]) -> dict[str, set[str]] | None:
+    def _read_served(self, nodes: list[str]) -> tuple[dict[str, set[str]] | None, bool]:
+        """What the nodes serve (None: none could be read), and whether every node was read."""
         if not nodes:
-            return None
+            return None, True
         with ThreadPoolExecutor(min(NODE_INFO_AT_ONCE, len(nodes))) as pool:
             infos = list(pool.map(self._node_info, nodes))
         read = [i for i in infos if i is not None]
         if not read:
-            return None
-        return {v: set().union(*(i[v] for i in read)) for v in SERVING.values()}
+            return None, False
+        served = {v: set().union(*(i[v] for i in read)) for v in SERVING.values()}
+        return served, len(read) == len(infos)
 
     def _node_info(self, node: str) -> dict[str, set[str]] | None:
         """What `node` serves, from `ros2 node info`; None if it could not be read (it left)."""
