@@ -166,8 +166,8 @@ class RobotGateway(EstopLatch, GraphReading):
     # -- commands --------------------------------------------------------------------------
     def review(self, text: str) -> Review:
         checked = validate(text, self.catalog)
-        if not checked.valid and checked.reason.startswith("there is no") and self._refresh():
-            checked = validate(text, self.catalog)  # it may have appeared since the last read
+        if not checked.valid and checked.reason.startswith("there is no"):
+            checked = self.checked_once_heard(text, checked)  # it may have appeared since
         if self.safety.geofence is None and checked.valid and checked.kind == "actuate":
             self.use_map()  # the robot's /map may have come in since
             if self.safety.geofence is None:  # a one-shot command: its map read now

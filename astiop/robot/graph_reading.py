@@ -10,6 +10,7 @@ from astiop.robot.safety import SafetyPolicy
 from astiop.ros2.catalog import Catalog
 from astiop.ros2.profile import match_profile
 from astiop.ros2.profile_types import Profile
+from astiop.ros2.validation import Checked, validate
 from astiop.store import Store
 from astiop.transports.base import RobotBackend
 
@@ -99,3 +100,31 @@ class GraphReading(_Host):
         if time.monotonic() - self.backend.refreshed_at < self.backend.refresh_every_s:
             return False
         return self.backend.refresh()
+
+    def checked_once_heard(self, text: str, checked: Checked) -> Checked:
+        """`checked` names what the graph lacks: read the graph again. A process still
+        discovering the robot reads it until the name is heard of, or the graph has not changed
+        for SETTLED_S; a name under a namespace the graph has nothing of yet (a fleet's robot
+        whose participant comes seconds after another's), until discovery is over."""
+        if not self.backend.discovering():
+            return validate(text, self.catalog) if self._refresh() else checked
+        name = checked.command.name if checked.command else ""
+        namespace = "/" + name.strip("/").split("/")[0] if name.count("/") > 1 else ""
+        seen, changed_at = _names(self.catalog), time.monotonic()
+        while self.backend.discovering():
+            time.sleep(0.25)
+            self.backend.refresh(settle=False)
+            checked = validate(text, self.catalog)
+            if checked.valid or not checked.reason.startswith("there is no"):
+                return checked
+            now = _names(self.catalog)
+            if now != seen:
+                seen, changed_at = now, time.monotonic()
+            heard_of = not namespace or any(n.startswith(namespace + "/") for n in now)
+            if heard_of and time.monotonic() - changed_at >= SETTLED_S:
+                break
+        return checked
+
+
+def _names(catalog: Catalog) -> set[str]:
+    return {*catalog.topics, *catalog.services, *catalog.actions}
