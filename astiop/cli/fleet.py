@@ -170,6 +170,7 @@ def release_all(st, yes: bool) -> None:
 
         latched = [ns for ns in st.store.latched_robots() if ns not in found]
         robots += [FleetRobot(name=ns.strip("/"), namespace=ns) for ns in latched]
+    robots = sorted(robots, key=lambda r: r.name)  # found or only latched, said in one order
     names = ", ".join(r.name for r in robots)
     if not yes:
         if not interactive():
