@@ -49,8 +49,9 @@ def discovered(catalog: Catalog) -> list[FleetRobot]:
     return [FleetRobot(name=ns.lstrip("/"), namespace=ns) for ns in namespaces(catalog)]
 
 
-# A fleet found once, for good (estop --all, astiop mcp), is looked for until no new robot
-# appeared this long: DDS may discover one robot's participant seconds after another's
+# A fleet found on the graph is looked for until no new robot appeared this long: DDS may
+# discover one robot's participant seconds after another's (a loaded machine: over 2 s, for
+# `fleet list` and `mcp` alike)
 FOUND_ONCE_S = 5.0
 
 
@@ -60,10 +61,8 @@ def find_robots(
     settle_s: float | None = None,
 ) -> list[FleetRobot]:
     """The fleet's robots: the settings' list, or every robot namespace on the domain, read
-    until the graph has shown no new robot for `settle_s` (SETTLED_S; or robot.ros2_timeout_s);
-    `on_found(robot)` as each is found."""
-    from astiop.robot.graph_reading import SETTLED_S
-
+    until the graph has shown no new robot for `settle_s` (FOUND_ONCE_S; or
+    robot.ros2_timeout_s); `on_found(robot)` as each is found."""
     on_found = on_found or (lambda _robot: None)
     if settings.fleet.discover == "list":
         listed = listed_robots(settings)
@@ -72,7 +71,7 @@ def find_robots(
         return listed
     finder = FleetFinder(settings)
     try:
-        return finder.settle(on_found, settle_s or SETTLED_S)
+        return finder.settle(on_found, settle_s or FOUND_ONCE_S)
     finally:
         finder.close()
 
