@@ -12,13 +12,25 @@ import sqlite3
 import time
 from pathlib import Path
 
-# a latch already engaged keeps who engaged it and when (SET reads the row as it was)
+# A latch already engaged keeps who engaged it and when (SET reads the row as it was). A press
+# latches only if no release was made after it: a press's late steps never undo a later release.
 LATCH = (
     "UPDATE estop SET engaged_by = CASE WHEN engaged = 1 THEN engaged_by ELSE ? END, "
-    "engaged_at = CASE WHEN engaged = 1 THEN engaged_at ELSE ? END, engaged = 1 WHERE id = 1"
+    "engaged_at = CASE WHEN engaged = 1 THEN engaged_at ELSE ? END, engaged = 1 "
+    "WHERE id = 1 AND COALESCE(released_at, 0) < ?"
 )
 RELEASE = "UPDATE estop SET engaged = 0, released_by = ?, released_at = ? WHERE id = 1"
-WAIT_S = 2.0  # for another process's write: the full path latches again after this
+WAIT_S = 0.05  # for another process's write: never in the robot's way; the full path latches
+# when this process pressed the E-STOP (`astiop estop`): each of its steps is that one press
+PRESSED_AT: float | None = None
+
+
+def pressed_at() -> float:
+    """The time of this process's press, taken once (the first step that asks)."""
+    global PRESSED_AT
+    if PRESSED_AT is None:
+        PRESSED_AT = time.time()
+    return PRESSED_AT
 
 
 def _configured_db(env: dict[str, str]) -> Path | None:
@@ -69,10 +81,11 @@ def latch_early(args: list[str], who: str = "estop") -> bool:
         path = db_path(args)
         if not path.is_file():
             return False
+        at = pressed_at()
         conn = sqlite3.connect(path, timeout=WAIT_S)
         try:
             with conn:
-                written = conn.execute(LATCH, (who, time.time())).rowcount
+                written = conn.execute(LATCH, (who, at, at)).rowcount
         finally:
             conn.close()
     except Exception:  # noqa: BLE001 - never in the way of the full path

@@ -106,29 +106,6 @@ def exec_command(
         raise typer.Exit(1)
 
 
-def _release_robot(st) -> None:
-    """A robot that latches its own stop (a /release service on its graph) is released too;
-    its graph is read first, to know whether it has one."""
-    from astiop.robot.factory import make_robot_gateway
-    from astiop.transports.base import BackendError
-
-    try:
-        gateway = make_robot_gateway(
-            st.settings, st.store, who="estop --release", restore_latch=False
-        )
-    except BackendError as exc:
-        fail(f"the robot was not reached to release its own stop: {exc}", code=1)
-    try:
-        has_release = gateway.serves("/release", st.settings.robot.ros2_timeout_s)
-        failed = gateway.release_estop()
-    finally:
-        gateway.close()
-    if failed:
-        fail("; ".join(failed), code=1)
-    if has_release:
-        typer.echo("the robot's own stop released (/release)")
-
-
 def estop(
     ctx: typer.Context,
     release: bool = typer.Option(
@@ -147,7 +124,6 @@ def estop(
     database then refuses motion until it is released. --robot-name NAME stops one robot of
     the fleet, --all every one."""
     from astiop.robot.estop_latch import HELD_FOR_ALL
-    from astiop.robot.factory import make_robot_gateway
 
     st = state(ctx)
     if every and st.robot_name is not None:
@@ -166,47 +142,124 @@ def estop(
     if release and ns and st.robot_name is not None and st.store.estop_latch() is not None:
         fail(HELD_FOR_ALL.replace("still holds it", f"holds {st.robot_name}"))
     if release:
-        own = bool(ns) and st.store.robot_latch(ns) is not None
-        latch = st.store.estop_latch() if st.robot_name is None else None
-        latch = latch or (st.store.robot_latch(ns) if ns else None)
-        live = st.settings.robot.backend == "ros2"  # its own stop may hold it (a bare /stop)
-        if latch is None and not live:
+        _release(st, ns, yes)
+        return
+    _press(st, ns)
+
+
+def _release(st, ns: str, yes: bool) -> None:
+    """`astiop estop --release`: a person's, knowing what they release (on a live robot, who
+    pressed it, where and when, as every station says it on the robot's graph)."""
+    own = bool(ns) and st.store.robot_latch(ns) is not None
+    latch = st.store.estop_latch() if st.robot_name is None else None
+    latch = latch or (st.store.robot_latch(ns) if ns else None)
+    live = st.settings.robot.backend == "ros2"  # its own stop may hold it (a bare /stop)
+    gateway = _release_gateway(st) if live else None
+    try:
+        pressed = gateway.pressed_by() if gateway is not None else None
+        if latch is None and pressed is None and not live:
             typer.echo("the E-STOP is not engaged")
             return
+        what = f"the E-STOP pressed by {pressed.words}" if pressed else "the E-STOP"
         if not yes:
             if not interactive():
                 fail("releasing the E-STOP needs a person to confirm it (or --yes)")
-            if not typer.confirm("release the E-STOP (the robot may move again)?", err=True):
+            if not typer.confirm(f"release {what} (the robot may move again)?", err=True):
                 fail("not released", code=1)
-        if latch is not None:
+        if gateway is None:
             if st.robot_name is None:
                 st.store.release_estop("estop --release")
             if own:
-                st.store.release_robot(ns)
-            typer.echo(f"E-STOP released{f' ({st.robot_name})' if st.robot_name else ''}")
+                st.store.release_robot(ns, "estop --release")
+        else:
+            has_release = gateway.serves("/release", st.settings.robot.ros2_timeout_s)
+            failed = gateway.release_estop(pressed)
+            if failed:
+                fail("; ".join(failed), code=1)
+        if latch is not None or pressed is not None:
+            named = f" ({st.robot_name})" if st.robot_name else ""
+            typer.echo(f"E-STOP released{named}" + (f": {what[4:]}" if pressed else ""))
         else:
             typer.echo("the E-STOP is not latched in the database")
-        if live:
-            _release_robot(st)
-        return
+        if gateway is not None and has_release:
+            typer.echo("the robot's own stop released (/release)")
+    finally:
+        if gateway is not None:
+            gateway.close()
+
+
+def _release_gateway(st):
+    """The live robot's door, its graph read, for a release (a robot that latches its own
+    stop, a /release service on its graph, is released too)."""
+    from astiop.robot.factory import make_robot_gateway
     from astiop.transports.base import BackendError
 
     try:
+        return make_robot_gateway(st.settings, st.store, who="estop --release", restore_latch=False)
+    except BackendError as exc:
+        fail(f"the robot was not reached to release its own stop: {exc}", code=1)
+
+
+def _store_softly(st):
+    """The database, or why it cannot be had: an E-STOP is never held up by its record."""
+    from astiop.store import Store, StoreError
+
+    try:
+        return Store(st.db_path), ""
+    except (StoreError, OSError) as exc:
+        return None, str(exc)
+
+
+def _record_press(store, ns: str, at: float) -> str:
+    """The press latched in the database after the robot was told; what went wrong ("")."""
+    try:
+        latched = store.latch_robot(ns, "estop", at) if ns else store.latch_estop("estop", at)
+    except Exception as exc:  # noqa: BLE001 - full, damaged, locked, read-only
+        return f"not latched in the database: {exc}"
+    return "" if latched else "released meanwhile: a release made after this press stands"
+
+
+def _press(st, ns: str) -> None:
+    """`astiop estop`: the robot told first, then the robot's graph, then the database; a
+    database that cannot be written never delays nor prevents the stop."""
+    from astiop import latch
+    from astiop.robot.factory import make_robot_gateway
+    from astiop.transports.base import BackendError
+
+    at = latch.pressed_at()  # every step of this press is this one press
+    try:
         gateway = make_robot_gateway(
-            st.settings, st.store, who="estop", discover=False, restore_latch=False
+            st.settings, None, who="estop", discover=False, restore_latch=False
         )
     except BackendError as exc:
-        if ns:  # no robot reached: still hold every other process
-            st.store.latch_robot(ns, "estop")
-        else:
-            st.store.latch_estop("estop")
-        fail(f"E-STOP latched in the database, but the robot was not reached: {exc}", code=1)
-    failures = gateway.estop()
+        store, why = _store_softly(st)
+        said = _record_press(store, ns, at) if store is not None else why
+        held = "E-STOP not latched anywhere" if said else "E-STOP latched in the database"
+        fail(f"{held}, and the robot was not reached: {exc}", code=1)
+    failures = gateway.estop(at)
+    store, why = _store_softly(st)
+    recorded = (
+        _record_press(store, ns, at) if store is not None else f"not latched in the database: {why}"
+    )
     # the zero-Twist burst and /stop go out before this process exits
     failures += gateway.settle_estop(st.settings.robot.ros2_timeout_s)
+    pressed = gateway.station_latch
+    released = pressed is not None and pressed.press is not None and not pressed.engaged
     gateway.close()
     for failure in failures:
         typer.echo(f"astiop: {failure}", err=True)
+    if released and pressed is not None and pressed.release is not None:
+        typer.echo(f"E-STOP engaged, then released by {pressed.release.words}")
+        return
+    if recorded.startswith("released meanwhile"):
+        typer.echo(f"E-STOP engaged, then {recorded}")
+        return
+    if recorded:
+        typer.echo(f"astiop: {recorded}", err=True)
+        on_graph = pressed is not None and pressed.on_graph
+        held = "held by this robot's graph" if on_graph else "held nowhere else"
+        typer.echo(f"E-STOP engaged; {held} (the database was not written)")
+        raise typer.Exit(1)
     typer.echo("E-STOP engaged and latched" + (" (with failures above)" if failures else ""))
     if failures:
         raise typer.Exit(1)

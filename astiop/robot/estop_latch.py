@@ -6,9 +6,11 @@ from __future__ import annotations
 import contextlib
 import logging
 import threading
-from typing import TYPE_CHECKING, Protocol
+import time
+from typing import TYPE_CHECKING, Any, Protocol
 
 from astiop.robot.safety import always_allowed
+from astiop.robot.station_latch import Act, StationLatch
 from astiop.ros2.validation import Checked
 from astiop.store import Store
 from astiop.transports.base import RobotBackend
@@ -27,8 +29,11 @@ class LatchHost(Protocol):
     store: Store | None
     who: str
     latch_key: str
+    station_latch: StationLatch | None
     _latch_seen: bool
     _latch_lock: threading.Lock
+
+    def _say_store_error(self, message: str) -> None: ...
 
 
 if TYPE_CHECKING:
@@ -40,31 +45,142 @@ else:
 class EstopLatch(_Host):
     @property
     def latched(self) -> bool:
-        """The store's latch: every robot's, or this robot's own."""
+        """The latch: the robot's graph's (every station's), the store's (every robot's, or this
+        robot's own); a store that cannot be read counts as latched while this process holds."""
+        graph = self.station_latch
+        if graph is not None and graph.engaged:
+            return True
+        try:
+            return self._store_latch() is not None
+        except Exception as exc:  # noqa: BLE001 - a damaged or vanished file: memory decides
+            self._say_store_error(f"the E-STOP latch could not be read: {exc}")
+            return self._latch_seen
+
+    def _store_latch(self) -> dict[str, Any] | None:
         store = self.store
         if store is None:
-            return False
-        own = self.latch_key and store.robot_latch(self.latch_key) is not None
-        return bool(own) or store.estop_latch() is not None
+            return None
+        own = store.robot_latch(self.latch_key) if self.latch_key else None
+        return own or store.estop_latch()
 
     @property
     def e_stopped(self) -> bool:
         return self.backend.e_stopped or self.latched
 
-    def estop(self) -> list[str]:
-        """Stop the robot, then latch it for every process; returns steps that failed."""
-        failures = self.backend.estop()  # the robot first: the record must never delay it
-        if self.store is not None:
-            try:
-                with self._latch_lock:  # the sampler's follow_latch must not undo it
-                    if self.latch_key:
-                        self.store.latch_robot(self.latch_key, self.who)
-                    else:
-                        self.store.latch_estop(self.who)
-                    self._latch_seen = True
-            except Exception as exc:  # noqa: BLE001 - reported, the stop itself went out
-                failures.append(f"the E-STOP is not latched for other processes: {exc}")
+    def estop(self, at: float | None = None) -> list[str]:
+        """Stop the robot, then say it on its graph, then latch it for every process on this
+        database; the steps that failed. `at`: when it was pressed (a press's later steps name
+        the same press, and never undo a release made after it)."""
+        act = Act.here(self.who, at)
+        failures = self.backend.estop()  # the robot first: nothing may delay it
+        with self._latch_lock:  # the sampler's follow_latch must not undo it
+            self._latch_seen = True
+            if self.station_latch is not None:
+                self.station_latch.pressed(act)
+            if self.store is not None:
+                try:
+                    self._latch_store(act)
+                except Exception as exc:  # noqa: BLE001 - said; the stop itself went out
+                    failures.append(f"the E-STOP is not latched in the database: {exc}")
         return failures
+
+    def _latch_store(self, act: Act) -> bool:
+        store, who = self.store, act.who
+        assert store is not None
+        if self.latch_key:
+            return store.latch_robot(self.latch_key, who, act.at)
+        return store.latch_estop(who, act.at)
+
+    def _release_store(self, act: Act) -> None:
+        store = self.store
+        assert store is not None
+        if self.latch_key:
+            store.release_robot(self.latch_key, act.who, act.at)
+        else:
+            store.release_estop(act.who, act.at)
+
+    def release_estop(self, pressed: Act | None = None) -> list[str]:
+        """Release the latch for every station and every process on this database, then this
+        process's robot; the failures. `pressed`: the press the person was shown (a press made
+        since is not released). A fleet's robot releases its own latch; one on every robot
+        still holds it."""
+        graph = self.station_latch
+        newer = graph.press if graph is not None else None
+        if pressed is not None and newer is not None and newer > pressed:
+            return [f"pressed again since, by {newer.words}: not released"]
+        act = Act.here(self.who)
+        with self._latch_lock:
+            if self.store is not None:
+                self._release_store(act)
+                if self.latch_key and self.store.estop_latch() is not None:
+                    return [HELD_FOR_ALL]
+            if graph is not None:
+                graph.released(act)
+            self._latch_seen = False
+        return self.backend.release_estop()
+
+    def pressed_by(self) -> Act | None:
+        """The newest press the robot's graph knows of (None: not said on it)."""
+        graph = self.station_latch
+        if graph is not None:
+            graph.wait_ready()
+            return graph.press if graph.engaged else None
+        return None
+
+    def follow_latch(self) -> bool:
+        """Whether the E-STOP is latched; when another process (a second console, `astiop
+        estop`, another station on the robot's graph) latched or released it since the last
+        look, this process's robot follows, and so does this database."""
+        with self._latch_lock:  # read and acted on together: an estop() meanwhile waits
+            self._adopt_graph()
+            latched = self.latched
+            if latched != self._latch_seen:
+                self._latch_seen = latched
+                if latched and not self.backend.e_stopped:
+                    self.backend.estop()
+                elif not latched and self.backend.e_stopped:
+                    self.backend.release_estop(robot=False)  # the releaser told the robot
+            if not latched and self.store is not None:
+                self._end_what_moves_latched_robots()
+        return latched
+
+    def _adopt_graph(self) -> None:
+        """The graph's newest word made this database's too (and this database's said on the
+        graph): a press heard latches it, a release after its press releases it."""
+        graph, store = self.station_latch, self.store
+        if graph is None or store is None or not graph.on_graph:
+            return
+        try:
+            mine = self._store_latch()
+            released = self._store_release()
+            if graph.engaged and mine is None and graph.press is not None:
+                if released is None or graph.press.at > released.at:
+                    press = graph.press
+                    self._latch_store(Act(press.at, f"{press.who} on {press.host}",
+                                          press.host, press.pid))  # fmt: skip
+                elif released is not None:
+                    graph.released(released)  # released here, after that press
+            elif not graph.engaged and mine is not None:
+                release = graph.release
+                if release is not None and release.at > float(mine["at"] or 0):
+                    self._release_store(Act(release.at, f"{release.who} on {release.host}",
+                                            release.host, release.pid))  # fmt: skip
+                else:  # latched here (another process on this database): said on the graph
+                    graph.pressed(Act(float(mine["at"] or time.time()), str(mine["by"]),
+                                      *_here()))  # fmt: skip
+        except Exception as exc:  # noqa: BLE001 - the graph's word still holds this process
+            self._say_store_error(f"the E-STOP on the robot's graph is not in the database: {exc}")
+
+    def _store_release(self) -> Act | None:
+        store = self.store
+        assert store is not None
+        if self.latch_key:
+            row = store.robot_release(self.latch_key)
+            by, at = (row["by"], row["at"]) if row else (None, None)
+        else:
+            record = store.estop_record()
+            by, at = record.get("released_by"), record.get("released_at")
+        return Act(float(at), str(by), *_here()) if at is not None else None
 
     def zero_now(self) -> None:
         """A zero velocity sent at once, nothing else (a fleet's E-STOP sends every robot's
@@ -76,37 +192,6 @@ class EstopLatch(_Host):
         """Wait for what the E-STOP started in the background to go out (a process about to
         exit); the failures that came meanwhile."""
         return self.backend.settle_estop(timeout_s)
-
-    def release_estop(self) -> list[str]:
-        """Release the latch for every process, then this process's robot; the failures. A
-        fleet's robot releases its own latch; one on every robot still holds it."""
-        if self.store is not None:
-            with self._latch_lock:
-                if self.latch_key:
-                    self.store.release_robot(self.latch_key)
-                    if self.store.estop_latch() is not None:
-                        return [HELD_FOR_ALL]
-                else:
-                    self.store.release_estop(self.who)
-                self._latch_seen = False
-        return self.backend.release_estop()
-
-    def follow_latch(self) -> bool:
-        """Whether the E-STOP is latched; when another process (a second console, `astiop
-        estop`) latched or released it since the last look, this process's robot follows."""
-        if self.store is None:
-            return False
-        with self._latch_lock:  # read and acted on together: an estop() meanwhile waits
-            latched = self.latched
-            if latched != self._latch_seen:
-                self._latch_seen = latched
-                if latched and not self.backend.e_stopped:
-                    self.backend.estop()
-                elif not latched and self.backend.e_stopped:
-                    self.backend.release_estop(robot=False)  # the releaser told the robot
-            if not latched:
-                self._end_what_moves_latched_robots()
-        return latched
 
     def _end_what_moves_latched_robots(self) -> None:
         """What this process has in flight on another robot of the fleet, reached by its names,
@@ -125,6 +210,8 @@ class EstopLatch(_Host):
         the E-STOP always lets through (/stop)."""
         if always_allowed(checked):
             return False
+        if self.station_latch is not None:  # a new station hears the others first
+            self.station_latch.wait_ready()
         if self.e_stopped:
             return True
         name = checked.command.name if checked.command else None
@@ -133,6 +220,11 @@ class EstopLatch(_Host):
     def _latched_robots(self) -> list[str]:
         """The namespaces of every robot whose own E-STOP is latched (none without a store)."""
         return self.store.latched_robots() if self.store is not None else []
+
+
+def _here() -> tuple[str, int]:
+    act = Act.here("")
+    return act.host, act.pid
 
 
 def _under(name: str, namespace: str) -> bool:

@@ -116,6 +116,7 @@ def make_robot_gateway(
             restore_latch=restore_latch,
             latch_key=settings.robot.namespace,  # a fleet's robot: a latch of its own
         )
+        gateway.follow_stations(settings.robot.namespace)
         if store is not None:  # a robot on the graph is shared: one operator controls it
             ns = settings.robot.namespace
             gateway.lease = robot_lease(ns, store, who, backend)

@@ -18,6 +18,7 @@ from astiop.robot.estop_latch import ESTOP_REASON, EstopLatch
 from astiop.robot.graph_reading import GraphReading
 from astiop.robot.latch_watch import LatchWatcher
 from astiop.robot.safety import Review, SafetyPolicy
+from astiop.robot.station_latch import StationLatch
 from astiop.ros2.fleet_names import robot_under
 from astiop.ros2.render import STAMPED
 from astiop.ros2.validation import Checked, validate
@@ -58,6 +59,8 @@ class RobotGateway(EstopLatch, GraphReading):
         self._journal_lock = threading.Lock()
         self._latch_lock = threading.Lock()
         self.latch_key = latch_key  # a namespaced robot latches its own E-STOP (a fleet's)
+        self.station_latch: StationLatch | None = None  # the latch on the robot's graph
+        self._latch_seen = False
         self._latch_seen = self.latched
         self.lease = None  # robot/lease.py: set where the robot is shared (ROS 2)
         # a fleet's robot reached through a whole-domain gateway by its names: its lease, made
@@ -87,6 +90,14 @@ class RobotGateway(EstopLatch, GraphReading):
     def start(self) -> None:
         self.backend.start()
 
+    def follow_stations(self, namespace: str) -> None:
+        """Follow the E-STOP that every station says on the robot's graph, and say this one's
+        (robot/station_latch.py), where the transport can reach the graph."""
+        backend = self.backend
+        self.station_latch = StationLatch(
+            lambda heard: backend.estop_channel(namespace, heard), self.follow_latch
+        ).start()
+
     def take_control(self, force: bool = False) -> str | None:
         """Take the lease of a shared robot (robot/lease.py); why it could not be (None: this
         process controls it, or the robot is this process's own)."""
@@ -112,6 +123,8 @@ class RobotGateway(EstopLatch, GraphReading):
                 lease.release()
         if self._watcher is not None:
             self._watcher.close()
+        if self.station_latch is not None:
+            self.station_latch.close()
         self.backend.close()
 
     def state(self) -> RobotState:

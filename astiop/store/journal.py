@@ -112,6 +112,22 @@ class JournalTables:
             return {"by": row[1], "at": row[2]}
         return None
 
+    def estop_record(self) -> dict[str, Any]:
+        """The latch's whole row: engaged, by, at, released_by, released_at."""
+        row = self.db.conn.execute(
+            "SELECT engaged, engaged_by, engaged_at, released_by, released_at FROM estop "
+            "WHERE id = 1"
+        ).fetchone()
+        keys = ("engaged", "by", "at", "released_by", "released_at")
+        return dict(zip(keys, row)) if row else {"engaged": 0}
+
+    def robot_release(self, robot: str) -> dict[str, Any] | None:
+        """The last release of one robot's own latch (by, at), else None."""
+        row = self.db.conn.execute(
+            "SELECT released_by, released_at FROM robot_estop_releases WHERE robot = ?", [robot]
+        ).fetchone()
+        return {"by": row[0], "at": row[1]} if row else None
+
     def robot_latch(self, robot: str) -> dict[str, Any] | None:
         """One robot's own latch while engaged (a fleet's robot, by its namespace), else None."""
         row = self.db.conn.execute(
@@ -122,30 +138,45 @@ class JournalTables:
     def latched_robots(self) -> list[str]:
         return [r[0] for r in self.db.conn.execute("SELECT robot FROM robot_estops ORDER BY 1")]
 
-    def latch_robot(self, robot: str, who: str) -> None:
+    def latch_robot(self, robot: str, who: str, at: float | None = None) -> bool:
+        """Latch one robot's own E-STOP for a press made `at` (now); False if a release was
+        made after it (nothing latched)."""
+        at = time.time() if at is None else at
         with self._tx():
+            released = self.robot_release(robot)
+            if released is not None and released["at"] >= at:
+                return False
             self.db.conn.execute(
                 "INSERT OR IGNORE INTO robot_estops (robot, engaged_by, engaged_at) "
                 "VALUES (?, ?, ?)",
-                [robot, who, time.time()],
+                [robot, who, at],
             )
+        return True
 
-    def release_robot(self, robot: str) -> None:
+    def release_robot(self, robot: str, who: str = "", at: float | None = None) -> None:
         with self._tx():
             self.db.conn.execute("DELETE FROM robot_estops WHERE robot = ?", [robot])
+            self.db.conn.execute(
+                "INSERT OR REPLACE INTO robot_estop_releases (robot, released_by, released_at) "
+                "VALUES (?, ?, ?)",
+                [robot, who, time.time() if at is None else at],
+            )
 
     def latch_version(self) -> int:
         """SQLite's data_version on this thread's connection: it changes when another
         connection commits, so a watcher reads the latch only then (a few µs a look)."""
         return self.db.conn.execute("PRAGMA data_version").fetchone()[0]
 
-    def latch_estop(self, who: str) -> None:
+    def latch_estop(self, who: str, at: float | None = None) -> bool:
+        """Latch the E-STOP of every robot on this database for a press made `at` (now); False
+        if a release was made after it (nothing latched)."""
+        at = time.time() if at is None else at
         with self._tx():
-            self.db.conn.execute(latch.LATCH, [who, time.time()])
+            return self.db.conn.execute(latch.LATCH, [who, at, at]).rowcount == 1
 
-    def release_estop(self, who: str) -> None:
+    def release_estop(self, who: str, at: float | None = None) -> None:
         with self._tx():
-            self.db.conn.execute(latch.RELEASE, [who, time.time()])
+            self.db.conn.execute(latch.RELEASE, [who, time.time() if at is None else at])
 
     def interaction_marks(self) -> tuple[int, list[int]]:
         """The newest turn's id and the ids of the turns still running, read together."""

@@ -265,6 +265,18 @@ def _migrate_v10(conn: sqlite3.Connection) -> None:
     )
 
 
+def _migrate_v11(conn: sqlite3.Connection) -> None:
+    # A robot's own latch's last release: a press's late steps never undo a release made after it.
+    _run(
+        conn,
+        """
+        CREATE TABLE robot_estop_releases (
+            robot TEXT PRIMARY KEY, released_by TEXT NOT NULL, released_at REAL NOT NULL
+        );
+        """,
+    )
+
+
 # Ordered; the database's PRAGMA user_version counts how many have run. Each runs inside one
 # transaction (Store._run_migrations): on a plain connection, with execute only.
 MIGRATIONS = [
@@ -278,6 +290,7 @@ MIGRATIONS = [
     _migrate_v8,
     _migrate_v9,
     _migrate_v10,
+    _migrate_v11,
 ]
 SCHEMA_VERSION = len(MIGRATIONS)
 _OUR_TABLES = {
@@ -294,6 +307,7 @@ _OUR_TABLES = {
     "mission_steps",
     "leases",
     "robot_estops",
+    "robot_estop_releases",
 }
 
 

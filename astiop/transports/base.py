@@ -5,7 +5,7 @@ from __future__ import annotations
 import contextlib
 import time
 from abc import ABC, abstractmethod
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass, field
 from typing import Any, Union
 
@@ -106,6 +106,12 @@ class RobotBackend(ABC):
     def control_channel(self, namespace: str):
         """Where the robot's lease is announced on its graph (robot/lease.py), for a robot that
         other machines reach too; None: the store alone holds it."""
+        return None
+
+    def estop_channel(self, namespace: str, on_word: Callable[[dict[str, Any]], None]):
+        """Where the robot's E-STOP latch is announced on its graph (robot/station_latch.py):
+        a channel with `announce(word)`, `settle()`, `words()` and `close()`, calling `on_word`
+        with each word heard; None: this transport cannot (the store alone holds it)."""
         return None
 
     def discovering(self) -> bool:

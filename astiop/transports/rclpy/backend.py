@@ -136,6 +136,11 @@ class RclpyBackend(RclpyEstop, RclpyTeleop, RclpyStateWatches, RclpyVerbs, Robot
         topic.settle()
         return topic
 
+    def estop_channel(self, namespace: str, on_word):
+        from astiop.transports.rclpy.control_topic import ESTOP, ControlTopic
+
+        return ControlTopic(self.proc, namespace, ESTOP, on_word)
+
     def discovering(self) -> bool:
         return time.monotonic() - self.t0 < DISCOVERY_YOUNG_S
 

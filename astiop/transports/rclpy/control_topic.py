@@ -1,6 +1,7 @@
-"""A robot's lease announced on its own graph, so that it holds between machines on one ROS 2
-domain as the store makes it hold between consoles on one machine: `<namespace>/astiop_control`,
-std_msgs/msg/String holding JSON, reliable and transient-local with depth 1.
+"""What astiop's stations say of a robot on its own graph, so that it holds between machines on
+one ROS 2 domain as the store makes it hold between processes on one machine: the lease on
+`<namespace>/astiop_control`, the E-STOP latch on `<namespace>/astiop_estop`; std_msgs/msg/String
+holding JSON, reliable and transient-local with depth 1.
 
 Why a transient-local topic: a console that joins later is handed every holder's last word at
 once (each writer keeps its own), with no server to ask and none to fail; a holder that dies
@@ -14,6 +15,7 @@ import contextlib
 import json
 import threading
 import time
+from collections.abc import Callable
 from typing import Any
 
 from rclpy.duration import Duration
@@ -23,6 +25,8 @@ from std_msgs.msg import String
 from astiop.store.leases import LEASE_TTL_S
 from astiop.transports.rclpy.node import RosProcess
 
+CONTROL = "astiop_control"  # the lease
+ESTOP = "astiop_estop"  # the E-STOP latch
 QOS = QoSProfile(
     depth=1,
     history=HistoryPolicy.KEEP_LAST,
@@ -32,9 +36,16 @@ QOS = QoSProfile(
 
 
 class ControlTopic:
-    def __init__(self, proc: RosProcess, namespace: str):
+    def __init__(
+        self,
+        proc: RosProcess,
+        namespace: str,
+        topic: str = CONTROL,
+        on_word: Callable[[dict[str, Any]], None] | None = None,
+    ):
         self.proc = proc
-        self.name = f"{namespace.rstrip('/')}/astiop_control"
+        self.name = f"{namespace.rstrip('/')}/{topic}"
+        self._on_word = on_word  # called on the executor's thread with each word heard
         self._lock = threading.Lock()
         self._heard: dict[str, tuple[float, dict[str, Any]]] = {}  # token -> (when, word)
         node = proc.node
@@ -67,6 +78,8 @@ class ControlTopic:
             return  # not ours: nothing to follow
         with self._lock:
             self._heard[token] = (time.monotonic(), word)
+        if self._on_word is not None:
+            self._on_word(word)
 
     def announce(self, word: dict[str, Any], acked_s: float = 0.0) -> None:
         """Say it; with `acked_s`, wait that long at most for every reader to have it (a word
@@ -74,6 +87,11 @@ class ControlTopic:
         self._pub.publish(String(data=json.dumps(word)))
         if acked_s > 0:  # ros2/rclpy humble rclpy/rclpy/publisher.py: wait_for_all_acked
             self._pub.wait_for_all_acked(Duration(nanoseconds=int(acked_s * 1e9)))
+
+    def words(self) -> list[dict[str, Any]]:
+        """Every word heard, one per writer, however old."""
+        with self._lock:
+            return [w for _, w in self._heard.values()]
 
     def holders(self, released: bool = False) -> list[dict[str, Any]]:
         """Every holder heard within the lease's time that has not let go (`released`: and

@@ -18,12 +18,18 @@ class EmptyCalls:
     def __init__(self, proc: RosProcess, events: EventLog, timeout_s: float):
         self.proc, self.events, self.timeout_s = proc, events, timeout_s
 
-    def call(self, name: str, type_: str, what: str) -> None:
-        """Wait for the server, call, wait for the answer: each up to the timeout."""
+    def call(
+        self, name: str, type_: str, what: str, still: Callable[[], bool] | None = None
+    ) -> None:
+        """Wait for the server, call, wait for the answer: each up to the timeout. `still`:
+        asked right before the call goes out (an E-STOP released meanwhile sends no /stop)."""
         try:
             client = self.proc.client(interface_class(type_), name)
             if not client.wait_for_service(timeout_sec=self.timeout_s):
                 self._unanswered(name, what)
+                return
+            if still is not None and not still():
+                self.events.add("estop", "info", f"{what}: released meanwhile, {name} not called")
                 return
             request = client.srv_type.Request()
             self.proc.wait(client.call_async(request), self.timeout_s, f"{what} {name}")
@@ -31,7 +37,12 @@ class EmptyCalls:
             self.events.add("estop", "error", f"{what} {name}: {exc}")
 
     def call_if_served(
-        self, name: str, type_: str, what: str, robot_seen: Callable[[], bool]
+        self,
+        name: str,
+        type_: str,
+        what: str,
+        robot_seen: Callable[[], bool],
+        still: Callable[[], bool] | None = None,
     ) -> None:
         """In a process that did not read the graph: called once served; a robot seen
         (`robot_seen`) without it for ABSENT_S has none: said, not a failure (a TurtleBot3 has no
@@ -52,7 +63,7 @@ class EmptyCalls:
             if now > deadline:
                 self._unanswered(name, what)
                 return
-        self.call(name, type_, what)
+        self.call(name, type_, what, still)
 
     def _unanswered(self, name: str, what: str) -> None:
         self.events.add("estop", "error", f"{what}: no {name} answered within {self.timeout_s:g} s")

@@ -78,12 +78,17 @@ class RclpyEstop(_Host):
         # goal on the robot is cancelled, another client's too (a TurtleBot3 has no /stop).
         stop = self._name("stop")
         stop_type = stop_service_type(self.catalog)
+        held = self._still_held
         if stop:
-            self._estop.start(lambda: self._calls.call(stop, stop_type, "E-STOP"), "estop-stop")
+            self._estop.start(
+                lambda: self._calls.call(stop, stop_type, "E-STOP", held), "estop-stop"
+            )
         else:
             name = self._fixed.namespace + "/stop"
             self._estop.start(
-                lambda: self._calls.call_if_served(name, stop_type, "E-STOP", self._base_seen),
+                lambda: self._calls.call_if_served(
+                    name, stop_type, "E-STOP", self._base_seen, held
+                ),
                 "estop-stop",
             )
             actions = navigation_actions(self.catalog, self._fixed.namespace) or [
@@ -93,6 +98,10 @@ class RclpyEstop(_Host):
                 self._estop.start(lambda a=action: self._cancel_every_goal(a), "estop-cancel")
         self._estop.said(failures)
         return failures
+
+    def _still_held(self) -> bool:
+        """The E-STOP still holds (a release made since must not be undone by its late steps)."""
+        return self.inflight.held
 
     def _cancel_every_goal(self, action: str) -> None:
         """A CancelGoal with a zero goal id and a zero stamp cancels every goal of the action
