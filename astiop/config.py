@@ -59,6 +59,8 @@ class RobotSettings(_Section):
     # (astibot, turtlebot3_burger, turtlebot3_waffle) or a profile file's path
     profile: str = "auto"
     namespace: str = Field("", description="the robot's ROS 2 namespace, e.g. /tb3_1")
+    # `astiop estop` leaves a keeper that says its press on the robot's graph until released
+    estop_keeper: StrictBool = True
 
 
 class FleetRobot(_Section):

@@ -39,6 +39,9 @@ def _isolated_config(tmp_path, monkeypatch):
     monkeypatch.setenv("ASTIOP_CONFIG", str(tmp_path / "no-config.toml"))
     monkeypatch.setenv("ASTIOP_DB", str(tmp_path / "default.db"))
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))  # the embedded model's cache
+    # `astiop estop` leaves no keeper of its press on the graph: a test's robot ends with the
+    # test, and the next test on this worker's domain starts clean (test_stations.py: the keeper)
+    monkeypatch.setenv("ASTIOP_ROBOT__ESTOP_KEEPER", "false")
     for name in ("ASTIOP_MODEL", "ASTIOP_ROBOT"):
         monkeypatch.delenv(name, raising=False)
 

@@ -487,7 +487,7 @@ def test_an_outside_agent_may_never_release_a_held_robot(store):
     token = CALL.set(call)
     try:
         robot.ros2_command("ros2 service call /stop std_srvs/srv/Trigger")
-        with pytest.raises(Refused, match="/release is the operator's"):
+        with pytest.raises(Refused, match="/release releases a held robot: a person does"):
             robot.ros2_command("ros2 service call /release std_srvs/srv/Trigger")
     finally:
         CALL.reset(token)

@@ -11,6 +11,13 @@ _VALUED = (
     "--robot-name", "--fleet",
 )  # fmt: skip
 SERVED_ELSEWHERE = ("rules", "ollama:", "openai:", "dmr:")  # specs with no model process here
+ARGS: list[str] = []  # this run's command line (a process it starts may need its options)
+
+
+def global_args() -> list[str]:
+    """This run's options before its command (`--db X --robot ros2` of `astiop --db X ...`)."""
+    command, _ = _command_and_model(ARGS)
+    return ARGS[: ARGS.index(command)] if command in ARGS else list(ARGS)
 
 
 def _with_record_file(args: list[str]) -> list[str]:
@@ -51,7 +58,7 @@ def _stops_the_robot(args: list[str]) -> bool:
     """`astiop estop` of every robot on the database: not its --release nor its help, nor the
     stop of one robot of a fleet (its own latch, written once its namespace is known)."""
     command, _ = _command_and_model(args)
-    asks = {"--release", "--help", "-h", "--robot-name", "--namespace"}
+    asks = {"--release", "--hold", "--help", "-h", "--robot-name", "--namespace"}
     return command == "estop" and not asks & {a.split("=", 1)[0] for a in args}
 
 
@@ -59,6 +66,7 @@ def run(argv: list[str] | None = None) -> None:
     """The `astiop` executable (argv None: this process is it), or a command run in a process
     that goes on (tests): the app, with one line (never a traceback) for any failure."""
     args = _with_record_file(list(sys.argv[1:] if argv is None else argv))
+    ARGS[:] = args
     if _stops_the_robot(args):  # every other astiop process stops as soon as this is written
         from astiop import latch
 

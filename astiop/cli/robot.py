@@ -112,6 +112,8 @@ def estop(
         False, "--release", help="Release the E-STOP (asks first; --yes does not ask)."
     ),
     yes: bool = typer.Option(False, "--yes", "-y", help="Release without asking."),
+    hold: float = typer.Option(0.0, "--hold", hidden=True, help="Keep a press on the graph."),
+    pressed_by: int = typer.Option(0, "--pressed-by", hidden=True),
     every: bool = typer.Option(
         False,
         "--all",
@@ -126,6 +128,9 @@ def estop(
     from astiop.robot.estop_latch import HELD_FOR_ALL
 
     st = state(ctx)
+    if hold:
+        _hold(st, hold, pressed_by)
+        return
     if every and st.robot_name is not None:
         fail("--all stops every robot of the fleet: leave out --robot-name")
     if every and not release:
@@ -178,7 +183,8 @@ def _release(st, ns: str, yes: bool) -> None:
                 fail("; ".join(failed), code=1)
         if latch is not None or pressed is not None:
             named = f" ({st.robot_name})" if st.robot_name else ""
-            typer.echo(f"E-STOP released{named}" + (f": {what[4:]}" if pressed else ""))
+            by = f" (pressed by {pressed.words})" if pressed else ""
+            typer.echo(f"E-STOP released{named}{by}")
         else:
             typer.echo("the E-STOP is not latched in the database")
         if gateway is not None and has_release:
@@ -198,6 +204,70 @@ def _release_gateway(st):
         return make_robot_gateway(st.settings, st.store, who="estop --release", restore_latch=False)
     except BackendError as exc:
         fail(f"the robot was not reached to release its own stop: {exc}", code=1)
+
+
+ROBOT_GONE_S = 10.0  # a keeper whose robot left the graph this long has nothing to hold
+
+
+def _keep_on_the_graph(st, at: float) -> None:
+    """This process's press outlives it: a keeper (`astiop estop --hold`, in a session of its
+    own) says it on the robot's graph, and holds the robot's lock input, until it is released."""
+    import os
+    import subprocess
+    import sys
+
+    from astiop.cli import global_args
+
+    if not st.settings.robot.estop_keeper:
+        return
+    argv = [sys.executable, "-m", "astiop", *global_args(), "estop", "--hold", repr(at)]
+    argv += ["--pressed-by", str(os.getpid())]
+    try:
+        keeper = subprocess.Popen(
+            argv,
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            start_new_session=True,  # the shell that ran `astiop estop` may close
+        )
+    except OSError as exc:
+        typer.echo(f"astiop: no keeper of the E-STOP on the robot's graph: {exc}", err=True)
+        return
+    typer.echo(f"held on the robot's graph until released (keeper pid {keeper.pid})", err=True)
+
+
+def _hold(st, at: float, by: int) -> None:
+    """`astiop estop --hold AT`: keep saying the robot's E-STOP pressed at AT (by the `astiop
+    estop` that started this) on its graph, and its lock input true, until someone releases it,
+    or the robot is gone from the graph."""
+    import time
+
+    from astiop.robot.factory import make_robot_gateway
+    from astiop.robot.station_latch import Act
+    from astiop.transports.base import BackendError
+
+    store, _why = _store_softly(st)
+    try:
+        gateway = make_robot_gateway(
+            st.settings, store, who="estop (keeper)", discover=False, restore_latch=False
+        )
+    except BackendError as exc:
+        fail(str(exc), code=1)
+    graph = gateway.station_latch
+    try:
+        if graph is None or not graph.wait_ready() or not graph.on_graph:
+            return
+        graph.pressed(Act(at, "estop", Act.here("").host, by))
+        seen = time.monotonic()
+        while graph.engaged:
+            gateway.follow_latch()  # holds this process's robot (its lock input) as latched
+            if gateway.backend.robot_present() is not False:
+                seen = time.monotonic()
+            elif time.monotonic() - seen > ROBOT_GONE_S:
+                return
+            time.sleep(0.5)
+    finally:
+        gateway.close()
 
 
 def _store_softly(st):
@@ -237,6 +307,8 @@ def _press(st, ns: str) -> None:
         held = "E-STOP not latched anywhere" if said else "E-STOP latched in the database"
         fail(f"{held}, and the robot was not reached: {exc}", code=1)
     failures = gateway.estop(at)
+    if gateway.station_latch is not None:  # said on the graph from now until released
+        _keep_on_the_graph(st, at)
     store, why = _store_softly(st)
     recorded = (
         _record_press(store, ns, at) if store is not None else f"not latched in the database: {why}"
@@ -245,6 +317,7 @@ def _press(st, ns: str) -> None:
     failures += gateway.settle_estop(st.settings.robot.ros2_timeout_s)
     pressed = gateway.station_latch
     released = pressed is not None and pressed.press is not None and not pressed.engaged
+    on_graph = pressed is not None and pressed.on_graph
     gateway.close()
     for failure in failures:
         typer.echo(f"astiop: {failure}", err=True)
@@ -256,8 +329,7 @@ def _press(st, ns: str) -> None:
         return
     if recorded:
         typer.echo(f"astiop: {recorded}", err=True)
-        on_graph = pressed is not None and pressed.on_graph
-        held = "held by this robot's graph" if on_graph else "held nowhere else"
+        held = "said on the robot's graph" if on_graph else "held nowhere else"
         typer.echo(f"E-STOP engaged; {held} (the database was not written)")
         raise typer.Exit(1)
     typer.echo("E-STOP engaged and latched" + (" (with failures above)" if failures else ""))

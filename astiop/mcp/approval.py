@@ -11,8 +11,7 @@ from dataclasses import dataclass
 
 from astiop.robot.estop_latch import ESTOP_REASON
 from astiop.robot.gateway import RobotGateway
-from astiop.robot.safety import Review, always_allowed
-from astiop.ros2.catalog import RELEASE
+from astiop.robot.safety import Review, always_allowed, releases_a_stop
 from astiop.ros2.render import sent_text
 from astiop.store import Store
 
@@ -62,8 +61,10 @@ def clear(
         return Clearance(review, ESTOP_REASON)
     if not checked.valid:
         return Clearance(review, checked.reason or "not a valid command")
-    if checked.command.name == RELEASE:  # a held robot is let go by a person, never an agent
-        return Clearance(review, f"{RELEASE} is the operator's: ctrl+r or astiop estop --release")
+    own = gateway.profile.name("release")
+    if releases_a_stop(checked, own):  # a held robot is let go by a person, never an agent
+        said = f"{checked.command.name} releases a held robot: a person does, with ctrl+r or astiop estop --release"
+        return Clearance(review, said)
     if not review.allowed:
         return Clearance(review, review.reason)
     if not needs_approval(review):

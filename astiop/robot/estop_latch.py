@@ -145,22 +145,17 @@ class EstopLatch(_Host):
         return latched
 
     def _adopt_graph(self) -> None:
-        """The graph's newest word made this database's too (and this database's said on the
-        graph): a press heard latches it, a release after its press releases it."""
+        """This database and the robot's graph agree: a release said on the graph after this
+        database's press releases it, and this database's own press or release (made by a
+        process that does not hear the graph) is said there. A press heard on the graph holds
+        this process while it is said, and is not written here: a station that was not running
+        when it was released would raise it again."""
         graph, store = self.station_latch, self.store
         if graph is None or store is None or not graph.on_graph:
             return
         try:
             mine = self._store_latch()
-            released = self._store_release()
-            if graph.engaged and mine is None and graph.press is not None:
-                if released is None or graph.press.at > released.at:
-                    press = graph.press
-                    self._latch_store(Act(press.at, f"{press.who} on {press.host}",
-                                          press.host, press.pid))  # fmt: skip
-                elif released is not None:
-                    graph.released(released)  # released here, after that press
-            elif not graph.engaged and mine is not None:
+            if mine is not None and not graph.engaged:
                 release = graph.release
                 if release is not None and release.at > float(mine["at"] or 0):
                     self._release_store(Act(release.at, f"{release.who} on {release.host}",
@@ -168,6 +163,10 @@ class EstopLatch(_Host):
                 else:  # latched here (another process on this database): said on the graph
                     graph.pressed(Act(float(mine["at"] or time.time()), str(mine["by"]),
                                       *_here()))  # fmt: skip
+            elif mine is None and graph.engaged and graph.press is not None:
+                released = self._store_release()
+                if released is not None and released.at > graph.press.at:
+                    graph.released(released)  # released here, after that press
         except Exception as exc:  # noqa: BLE001 - the graph's word still holds this process
             self._say_store_error(f"the E-STOP on the robot's graph is not in the database: {exc}")
 

@@ -25,6 +25,16 @@ class Review:
     needs_confirmation: bool
 
 
+def releases_a_stop(checked: Checked, release: str | None = None) -> bool:
+    """A call that lets a held robot go: a release service under any namespace (`release`:
+    the robot's own name for it, from its profile)."""
+    cmd = checked.command
+    if cmd is None or cmd.key != ("service", "call"):
+        return False
+    name = (cmd.name or "").rstrip("/")
+    return name.rsplit("/", 1)[-1] == "release" or (bool(release) and name == release)
+
+
 @dataclass
 class SafetyPolicy:
     max_linear: float = 0.8

@@ -26,7 +26,8 @@ from typing import Any
 
 log = logging.getLogger("astiop.robot")
 LAST_WORD_S = 1.0  # a station's last word: how long it waits for every reader to have it
-SETTLE_S = 5.0  # a new station waits at most this for the others' words before it actuates
+SETTLE_S = 5.0
+HEARD_LEAST_S = 1.0  # a writer's endpoint may be discovered a moment after its participant  # a new station waits at most this for the others' words before it actuates
 
 
 @dataclass(frozen=True, order=True)
@@ -164,7 +165,7 @@ class StationLatch:
         try:
             channel = self._open_channel(self._heard)
             if channel is not None:
-                channel.settle(SETTLE_S)
+                channel.settle(SETTLE_S, HEARD_LEAST_S)
         except Exception as exc:  # noqa: BLE001 - the store still holds the latch here
             if not self._closed.is_set():  # else: the process ended while it opened
                 log.error("the E-STOP is not followed on the robot's graph: %s", exc)

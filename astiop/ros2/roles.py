@@ -99,6 +99,14 @@ ROLES: tuple[Role, ...] = (
     Role("stop", (("service", TRIGGER),), ("/stop",), by_name_only=True, description="stops"),
     Role("release", (("service", TRIGGER),), ("/release",), by_name_only=True),
     Role(
+        "estop_lock",
+        (("topic", "std_msgs/msg/Bool"),),
+        ("/e_stop", "/estop", "/emergency_stop"),
+        by_name_only=True,
+        description="the robot's own E-STOP or lock input (a twist_mux lock): held true while "
+        "the E-STOP latches",
+    ),
+    Role(
         "dock",
         (("service", TRIGGER), ("action", "nav2_msgs/action/DockRobot")),
         ("/dock", "/dock_robot"),

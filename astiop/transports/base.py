@@ -108,6 +108,11 @@ class RobotBackend(ABC):
         other machines reach too; None: the store alone holds it."""
         return None
 
+    def robot_present(self) -> bool | None:
+        """Whether any node other than astiop's stations is on the robot's graph now (None: not
+        known to this transport)."""
+        return None
+
     def estop_channel(self, namespace: str, on_word: Callable[[dict[str, Any]], None]):
         """Where the robot's E-STOP latch is announced on its graph (robot/station_latch.py):
         a channel with `announce(word)`, `settle()`, `words()` and `close()`, calling `on_word`

@@ -21,6 +21,7 @@ from astiop.transports.live_robot import MOVING, without_finished_plan
 from astiop.transports.rclpy.empty_calls import EmptyCalls
 from astiop.transports.rclpy.estop import RclpyEstop
 from astiop.transports.rclpy.graph import read_lists, read_params
+from astiop.transports.rclpy.lock_hold import LockHold
 from astiop.transports.rclpy.node import ros_process
 from astiop.transports.rclpy.state_watches import RclpyStateWatches
 from astiop.transports.rclpy.teleop import RclpyTeleop
@@ -81,6 +82,7 @@ class RclpyBackend(RclpyEstop, RclpyTeleop, RclpyStateWatches, RclpyVerbs, Robot
         self.events = EventLog(self.t0)
         self._estop = EstopWork(self.events)
         self._calls = EmptyCalls(self.proc, self.events, timeout_s)
+        self._lock_hold = LockHold(self.proc, lambda: self._name("estop_lock"), self.events)
         self._contact = Contact(self.events)
         self._lists = self._discover(DISCOVERY_S if discover else 0.0)
         self._params: list[tuple[str, str]] = []  # read by start(), or when a command needs them
@@ -128,6 +130,14 @@ class RclpyBackend(RclpyEstop, RclpyTeleop, RclpyStateWatches, RclpyVerbs, Robot
     def robot_nodes(self) -> list[str]:
         """The nodes discovered on the robot's domain (not this process's own)."""
         return [n for n, _ in self._lists["node"]]
+
+    def robot_present(self) -> bool | None:
+        names = self.proc.node.get_node_names_and_namespaces()
+        ns = self._fixed.namespace.rstrip("/")
+        return any(
+            not name.startswith("astiop_") and (not ns or space.startswith(ns))
+            for name, space in names
+        )
 
     def control_channel(self, namespace: str):
         from astiop.transports.rclpy.control_topic import ControlTopic
@@ -227,6 +237,7 @@ class RclpyBackend(RclpyEstop, RclpyTeleop, RclpyStateWatches, RclpyVerbs, Robot
 
     def close(self) -> None:
         self._closed.set()
+        self._lock_hold.stop()
         self._poke.set()
         self._holding.set()
         with self._watch_lock:  # none is being made meanwhile

@@ -22,6 +22,7 @@ from astiop.transports.live_catalog import (
     stop_service_type,
 )
 from astiop.transports.rclpy.empty_calls import EmptyCalls
+from astiop.transports.rclpy.lock_hold import LockHold
 from astiop.transports.rclpy.node import RosProcess
 from astiop.transports.rclpy.teleop import TELEOP_HZ
 
@@ -39,6 +40,7 @@ class RclpyEstopHost(Protocol):
     _fixed: ProfileSpec
     _estop: EstopWork
     _calls: EmptyCalls
+    _lock_hold: LockHold
     _closed: threading.Event
 
     def _name(self, role: str, default: str = "") -> str: ...
@@ -66,6 +68,7 @@ class RclpyEstop(_Host):
         now and /stop called, neither waiting on the other; failures that come later arrive as
         events (`settle_estop`)."""
         failures = self.inflight.stop_all()
+        self._lock_hold.hold()  # the robot's own lock input, where it has one
         self._estop.begin()
         try:
             self.zero_now()  # matched already in a running console
@@ -153,6 +156,7 @@ class RclpyEstop(_Host):
 
     def release_estop(self, *, robot: bool = True) -> list[str]:
         self.inflight.release()
+        self._lock_hold.let_go()
         name = self._name("release", RELEASE)  # under the robot's namespace
         spec = self.catalog.services.get(name)
         if spec is None or not robot:
