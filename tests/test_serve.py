@@ -18,7 +18,7 @@ import pytest
 from astiop.store import Store
 from astiop.web.access import FREE_TRIES, Access, host_name, loopback_host
 from tests.cli_runner import run_cli
-from tests.ros import require_ros
+from tests.ros import require_ros, ros_client
 from tests.web_console import (
     ENV,
     Terminal,
@@ -285,7 +285,14 @@ async def test_every_tab_sees_one_shared_simulated_robot_and_its_estop(tmp_path)
     try:
         async with aiohttp.ClientSession() as http:
             async with http.get(url + "/") as page:
-                assert "shared by every tab" in await page.text()
+                text = await page.text()
+            assert "shared by every tab" in text
+            # never on this machine's graph, where a real base may listen: a domain of its own
+            domain = re.search(r"ROS_DOMAIN_ID=(\d+)", text)
+            assert domain and domain[1] != os.environ["ROS_DOMAIN_ID"], text
+            with ros_client("graph_watch") as client:
+                time.sleep(1.5)
+                assert not client.node.get_subscriptions_info_by_topic("/cmd_vel")
             one, two = Terminal(), Terminal()
             first = await http.ws_connect(url + "/ws?width=120&height=40")
             second = await http.ws_connect(url + "/ws?width=120&height=40")
@@ -311,6 +318,8 @@ async def test_every_tab_sees_one_shared_simulated_robot_and_its_estop(tmp_path)
             async with http.post(url + "/estop", headers={"Origin": url, "X-Astiop": "estop"}) as r:
                 body = await r.json()
                 assert r.status == 200 and body["ok"], body
+            # stopped from the server's own process (no `astiop estop` started), then recorded
+            assert body["robot"] == "the robot was told to stop" and body["recorded"], body
             await read_until(second, two, r"E.STOPPED", timeout=30)
             settled = pose_x(two)
             await asyncio.sleep(2)

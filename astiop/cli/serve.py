@@ -7,6 +7,7 @@ import os
 import subprocess
 import sys
 import threading
+import time
 from pathlib import Path
 
 import typer
@@ -49,10 +50,16 @@ def _loopback() -> dict[str, str]:
 NODE_START_S = 60.0
 
 
-def _shared_simulator(st: CliState, mode: str) -> subprocess.Popen | None:
+# The shared simulator's own domain: never the robot's graph (a real base may listen on this
+# machine's domain). The highest of Linux's safe domain ids, the first found with no robot on it.
+SIM_DOMAINS = range(101, 88, -1)
+
+
+def _shared_simulator(st: CliState, mode: str) -> tuple[subprocess.Popen, int] | None:
     """With `--robot sim`, one simulated robot for every tab: `astiop sim node` (real ROS 2 nodes,
-    on the loopback) and the tabs on `--robot ros2 --ros2-transport rclpy`. None: each tab
-    simulates its own (`--sim per-tab`, or auto where ROS 2 is not installed)."""
+    on the loopback, on a domain of its own where no robot is) and the tabs on `--robot ros2
+    --ros2-transport rclpy` there. None: each tab simulates its own (`--sim per-tab`, or auto
+    where ROS 2 is not installed)."""
     if st.settings.robot.backend != "sim" or mode == "per-tab":
         return None
     from astiop.robot_programs.ros2_node.run import NodeSetupError, check_imports
@@ -64,11 +71,22 @@ def _shared_simulator(st: CliState, mode: str) -> subprocess.Popen | None:
             fail(f"--sim shared: {exc}")
         typer.echo(f"astiop serve: each tab simulates its own robot ({exc})", err=True)
         return None
+    said: list[str] = []
+    for domain in SIM_DOMAINS:
+        node = _start_node(st, domain, said)
+        if node is not None:
+            return node, domain
+        if not said or "already on" not in said[-1]:
+            break  # not a robot in its way: it did not start
+    fail("the shared simulator did not start: " + (said[-1] if said else "no output"))
+
+
+def _start_node(st: CliState, domain: int, said: list[str]) -> subprocess.Popen | None:
     sim = st.settings.sim
     argv = [sys.executable, "-m", "astiop", "sim", "node", "--seed", str(sim.seed)]
     node = subprocess.Popen(
         [*argv, "--speed", str(min(sim.speed, 20.0))],
-        env={**os.environ, **_loopback()},
+        env={**os.environ, **_loopback(), "ROS_DOMAIN_ID": str(domain)},
         stdin=subprocess.DEVNULL,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,
@@ -76,13 +94,49 @@ def _shared_simulator(st: CliState, mode: str) -> subprocess.Popen | None:
         start_new_session=True,  # Ctrl-C reaches the server, which ends the robot last
         preexec_fn=_ends_with_its_parent,
     )
-    said: list[str] = []
+    said.clear()
     up = threading.Event()
-    threading.Thread(target=_drain, args=(node, said, up), daemon=True).start()
-    if not up.wait(NODE_START_S) or node.poll() is not None:
-        _end_node(node)
-        fail("the shared simulator did not start: " + (said[-1] if said else "no output"))
-    return node
+    drain = threading.Thread(target=_drain, args=(node, said, up), daemon=True)
+    drain.start()
+    t0 = time.monotonic()
+    while not up.wait(0.1) and node.poll() is None and time.monotonic() - t0 < NODE_START_S:
+        pass
+    if up.is_set() and node.poll() is None:
+        return node
+    _end_node(node)
+    drain.join(5)  # its last lines, to say why
+    return None
+
+
+def _button_stops(st: CliState, env: dict[str, str]):
+    """The page's E-STOP button, from this process: a gateway to the tabs' robot made now and
+    kept warm, so a click sends the zero velocity at once (None: not reached this way; the
+    button starts `astiop estop`)."""
+    from astiop.robot.factory import make_robot_gateway, ros2_transport
+    from astiop.transports.base import BackendError
+
+    os.environ.update(env)  # the shared simulator's domain: before rclpy starts here
+    settings = st.settings
+    if env:  # the shared simulator: the tabs reach it over rclpy
+        settings = settings.model_copy(
+            update={"robot": settings.robot.model_copy(update={"backend": "ros2",
+                                                               "ros2_transport": "rclpy"})}
+        )  # fmt: skip
+    if settings.robot.backend != "ros2":
+        return None, None
+    try:
+        if ros2_transport(settings)[0] != "rclpy":
+            return None, None
+        gateway = make_robot_gateway(settings, None, who="serve", discover=False)
+    except BackendError as exc:
+        typer.echo(f"astiop serve: the E-STOP button runs astiop estop ({exc})", err=True)
+        return None, None
+    gateway.warm_estop()
+
+    def stop(who: str) -> list[str]:
+        return gateway.estop(who=who)
+
+    return stop, gateway
 
 
 def _ends_with_its_parent() -> None:
@@ -167,16 +221,20 @@ def serve(
 
     base = [sys.executable, "-m", "astiop", *_global_args(st)]
     robot, env = _robot_said(st), {}
-    node = _shared_simulator(st, sim_mode)
-    if node is not None:
+    shared = _shared_simulator(st, sim_mode)
+    node = shared[0] if shared is not None else None
+    if shared is not None:
         base += ["--robot", "ros2", "--ros2-transport", "rclpy"]  # the last --robot wins
-        robot, env = "simulator (shared by every tab; astiop sim node)", _loopback()
+        robot = f"simulator (shared by every tab; astiop sim node on ROS_DOMAIN_ID={shared[1]})"
+        env = {**_loopback(), "ROS_DOMAIN_ID": str(shared[1])}
+    stop_robot, button = _button_stops(st, env)
     config = ServeConfig(
         host=host,
         port=port,
         token=token,
         console_argv=base,
         estop_argv=[*base, "estop"],
+        stop_robot=stop_robot,
         db=Path(st.db_path),
         robot=robot,
         console_env=env,
@@ -198,5 +256,7 @@ def serve(
     except OSError as exc:
         fail(f"cannot listen on {host}:{port}: {exc.strerror or exc}")
     finally:
+        if button is not None:
+            button.close()
         if node is not None:
             _end_node(node)

@@ -152,6 +152,12 @@ def node(
         "--domains",
         help="Each robot un-namespaced on a domain of its own: ROS_DOMAIN_ID, then +1, +2, ….",
     ),
+    join: bool = typer.Option(
+        False,
+        "--join",
+        help="Start even where a robot of the same names is already on the domain (by default "
+        "it refuses: a simulator never speaks to a real base).",
+    ),
 ) -> None:
     """Run a simulated robot as real ROS 2 nodes on this machine's ROS domain, until Ctrl-C or
     SIGTERM: the ASTIbot (or a fleet of them in one warehouse, --robots N), or a TurtleBot3
@@ -168,11 +174,11 @@ def node(
             if given:
                 fail(f"{', '.join(given)}: only for --robot turtlebot3")
             if robots > 1 or prefix is not None or domains:
-                _serve_fleet(robots, prefix, domains, seed, speed, say)
+                _serve_fleet(robots, prefix, domains, seed, speed, say, join)
                 return
             from astiop.robot_programs.ros2_node.run import serve
 
-            serve(seed, speed, say)
+            serve(seed, speed, say, join)
             return
         if robots > 1 or prefix is not None or domains:
             fail("--robots, --prefix and --domains: only for --robot astibot")
@@ -186,12 +192,17 @@ def node(
             fail(f"--namespace '{namespace}' is not a ROS name like /tb3_1")
         from astiop.robot_programs.turtlebot3.run import serve as serve_tb3
 
-        serve_tb3(seed=seed, speed=speed, distro=distro, model=model, namespace=namespace, say=say)
+        serve_tb3(
+            seed=seed, speed=speed, distro=distro, model=model, namespace=namespace, say=say,
+            join=join,
+        )  # fmt: skip
     except NodeSetupError as exc:
         fail(str(exc))
 
 
-def _serve_fleet(robots: int, prefix, domains: bool, seed: int, speed: float, say) -> None:
+def _serve_fleet(
+    robots: int, prefix, domains: bool, seed: int, speed: float, say, join: bool
+) -> None:
     import os
     import re
 
@@ -210,7 +221,7 @@ def _serve_fleet(robots: int, prefix, domains: bool, seed: int, speed: float, sa
         if placed[-1] > MAX_DOMAIN_ID:
             fail(f"--domains: robot {robots} would be on domain {placed[-1]} (at most "
                  f"{MAX_DOMAIN_ID}): lower ROS_DOMAIN_ID or --robots")  # fmt: skip
-    serve_fleet(names, seed=seed, speed=speed, domains=placed, say=say)
+    serve_fleet(names, seed=seed, speed=speed, domains=placed, say=say, join=join)
 
 
 def _valid_namespace(text: str) -> bool:

@@ -67,11 +67,11 @@ class EstopLatch(_Host):
     def e_stopped(self) -> bool:
         return self.backend.e_stopped or self.latched
 
-    def estop(self, at: float | None = None) -> list[str]:
+    def estop(self, at: float | None = None, who: str | None = None) -> list[str]:
         """Stop the robot, then say it on its graph, then latch it for every process on this
         database; the steps that failed. `at`: when it was pressed (a press's later steps name
         the same press, and never undo a release made after it)."""
-        act = Act.here(self.who, at)
+        act = Act.here(who or self.who, at)
         failures = self.backend.estop()  # the robot first: nothing may delay it
         with self._latch_lock:  # the sampler's follow_latch must not undo it
             self._latch_seen = True
@@ -180,6 +180,11 @@ class EstopLatch(_Host):
             record = store.estop_record()
             by, at = record.get("released_by"), record.get("released_at")
         return Act(float(at), str(by), *_here()) if at is not None else None
+
+    def warm_estop(self) -> None:
+        """Make ready what the E-STOP sends, so a press later goes out at once (a server's
+        button: its publisher matched with the robot's base before anyone presses)."""
+        self.backend.warm_estop()
 
     def zero_now(self) -> None:
         """A zero velocity sent at once, nothing else (a fleet's E-STOP sends every robot's

@@ -108,6 +108,10 @@ class RobotBackend(ABC):
         other machines reach too; None: the store alone holds it."""
         return None
 
+    def warm_estop(self) -> None:
+        """Make ready, in the background, what the E-STOP sends (nothing sent now)."""
+        return None
+
     def robot_present(self) -> bool | None:
         """Whether any node other than astiop's stations is on the robot's graph now (None: not
         known to this transport)."""

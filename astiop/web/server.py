@@ -10,6 +10,7 @@ import logging
 import os
 import signal
 import time
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from importlib.resources import files
@@ -25,6 +26,7 @@ from astiop.web.pages import console_page, login_page
 
 log = logging.getLogger("astiop.serve")
 ESTOP_S = 60.0  # for `astiop estop` to reach the robot (its own timeouts are shorter)
+RECORD_S = 2.0  # the button's answer waits this long at most for the database's latch
 MAX_MESSAGE = 64 * 1024  # a browser's keystrokes and resizes are small
 STATIC = Path(str(files("textual_serve") / "static"))
 
@@ -40,6 +42,9 @@ class ServeConfig:
     robot: str  # said in the page's title and header
     console_env: dict[str, str] = field(default_factory=dict)
     max_consoles: int = 8
+    # the robot stopped from this process (who pressed it -> failures), where it can be:
+    # the button never waits for a new process
+    stop_robot: Callable[[str], list[str]] | None = None
     warm: bool = True  # a console started ahead, waiting for the next tab
 
 
@@ -52,6 +57,7 @@ class WebServer:
         self._db = ThreadPoolExecutor(1, thread_name_prefix="astiop-serve-db")
         self._store = None  # made on the executor's thread, used only there
         self._estop_lock = asyncio.Lock()
+        self._stopper = ThreadPoolExecutor(1, thread_name_prefix="astiop-serve-estop")
         self.spare: ConsoleProcess | None = None
 
     # --- who may ------------------------------------------------------------------------------
@@ -157,16 +163,33 @@ class WebServer:
             raise web.HTTPForbidden(text="not from this server's page")
         who = f"serve: browser at {self._address(request)}"
         started = time.monotonic()
-        latch = await self._read_latch(who)  # every process on this database stops now
+        stopped = None
+        if self.config.stop_robot is not None:  # the robot first, from this process, at once
+            stopped = asyncio.get_running_loop().run_in_executor(
+                self._stopper, self.config.stop_robot, who
+            )
+        try:  # then every process on this database; a database in trouble never holds it up
+            latch = await asyncio.wait_for(self._read_latch(who), RECORD_S)
+            recorded = ""
+        except asyncio.TimeoutError:
+            latch, recorded = {}, f"not latched in the database within {RECORD_S:g} s"
+        except Exception as exc:  # noqa: BLE001 - full, damaged, locked, read-only
+            latch, recorded = {}, f"not latched in the database: {exc}"
         latched_ms = (time.monotonic() - started) * 1000
-        async with self._estop_lock:  # one `astiop estop` at a time; the latch is already held
-            ok, said = await self._stop_robot()
-        log.warning("E-STOP from %s: latched in %.0f ms; %s", who, latched_ms, said)
-        body = _latch_said(latch)
-        body.update(ok=ok, robot=said, latched_ms=round(latched_ms, 1))
-        body["message"] = (
-            "E-STOP ENGAGED: " if ok else "E-STOP LATCHED, robot not reached: "
-        ) + said
+        if stopped is not None:
+            failures = await stopped
+            ok, said = not failures, "; ".join(failures) or "the robot was told to stop"
+        else:
+            async with self._estop_lock:  # one `astiop estop` at a time
+                ok, said = await self._stop_robot()
+        if recorded:
+            said += f" ({recorded})"
+        log.warning(
+            "E-STOP from %s: %s; %s", who, recorded or f"latched in {latched_ms:.0f} ms", said
+        )
+        body = _latch_said(latch) if latch else {"engaged": True}
+        body.update(ok=ok, robot=said, latched_ms=round(latched_ms, 1), recorded=not recorded)
+        body["message"] = ("E-STOP ENGAGED: " if ok else "E-STOP, robot not reached: ") + said
         return web.json_response(body, status=200 if ok else 502)
 
     async def _stop_robot(self) -> tuple[bool, str]:

@@ -9,6 +9,7 @@ from pathlib import Path
 from astiop.robot_programs.serving import (
     NodeSetupError,
     check_imports,
+    refuse_a_taken_graph,
     serve_until_signal,
     where,
 )
@@ -16,8 +17,9 @@ from astiop.robot_programs.serving import (
 __all__ = ["NodeSetupError", "check_imports", "serve", "serve_fleet"]
 
 
-def serve(seed: int, speed: float, say: Callable[[str], None]) -> None:
+def serve(seed: int, speed: float, say: Callable[[str], None], join: bool = False) -> None:
     check_imports()
+    refuse_a_taken_graph(["/cmd_vel"], join)
     from astiop.robot_programs.ros2_node.node import SimRobotNodes
 
     with tempfile.TemporaryDirectory(prefix="astiop-sim-node-") as folder:
@@ -31,10 +33,12 @@ def serve(seed: int, speed: float, say: Callable[[str], None]) -> None:
 
 
 def serve_fleet(
-    names: list[str], *, seed: int, speed: float, domains: list[int] | None, say
+    names: list[str], *, seed: int, speed: float, domains: list[int] | None, say, join=False
 ) -> None:
     """N ASTIbots in one warehouse, each under /NAME on this domain, or on domains[i]."""
     check_imports()
+    if not domains:  # (each robot on a domain of its own: their own domains, not this one)
+        refuse_a_taken_graph([f"/{n}/cmd_vel" for n in names], join)
     from astiop.robot_programs.ros2_node.fleet import SimFleetNodes
 
     with tempfile.TemporaryDirectory(prefix="astiop-sim-fleet-") as folder:

@@ -5,13 +5,26 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from astiop.robot_programs.serving import check_imports, serve_until_signal, where
+from astiop.robot_programs.serving import (
+    check_imports,
+    refuse_a_taken_graph,
+    serve_until_signal,
+    where,
+)
 
 
 def serve(
-    *, seed: int, speed: float, distro: str, model: str, namespace: str, say: Callable[[str], None]
+    *,
+    seed: int,
+    speed: float,
+    distro: str,
+    model: str,
+    namespace: str,
+    say: Callable[[str], None],
+    join: bool = False,
 ) -> None:
     check_imports()
+    refuse_a_taken_graph([f"{namespace.rstrip('/')}/cmd_vel"], join)
     from astiop.robot_programs.turtlebot3.node import TurtleBot3Nodes
 
     robot = TurtleBot3Nodes(seed=seed, speed=speed, distro=distro, model=model, namespace=namespace)

@@ -102,6 +102,18 @@ class RclpyEstop(_Host):
         self._estop.said(failures)
         return failures
 
+    def warm_estop(self) -> None:
+        def publisher() -> None:
+            deadline = time.monotonic() + 60.0
+            while not self._closed.is_set() and time.monotonic() < deadline:
+                try:
+                    self._publisher()
+                    return
+                except Exception:  # noqa: BLE001 - the base not discovered yet
+                    time.sleep(0.2)
+
+        threading.Thread(target=publisher, name="estop-warm", daemon=True).start()
+
     def _still_held(self) -> bool:
         """The E-STOP still holds (a release made since must not be undone by its late steps)."""
         return self.inflight.held
