@@ -205,3 +205,10 @@ def test_exported_nav2_masks_have_the_zones_pixels(tmp_path):
     assert server["topic_name"] == info["mask_topic"] and server["yaml_filename"].endswith(
         "speed_mask.yaml"
     )
+
+
+def test_asked_in_chat_a_place_inside_a_keepout_zone_is_answered_with_the_zone(tmp_path):
+    db = tmp_path / "z.db"
+    cli(db, "add", "ship_block", "--keepout", "36,2", "39,2", "39,6", "36,6")
+    r = run_cli("--db", str(db), "--model", "rules", "chat", "can the robot go to shipping?")
+    assert "NOT RUN" in r.stdout + r.stderr and "keepout zone 'ship_block'" in r.stdout + r.stderr
