@@ -390,3 +390,28 @@ async def test_the_console_records_the_session_and_stops_from_the_palette(tmp_pa
         assert "Start recording" in [c.title for c in app.get_system_commands(app.screen)]
     counts = summary(path)
     assert counts.get("/robot_pose", 0) >= 1 and counts.get("/battery_status", 0) >= 1
+
+
+async def test_the_maps_keepout_and_speed_zones_are_drawn_in_their_colours_and_named(tmp_path):
+    from astiop.store import Store
+    from astiop.widgets.map_view import KEEPOUT, SLOW
+
+    store = Store(tmp_path / "console.db")  # the console's database (tui_helpers)
+    store.add_zone("loading_bay", "keepout", [(31, 1), (38, 1), (38, 6), (31, 6)])
+    store.add_zone("packing", "speed", [(2, 19), (6, 19), (6, 23), (2, 23)], 0.3)
+    store.close()
+    app = console(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.pause()
+        view = app.screen.query_one(WarehouseMapView)
+        text = map_text(view)
+        assert "loading_bay" in text and "packing" in text
+        assert "keepout" in text and "speed limit" in text  # the legend
+        px = view._pixels
+        s, x0, y0 = view._scale(px.shape[1], px.shape[0])
+        top = view._top(px, s)
+
+        def at(x, y):
+            return px[top - 1 - math.floor((y - y0) * s), math.floor((x - x0) * s)]
+
+        assert at(34.5, 3.5) == KEEPOUT and at(4.0, 21.0) == SLOW and at(25.0, 3.5) != KEEPOUT

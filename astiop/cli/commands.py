@@ -25,6 +25,7 @@ from astiop.cli import (
     ros2,
     serve,
     sim,
+    zones,
 )
 from astiop.cli.common import CliState
 
@@ -36,6 +37,7 @@ app = typer.Typer(
 )
 app.add_typer(config_cmd.app, name="config")
 app.add_typer(locations.app, name="locations")
+app.add_typer(zones.app, name="zones")
 app.add_typer(sim.app, name="sim")
 app.add_typer(bench.app, name="bench")
 app.add_typer(export.app, name="export")

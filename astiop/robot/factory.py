@@ -31,6 +31,7 @@ def make_safety(settings: Settings, store: Store | None, profile=None) -> Safety
         geofence=bounds,
         confirm_actuation=settings.robot.confirm_actuation,
         locate=locate,
+        zones=store.list_zones if store is not None else None,
     )
 
 

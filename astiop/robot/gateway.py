@@ -50,6 +50,8 @@ class RobotGateway(EstopLatch, GraphReading):
         sends it at once itself: twice, every step went out twice)."""
         self.backend = backend
         self.safety = safety or SafetyPolicy()
+        if self.safety.where is None:  # a speed or keepout zone acts on where the robot is
+            self.safety.where = self._pose_now
         self.timeout_s = timeout_s
         self.store = store
         self.who = who
@@ -134,6 +136,10 @@ class RobotGateway(EstopLatch, GraphReading):
         ):
             self.use_map()  # its /map came in, or its make was recognised on a fuller graph
         return self.backend.state().with_e_stop(latched)
+
+    def _pose_now(self) -> tuple[float, float, float] | None:
+        pose = self.backend.state().pose
+        return (pose.x, pose.y, pose.theta) if pose is not None else None
 
     def events_since(self, seq: int) -> list[RobotEvent]:
         """The robot's events after `seq`. Each is kept in the store the first time any reader

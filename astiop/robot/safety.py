@@ -9,12 +9,16 @@ from dataclasses import dataclass, replace
 from astiop.ros2.render import POSE_STAMPED  # a goal on a navigator's goal topic
 from astiop.ros2.validation import Checked, always_allowed
 from astiop.warehouse import GEOFENCE_MARGIN, fence_text, inside_fence
+from astiop.zones import MapZone, zone_at
 
 # A velocity command is clamped by its type, whatever the topic (a namespace's /tb3_1/cmd_vel)
 VELOCITY_TYPES = {"geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped"}
 POSE_WITH_COVARIANCE = "geometry_msgs/msg/PoseWithCovarianceStamped"
 # |q| may differ from 1 by this much (a heading printed to a few digits still passes)
 UNIT_QUATERNION_TOLERANCE = 1e-3
+# Teleop toward a keepout zone is refused when the point this far ahead of the robot's centre
+# (its half length and a margin, plus half a second at the commanded speed) is inside it
+ZONE_LOOKAHEAD_M, ZONE_LOOKAHEAD_S = 0.45, 0.5
 
 
 @dataclass(frozen=True)
@@ -46,6 +50,20 @@ class SafetyPolicy:
     confirm_actuation: bool = True
     # where a named location is (x, y), so a goal by name is fenced like one by coordinates
     locate: Callable[[str], tuple[float, float] | None] | None = None
+    # the zones of the robot's map (the store's), read at each review; where the robot is
+    # (x, y, theta), read only for a velocity command while there are zones
+    zones: Callable[[], list[MapZone]] | None = None
+    where: Callable[[], tuple[float, float, float] | None] | None = None
+
+    def _zones(self) -> list[MapZone]:
+        return self.zones() if self.zones is not None else []
+
+    def keepout_at(self, x: float, y: float) -> MapZone | None:
+        return zone_at(self._zones(), x, y, "keepout")
+
+    def _zone_reason(self, x: float, y: float) -> str:
+        zone = self.keepout_at(x, y)
+        return f"goal ({x:.2f}, {y:.2f}) is inside the {zone.words}" if zone else ""
 
     def inside_geofence(self, x: float, y: float) -> bool:
         if self.geofence is None:
@@ -84,12 +102,21 @@ class SafetyPolicy:
             msg = {**msg, "twist": twist}
         elif velocity:
             msg, notes = self._clamp_twist(msg, notes)
+        if velocity:
+            twist = msg.get("twist", msg)
+            twist, notes, why = self._zone_twist(twist, notes)
+            if why:
+                return Review(False, why, checked, False)
+            msg = {**msg, "twist": twist} if "twist" in msg else twist
         elif cmd.key == ("service", "call") and base == "goto_position":
             where = self.locate(msg["name"]) if msg.get("name") and self.locate else None
             x, y = where if where else (msg.get("x", 0.0), msg.get("y", 0.0))
-            if (where or not msg.get("name")) and not self.inside_geofence(x, y):
-                label = f"'{msg['name']}' at " if where else ""
-                return Review(False, label + self._fence_reason(x, y), checked, False)
+            if where or not msg.get("name"):
+                inside = self.inside_geofence(x, y)
+                why = self._zone_reason(x, y) if inside else self._fence_reason(x, y)
+                if why:
+                    label = f"'{msg['name']}' at " if where else ""
+                    return Review(False, label + why, checked, False)
         elif cmd.key == ("action", "send_goal") or (
             cmd.key == ("topic", "pub") and checked.type == POSE_STAMPED  # a /goal_pose
         ):
@@ -119,6 +146,8 @@ class SafetyPolicy:
         p = pose["pose"]["position"]
         if not self.inside_geofence(p["x"], p["y"]):
             return self._fence_reason(p["x"], p["y"])
+        if why := self._zone_reason(p["x"], p["y"]):
+            return why
         q = pose["pose"]["orientation"]
         norm = math.hypot(q["x"], q["y"], q["z"], q["w"])  # hypot: no overflow at 1e308
         if not abs(norm - 1.0) <= UNIT_QUATERNION_TOLERANCE:
@@ -127,6 +156,35 @@ class SafetyPolicy:
                 "for a heading θ use {z: sin(θ/2), w: cos(θ/2)}"
             )
         return ""
+
+    def _zone_twist(self, twist: dict, notes: list[str]) -> tuple[dict, list[str], str]:
+        """A velocity within the speed zone the robot is in or about to enter, and why it may
+        not be sent: it would drive the robot into a keepout zone (turning stays allowed, and
+        so does leaving one the robot is inside)."""
+        zones = self._zones()
+        pose = self.where() if zones and self.where is not None else None
+        if pose is None:
+            return twist, notes, ""
+        x, y, theta = pose
+        vx, vy = twist["linear"]["x"], twist["linear"]["y"]
+        speed = math.hypot(vx, vy)
+        ahead = (x, y)
+        if speed > 1e-6:
+            heading = theta + math.atan2(vy, vx)
+            reach = ZONE_LOOKAHEAD_M + speed * ZONE_LOOKAHEAD_S
+            ahead = (x + reach * math.cos(heading), y + reach * math.sin(heading))
+            into = zone_at(zones, *ahead, "keepout")
+            if into is not None and not into.contains(x, y):
+                return twist, notes, f"teleop refused: that way the robot enters the {into.words}"
+        slow = [z for z in (zone_at(zones, x, y, "speed"), zone_at(zones, *ahead, "speed")) if z]
+        if slow and speed > (limit := min(z.speed for z in slow)):
+            zone = min(slow, key=lambda z: z.speed)
+            s = limit / speed
+            lin = {**twist["linear"], "x": vx * s, "y": vy * s}
+            twist = {**twist, "linear": lin}
+            notes = [*notes, f"linear speed clamped {speed:.2f} -> {limit:.2f} m/s in the "
+                     f"{zone.words}"]  # fmt: skip
+        return twist, notes, ""
 
     def _clamp_twist(self, msg: dict, notes: list[str]) -> tuple[dict, list[str]]:
         twist, more = clamp_twist(msg, self.max_linear, self.max_angular)

@@ -178,9 +178,11 @@ class DashboardScreen(ConsoleScreen):
     def on_screen_resume(self) -> None:
         # on first show too; locations may have changed on the Locations screen, and events
         # may have come while another screen was shown
-        self.query_one(WarehouseMapView).set_locations(
+        view = self.query_one(WarehouseMapView)
+        view.set_locations(
             [Place(loc.name, loc.x, loc.y) for loc in self.services.store.list_locations()]
         )
+        view.set_zones(self.services.store.list_zones())  # added from the CLI meanwhile, too
         self._show_events()
 
     def on_robot_state_sampled(self, msg: RobotStateSampled) -> None:

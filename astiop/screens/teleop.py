@@ -59,9 +59,9 @@ class TeleopScreen(ConsoleScreen):
         yield Footer()
 
     def on_screen_resume(self) -> None:
-        self.query_one(WarehouseMapView).set_locations(
-            [(loc.x, loc.y) for loc in self.services.store.list_locations()]
-        )
+        view = self.query_one(WarehouseMapView)
+        view.set_locations([(loc.x, loc.y) for loc in self.services.store.list_locations()])
+        view.set_zones(self.services.store.list_zones())  # where teleop may not go or slows
 
     def on_mount(self) -> None:
         self._show_help()

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -21,10 +22,14 @@ from astiop.sim.controller import (
 from astiop.sim.geometry import segments_hit_boxes, wrap_angle
 from astiop.sim.goal import Goal, GoalResult, Leg
 from astiop.sim.path_planner import PlanningError
+from astiop.zones import MapZone, zone_at
 
 ROBOT_LENGTH, ROBOT_WIDTH = ASTIBOT_BODY.length, ASTIBOT_BODY.width
 INFLATION = ASTIBOT_BODY.inflation  # circumscribed radius + margin
 BLOCKED_GIVE_UP_S = 60.0
+# a speed zone is obeyed from this far ahead (and half a second at the commanded speed more),
+# so the base has slowed down by the time it is inside
+ZONE_AHEAD_M, ZONE_AHEAD_S = 0.3, 1.0
 # Another robot of the fleet in the way: wait for it; plan around it every YIELD_REPLAN_S;
 # give the goal up (and say so) after ROBOT_GIVE_UP_S. "In the way" is a robot seen within
 # YIELD_GAP_M of the base's front, in its lane toward its next waypoint.
@@ -46,6 +51,42 @@ class GoalError(ValueError):
 
 
 class NavigationMixin:
+    # keepout and speed zones of the map, as plain geometry; `zone_source` (the store's, handed
+    # by whoever runs the simulator) is read again at each goal
+    zones: tuple[MapZone, ...] = ()
+    zone_source: Callable[[], Sequence[MapZone]] | None = None
+
+    def set_zones(self, zones: Sequence[MapZone]) -> None:
+        with self.lock:
+            self.zones = tuple(zones)
+            keepout = [z.corners for z in self.zones if z.kind == "keepout"]
+            self.path_planner.set_keepout(keepout, self.chassis.inflation)
+
+    def _take_zones(self) -> None:
+        if self.zone_source is None:
+            return
+        try:
+            zones = self.zone_source()
+        except Exception:  # the source's own errors (a busy database): the last zones hold
+            return
+        self.set_zones(zones)
+
+    def _zone_speed(self, target: tuple[float, float, float]) -> tuple[float, float, float]:
+        """A velocity within the limit of the speed zone the base is in or about to enter."""
+        vx, vy, wz = target
+        speed = math.hypot(vx, vy)
+        if not self.zones or speed < 1e-6:
+            return target
+        x, y, theta = self.pose
+        heading = theta + math.atan2(vy, vx)
+        reach = ZONE_AHEAD_M + speed * ZONE_AHEAD_S
+        ahead = (x + reach * math.cos(heading), y + reach * math.sin(heading))
+        found = [zone_at(self.zones, x, y, "speed"), zone_at(self.zones, *ahead, "speed")]
+        limit = min((z.speed for z in found if z is not None), default=math.inf)
+        if speed <= limit:
+            return target
+        return (vx * limit / speed, vy * limit / speed, wz)
+
     def check_goal(self, x: float, y: float, theta: float) -> None:
         """Raise GoalError if the robot could never stand at this pose."""
         if not all(math.isfinite(v) for v in (x, y, theta)):
@@ -55,6 +96,9 @@ class NavigationMixin:
             raise GoalError(
                 f"goal ({x:.2f}, {y:.2f}) is outside the map (x {x0:g}..{x1:g}, y {y0:g}..{y1:g} m)"
             )
+        zone = zone_at(self.zones, x, y, "keepout")
+        if zone is not None:
+            raise GoalError(f"goal ({x:.2f}, {y:.2f}) is inside the {zone.words}")
         base = self.chassis
         hit = self.world.footprint_collides(x, y, theta, base.length, base.width, margin=0.05)
         if hit:
@@ -69,6 +113,7 @@ class NavigationMixin:
         return plan.waypoints
 
     def goto(self, x: float, y: float, theta: float, name: str = "") -> Goal:
+        self._take_zones()  # outside the lock: the source may wait on its database
         with self.lock:
             self._check_can_move()
             self.check_goal(x, y, theta)
@@ -81,6 +126,7 @@ class NavigationMixin:
             return self._start_goal(name or f"({x:.2f}, {y:.2f})", [leg])
 
     def dock(self) -> Goal:
+        self._take_zones()
         with self.lock:
             self._check_can_move()
             st = self.map.station(self.dock_name)

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from astiop.sim.geometry import inflate, path_length, points_in_boxes, segments_hit_boxes
+from astiop.sim.keepout import Keepout
 
 NODE_OFFSET = 0.02
 
@@ -59,6 +60,23 @@ class PathPlanner:
         i, j = np.triu_indices(n, k=1)
         blocked = segments_hit_boxes(nodes[i], nodes[j], self.boxes).any(axis=1)
         self._pairs_i, self._pairs_j = i[~blocked], j[~blocked]
+        self.set_keepout(())
+
+    def set_keepout(self, polygons, margin: float = 0.0) -> None:
+        """Keepout zones no plan may cross (nor pass closer than `margin` to)."""
+        key = (tuple(tuple(map(tuple, p)) for p in polygons), margin)
+        if getattr(self, "_keepout_key", None) == key:
+            return
+        self._keepout_key = key
+        self.keepout = Keepout(polygons, margin)
+        if not self.keepout:
+            self._keepout_free = np.ones(len(self.nodes), dtype=bool)
+            self._keepout_pairs = np.ones(len(self._pairs_i), dtype=bool)
+            return
+        self._keepout_free = self.keepout.status(self.nodes).max(axis=1) == 0
+        self._keepout_pairs = ~self.keepout.blocks(
+            self.nodes[self._pairs_i], self.nodes[self._pairs_j]
+        )
 
     def _free(self, points: np.ndarray, boxes: np.ndarray) -> np.ndarray:
         x0, y0, x1, y1 = self.bounds
@@ -90,20 +108,21 @@ class PathPlanner:
         # boxes that contain the start (or goal) are ignored on edges leaving it
         inside = points_in_boxes(ends, all_boxes)
         static_nodes = self.nodes
-        extra_nodes = _corners(extra, NODE_OFFSET)
+        extra_nodes = np.concatenate([_corners(extra, NODE_OFFSET), self.keepout.nodes])
         if len(extra_nodes):
             extra_nodes = extra_nodes[self._free(extra_nodes, all_boxes)]
         if len(extra):
             keep_static = ~points_in_boxes(static_nodes, extra).any(axis=1)
         else:
             keep_static = np.ones(len(static_nodes), dtype=bool)
+        keep_static = keep_static & self._keepout_free
         nodes = np.concatenate([static_nodes, extra_nodes, ends])
         n_static, n = len(static_nodes), len(static_nodes) + len(extra_nodes) + 2
         s_idx, g_idx = n - 2, n - 1
         edges_i, edges_j = [], []
         # cached static pairs, minus those cut by new obstacles
         pi, pj = self._pairs_i, self._pairs_j
-        ok = keep_static[pi] & keep_static[pj]
+        ok = keep_static[pi] & keep_static[pj] & self._keepout_pairs
         if len(extra):
             ok &= ~segments_hit_boxes(static_nodes[pi], static_nodes[pj], extra).any(axis=1)
         edges_i.append(pi[ok])
@@ -122,6 +141,10 @@ class PathPlanner:
         both = ((ii == s_idx) & (jj == g_idx)) | ((ii == g_idx) & (jj == s_idx))
         hits[both] &= ~(inside[0] | inside[1])
         free = ~hits.any(axis=1)
+        if self.keepout:
+            status = self.keepout.status(ends)
+            relax = self.keepout.relax_for(ii, jj, {s_idx: status[0], g_idx: status[1]})
+            free[free] = ~self.keepout.blocks(nodes[ii[free]], nodes[jj[free]], relax[free])
         edges_i.append(ii[free])
         edges_j.append(jj[free])
         ei, ej = np.concatenate(edges_i), np.concatenate(edges_j)
@@ -150,6 +173,12 @@ class PathPlanner:
             i0, i1 = int((bx0 - x0) / res), int(math.ceil((bx1 - x0) / res))
             j0, j1 = int((by0 - y0) / res), int(math.ceil((by1 - y0) / res))
             occ[max(i0, 0) : max(i1, 0), max(j0, 0) : max(j1, 0)] = True
+
+        if self.keepout:
+            cx = x0 + (np.arange(nx) + 0.5) * res
+            cy = y0 + (np.arange(ny) + 0.5) * res
+            gx, gy = np.meshgrid(cx, cy, indexing="ij")
+            occ |= self.keepout.occupied(gx, gy, self.keepout.status(ends))
 
         def cell(p):
             return (
@@ -199,14 +228,19 @@ class PathPlanner:
         pts.append(goal)
         return self._smooth(pts, boxes[~containing])
 
-    @staticmethod
-    def _smooth(pts, boxes: np.ndarray):
+    def _smooth(self, pts, boxes: np.ndarray):
         out = [pts[0]]
         i = 0
+        ends = self.keepout.status(np.array([pts[0], pts[-1]])) if self.keepout else None
         while i < len(pts) - 1:
             j = len(pts) - 1
             while j > i + 1:
-                seg = segments_hit_boxes(np.array([pts[i]]), np.array([pts[j]]), boxes)
+                a, b = np.array([pts[i]]), np.array([pts[j]])
+                seg = segments_hit_boxes(a, b, boxes)
+                if not seg.any() and ends is not None:
+                    let_off = {0: ends[0], len(pts) - 1: ends[1]}
+                    relax = self.keepout.relax_for(np.array([i]), np.array([j]), let_off)
+                    seg = self.keepout.blocks(a, b, relax)
                 if not seg.any():
                     break
                 j -= 1

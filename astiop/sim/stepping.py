@@ -77,6 +77,8 @@ class SteppingHost(Protocol):
 
     def _navigate(self) -> tuple[float, float, float]: ...
 
+    def _zone_speed(self, target: tuple[float, float, float]) -> tuple[float, float, float]: ...
+
     def _check_path(self) -> None: ...
 
     def _finish(self, status: str, message: str) -> None: ...
@@ -196,6 +198,7 @@ class SteppingMixin(_Host):
             self._target = achievable_velocity(vx, vy, wz, self.params)
         else:
             self._target = (0.0, 0.0, 0.0)
+        self._target = self._zone_speed(self._target)
         w = wheel_speeds(*self._v, self.params)
         self._motor_power = self.chassis.motor_power(w)
         self.battery.update(dt, self._motor_power, on_charger=self.docked())

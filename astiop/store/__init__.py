@@ -29,6 +29,7 @@ from astiop.store.schema import (
     SCHEMA_VERSION,
     check_database_file,
 )
+from astiop.store.zones import ZoneTables
 from astiop.warehouse import Rect, default_map
 
 BUSY_TIMEOUT_MS = 10_000  # how long a write waits for another process's
@@ -55,7 +56,15 @@ def _read_only_uri(path: Path) -> str:
     return f"{path.as_uri()}?mode=ro"
 
 
-class Store(LocationTables, JournalTables, BenchTables, ApprovalTables, MissionTables, LeaseTables):
+class Store(
+    LocationTables,
+    ZoneTables,
+    JournalTables,
+    BenchTables,
+    ApprovalTables,
+    MissionTables,
+    LeaseTables,
+):
     """One connection per thread, all to the same file."""
 
     def __init__(self, path: Path | str, bounds: Rect | None = None):

@@ -277,6 +277,25 @@ def _migrate_v11(conn: sqlite3.Connection) -> None:
     )
 
 
+def _migrate_v12(conn: sqlite3.Connection) -> None:
+    # Zones belong to a map with its places: keepout (no goal inside, no plan through) and speed
+    # (a lower limit inside, m/s); corners a JSON list of [x, y] in the map frame.
+    _run(
+        conn,
+        """
+        CREATE TABLE zones (
+            id INTEGER PRIMARY KEY,
+            map TEXT NOT NULL DEFAULT 'warehouse',
+            name TEXT NOT NULL COLLATE NOCASE,
+            kind TEXT NOT NULL CHECK (kind IN ('keepout', 'speed')),
+            corners TEXT NOT NULL, speed REAL,
+            created_at REAL NOT NULL, updated_at REAL NOT NULL,
+            UNIQUE (map, name)
+        );
+        """,
+    )
+
+
 # Ordered; the database's PRAGMA user_version counts how many have run. Each runs inside one
 # transaction (Store._run_migrations): on a plain connection, with execute only.
 MIGRATIONS = [
@@ -291,6 +310,7 @@ MIGRATIONS = [
     _migrate_v9,
     _migrate_v10,
     _migrate_v11,
+    _migrate_v12,
 ]
 SCHEMA_VERSION = len(MIGRATIONS)
 _OUR_TABLES = {
@@ -308,6 +328,7 @@ _OUR_TABLES = {
     "leases",
     "robot_estops",
     "robot_estop_releases",
+    "zones",
 }
 
 

@@ -20,27 +20,10 @@ from textual.widget import Widget
 
 from astiop.transports.state import OccupancyGrid, RobotState
 from astiop.warehouse import WarehouseMap
+from astiop.widgets.map_pixels import body_points, line_runs
+from astiop.zones import MapZone, points_in_polygon
 
 FOLLOW_HALF_M = 12.0  # with no map: metres shown either side of the robot
-
-
-def _body_points(x: float, y: float, th: float, length: float = 1.0, width: float = 0.735):
-    c, s = math.cos(th), math.sin(th)
-    u = np.linspace(-length / 2, length / 2, 6)
-    v = np.linspace(-width / 2, width / 2, 5)
-    gu, gv = (a.ravel() for a in np.meshgrid(u, v))
-    return x + gu * c - gv * s, y + gu * s + gv * c
-
-
-def _line_runs(lines: np.ndarray) -> list[tuple[int, int]]:
-    """Sorted line numbers (repeats allowed) as runs of consecutive lines: (first, count)."""
-    runs: list[tuple[int, int]] = []
-    for y in np.unique(lines).tolist():
-        if runs and runs[-1][0] + runs[-1][1] == y:
-            runs[-1] = (runs[-1][0], runs[-1][1] + 1)
-        else:
-            runs.append((y, 1))
-    return runs
 
 
 # palette index -> colour
@@ -56,13 +39,18 @@ PALETTE = [
     "#22c55e",
     "#facc15",
     "#c084fc",
+    "#7f1d1d",
+    "#713f12",
 ]
 FREE, WALL, SHELF, STATION, ZONE, OBSTACLE, PLAN, LIDAR, ROBOT, HEADING, LABEL = range(11)
+KEEPOUT, SLOW = 11, 12  # the map's keepout and speed zones (astiop zones)
+AREAS = (ZONE, KEEPOUT, SLOW)  # drawn under names, which keep their colour
+_N = len(PALETTE)
 _STYLES = {
-    (t, b): Style(color=PALETTE[t], bgcolor=PALETTE[b]) for t in range(11) for b in range(11)
+    (t, b): Style(color=PALETTE[t], bgcolor=PALETTE[b]) for t in range(_N) for b in range(_N)
 }
 NAME_COLOUR = "#e5e7eb"
-_NAME_STYLES = {b: Style(color=NAME_COLOUR, bgcolor=PALETTE[b]) for b in (FREE, ZONE)}
+_NAME_STYLES = {b: Style(color=NAME_COLOUR, bgcolor=PALETTE[b]) for b in (FREE, *AREAS)}
 _LEGEND_TEXT = Style(color="#9ca3af", bgcolor=PALETTE[FREE])
 _BLANK = Style(bgcolor=PALETTE[FREE])
 _SWATCHES = [Style(color=c, bgcolor=PALETTE[FREE]) for c in PALETTE]
@@ -84,7 +72,9 @@ class _Name(NamedTuple):
     inside: bool = False
 
 
-def legend_items(geometry, markers: bool, what: str = "locations") -> list[tuple[int, str]]:
+def legend_items(
+    geometry, markers: bool, what: str = "locations", zones: tuple[MapZone, ...] = ()
+) -> list[tuple[int, str]]:
     """What the view draws, as (palette index, what it is): only what this geometry can show."""
     items = [(ROBOT, "robot"), (HEADING, "heading"), (PLAN, "path"), (LIDAR, "LiDAR hits")]
     items.append((OBSTACLE, "obstacles seen"))
@@ -92,6 +82,10 @@ def legend_items(geometry, markers: bool, what: str = "locations") -> list[tuple
         items += [(WALL, "walls"), (SHELF, "racks"), (STATION, "stations"), (ZONE, "zones")]
     elif isinstance(geometry, OccupancyGrid):
         items.append((WALL, "occupied (/map)"))
+    if any(z.kind == "keepout" for z in zones):
+        items.append((KEEPOUT, "keepout"))
+    if any(z.kind == "speed" for z in zones):
+        items.append((SLOW, "speed limit"))
     if markers:
         items.append((LABEL, what))
     return items
@@ -107,6 +101,7 @@ class WarehouseMapView(Widget):
         self.robot_state: RobotState | None = None
         self.places: list[Place] = []  # named locations, drawn as markers with their names
         self.locations: list[tuple[float, float]] = []  # every marker, named or not
+        self.zones: tuple[MapZone, ...] = ()  # the map's keepout and speed zones
         self._base: np.ndarray | None = None
         self._pixels: np.ndarray | None = None
         self._raster_size = (0, 0)
@@ -121,6 +116,13 @@ class WarehouseMapView(Widget):
         self._base = self._pixels = None
         self._legend_width = -1
         self.refresh()
+
+    def set_zones(self, zones: list[MapZone]) -> None:
+        if tuple(zones) != self.zones:
+            self.zones = tuple(zones)
+            self._base = self._pixels = None
+            self._legend_width = -1
+            self.refresh()
 
     def set_geometry(self, geometry) -> None:
         if geometry is not self.geometry:
@@ -156,7 +158,7 @@ class WarehouseMapView(Widget):
         if len(rows):
             # the changed lines alone: scan noise flips a few pixels far apart, and one region
             # spanning them redrew most of the map each sample
-            self.refresh(*(Region(0, y0, w, n) for y0, n in _line_runs(rows // 2)))
+            self.refresh(*(Region(0, y0, w, n) for y0, n in line_runs(rows // 2)))
 
     # -- the legend -----------------------------------------------------------------------
     def _legend_lines(self, w: int) -> list[list[Segment]]:
@@ -168,7 +170,8 @@ class WarehouseMapView(Widget):
                 self._legend.append([Segment(note[:w], _LEGEND_TEXT)])
             line: list[Segment] = []
             used = 0
-            for value, what in legend_items(self.geometry, bool(self.locations), self.markers_are):
+            markers = bool(self.locations)
+            for value, what in legend_items(self.geometry, markers, self.markers_are, self.zones):
                 cells = len(what) + 4  # swatch, space, name, two spaces
                 if line and used + cells - 2 > w:
                     self._legend.append(line)
@@ -214,6 +217,9 @@ class WarehouseMapView(Widget):
         if isinstance(geo, WarehouseMap):
             for zone in geo.zones:
                 self._fill_rect(px, zone.rect, ZONE, s, x0, y0)
+        if self.zones:
+            self._fill_zones(px, s, x0, y0)
+        if isinstance(geo, WarehouseMap):
             for kind, rect in geo.static_rects:
                 value = (
                     WALL if kind in ("wall", "pillar") else SHELF if kind == "shelf" else STATION
@@ -229,6 +235,17 @@ class WarehouseMapView(Widget):
             self._plot(px, xs, ys, LABEL, s, x0, y0)
         self._names = self._place_names(px, s, x0, y0)
         return px
+
+    def _fill_zones(self, px: np.ndarray, s: float, x0: float, y0: float) -> None:
+        """Each pixel whose centre is inside a zone, in its kind's colour (keepout over speed)."""
+        top = self._top(px, s)
+        cols = np.arange(px.shape[1])
+        rows = np.arange(px.shape[0])
+        gx, gy = np.meshgrid(x0 + (cols + 0.5) / s, y0 + (top - rows - 0.5) / s)
+        for zone in sorted(self.zones, key=lambda z: z.kind == "keepout"):
+            px[points_in_polygon(gx, gy, zone.corners)] = (
+                KEEPOUT if zone.kind == "keepout" else SLOW
+            )
 
     def _plot(self, px, xs, ys, value, s, x0, y0) -> None:
         full_h, w = px.shape
@@ -262,7 +279,7 @@ class WarehouseMapView(Widget):
             self._plot(
                 px, x + r * np.cos(ang[finite]), y + r * np.sin(ang[finite]), LIDAR, s, x0, y0
             )
-        bx, by = _body_points(x, y, th)
+        bx, by = body_points(x, y, th)
         self._plot(px, bx, by, ROBOT, s, x0, y0)
         self._plot(px, [x + 0.8 * math.cos(th)], [y + 0.8 * math.sin(th)], HEADING, s, x0, y0)
         return px
@@ -274,6 +291,9 @@ class WarehouseMapView(Widget):
         if isinstance(geo, WarehouseMap):
             names += [_Name(st.name, st.rect) for st in geo.stations]
             names += [_Name(z.name, z.rect, inside=True) for z in geo.zones]
+        for z in self.zones:
+            xs, ys = zip(*z.corners)
+            names.append(_Name(z.name, (min(xs), min(ys), max(xs), max(ys)), inside=True))
         written = {n.text for n in names}
         names += [_Name(p.name, (p.x, p.y, p.x, p.y)) for p in self.places if p.name not in written]
         return names
@@ -283,7 +303,8 @@ class WarehouseMapView(Widget):
         nowhere is left out."""
         rows, w = px.shape[0] // 2, px.shape[1]
         top = self._top(px, s)
-        drawn = (px[0::2] != FREE) & (px[0::2] != ZONE) | (px[1::2] != FREE) & (px[1::2] != ZONE)
+        floor = (FREE, *AREAS)
+        drawn = ~np.isin(px[0::2], floor) | ~np.isin(px[1::2], floor)
         markers = (px[0::2] == LABEL) | (px[1::2] == LABEL)
         taken = np.zeros((rows, w), dtype=bool)
         out: dict[int, dict[int, str]] = {}
@@ -351,7 +372,7 @@ class WarehouseMapView(Widget):
             ch = names.get(x)
             if ch is not None and not ({t, b} & {ROBOT, HEADING}):
                 # a name over a zone keeps the zone's colour; elsewhere it is written on the floor
-                style = _NAME_STYLES[ZONE if t == b == ZONE else FREE]
+                style = _NAME_STYLES[t if t == b and t in AREAS else FREE]
             else:
                 ch, style = "▀", _STYLES[(t, b)]
             if style is not run_style and run:

@@ -35,6 +35,8 @@ class SimBackend(SimVerbs, RobotBackend):
         `stepped_elsewhere` its fleet's: `sim/fleet.py`); else waiting steps it."""
         self.sim = sim
         self.store = store
+        if store is not None:  # the map's zones, read again at each goal: plain geometry
+            sim.zone_source = store.list_zones
         self.realtime = realtime or stepped_elsewhere
         own = realtime and not stepped_elsewhere
         self._runner = SimRunner(sim, speed=speed) if own else None
