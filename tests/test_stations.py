@@ -6,6 +6,7 @@ cannot be written never keeps the stop from the robot; no outside agent releases
 
 from __future__ import annotations
 
+import contextlib
 import os
 import re
 import sqlite3
@@ -219,3 +220,61 @@ def test_a_release_after_a_press_is_never_undone_by_the_press_and_all_agree(tmp_
             assert not _robot_holds(client), (delay, said, released.stdout)
             out = _run(station, "exec", "--dry-run", "ros2 service call /undock " + TRIGGER)
             assert out.returncode == 0 and out.stdout.startswith("valid"), (delay, out.stdout)
+
+
+@pytest.mark.slow
+@pytest.mark.ros
+def test_a_hung_robot_of_the_fleet_is_named_and_stopped_once_it_resumes(tmp_path):
+    """`estop --all` on a discovered fleet whose robot hangs (SIGSTOP): a new process does not
+    discover it, so it is named as one that may still be moving, and a keeper stops it (its
+    goal cancelled) as soon as it is back on the graph."""
+    import signal
+
+    from tests.ros import SimNode, require_ros, ros_client, tb3_node
+
+    require_ros()
+    from nav2_msgs.action import NavigateToPose
+    from nav_msgs.msg import Odometry
+    from rclpy.action import ActionClient
+
+    cli, env = _station(tmp_path, "a")
+    fleet = ([*cli, "--fleet", "auto"], {**env, "ASTIOP_ROBOT__ESTOP_KEEPER": "true"})
+    nudge = STAMPED_PUB.replace("/cmd_vel", "/tb3_2/cmd_vel").replace("-t 290", "-t 2")
+    with tb3_node(speed=4.0, namespace="/tb3_1"), ros_client("watcher") as client:
+        two = SimNode(speed=4.0, robot_args=("--robot", "turtlebot3", "--namespace", "/tb3_2"))
+        try:
+            two.wait_ready()
+            odom = client.collect(Odometry, "/tb3_2/odom")
+            # driven from this station (its lease is this database's), then sent far by a client
+            sent = _run(fleet, "--robot-name", "tb3_2", "exec", "--yes", nudge)
+            assert sent.returncode == 0, sent.stderr
+            action = ActionClient(client.node, NavigateToPose, "/tb3_2/navigate_to_pose")
+            assert action.wait_for_server(timeout_sec=15)
+            far = NavigateToPose.Goal()
+            far.pose.header.frame_id = "map"
+            far.pose.pose.position.x, far.pose.pose.position.y = 12.0, 4.0
+            far.pose.pose.orientation.w = 1.0
+            assert client.result(action.send_goal_async(far)).accepted
+            assert until(lambda: odom and abs(odom[-1][1].twist.twist.linear.x) > 0.05, 30)
+            os.kill(two.proc.pid, signal.SIGSTOP)
+            out = _run(fleet, "estop", "--all")
+            assert out.returncode == 1, out.stdout + out.stderr
+            assert "tb3_1: E-STOP engaged" in out.stdout, out.stdout
+            assert "tb3_2: NOT FOUND" in out.stderr and "MAY STILL BE MOVING: tb3_2" in out.stderr
+            keeper = re.search(
+                r"held on tb3_2's graph until released \(keeper pid (\d+)\)", out.stderr
+            )
+            assert keeper, out.stderr
+            os.kill(two.proc.pid, signal.SIGCONT)
+            resumed = time.monotonic()
+            assert until(lambda: odom[-1][0] > resumed, 30), "tb3_2 never came back"
+            assert until(lambda: abs(odom[-1][1].twist.twist.linear.x) < 0.01, 30), (
+                "the keeper did not stop the robot that resumed"
+            )
+            released = _run(fleet, "estop", "--release", "--all", "--yes")
+            assert released.returncode == 0, released.stderr
+            assert until(lambda: not _alive(int(keeper[1])), 15), "the keeper outlived the release"
+        finally:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(two.proc.pid, signal.SIGCONT)
+            two.stop()

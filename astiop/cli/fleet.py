@@ -52,7 +52,10 @@ def read_rows(st, robots: list) -> list:
     from astiop.robot.fleet_watch import FleetRow
 
     settings = st.fleet_settings
-    found = each(robots, lambda r: _read(settings, r))
+    from astiop.cli.robot import store_softly
+
+    store, _ = store_softly(st)  # its E-STOP latch: a latched robot is shown as held
+    found = each(robots, lambda r: _read(settings, r, store))
     return [
         found[r.name]
         if not isinstance(found[r.name], Exception)
@@ -61,12 +64,12 @@ def read_rows(st, robots: list) -> list:
     ]
 
 
-def _read(settings, robot):
+def _read(settings, robot, store=None):
     from astiop.robot.factory import make_robot_gateway
     from astiop.robot.fleet import robot_settings
     from astiop.robot.fleet_watch import row_of
 
-    gateway = make_robot_gateway(robot_settings(settings, robot.name), None, who="fleet")
+    gateway = make_robot_gateway(robot_settings(settings, robot.name), store, who="fleet")
     try:
         gateway.start()
         deadline = time.monotonic() + READ_S
@@ -110,23 +113,25 @@ def list_cmd(ctx: typer.Context, as_json: bool = typer.Option(False, "--json")) 
 
 def estop_all(st) -> None:
     """Every robot of the fleet stopped at once, each through its own zero Twists and stop (or
-    its goals cancelled), then the E-STOP latched for every process on this database."""
+    its goals cancelled), then the E-STOP latched for every process on this database. A robot it
+    could not stop (a hung node, a lost link), or one driven from here that is not on the graph
+    now, is named as one that may still be moving, and a keeper stops it when it is heard."""
+    from astiop import latch
     from astiop.robot.factory import make_robot_gateway
     from astiop.robot.fleet import FOUND_ONCE_S, robot_settings
 
     settings = st.fleet_settings
-    store = st.store
-    store.latch_estop("estop --all")  # first: held even if no robot is found or reached
+    at = latch.pressed_at()
     results: dict[str, object] = {}
     threads: list[threading.Thread] = []
 
     def stop(robot) -> list[str]:
         gateway = make_robot_gateway(
-            robot_settings(settings, robot.name), store, who="estop --all", discover=False,
+            robot_settings(settings, robot.name), None, who="estop --all", discover=False,
             restore_latch=False,
         )  # fmt: skip
         try:
-            failures = gateway.estop()
+            failures = gateway.estop(at)
             return failures + gateway.settle_estop(settings.robot.ros2_timeout_s)
         finally:
             gateway.close()
@@ -139,22 +144,70 @@ def estop_all(st) -> None:
     # looked for longer than a listing: on a loaded machine one robot's participant was
     # discovered more than 2 s after another's, and the E-STOP must miss none
     robots = members(st, stop_now, FOUND_ONCE_S)
+    recorded = _record_all(st, at)  # after the robots: a database in trouble holds none up
     for thread in threads:
         thread.join()
-    failed = False
+    unstopped: list[str] = []
     for robot in robots:
         got = results[robot.name]
         if isinstance(got, Exception):
-            failed = True
+            unstopped.append(robot.name)
             typer.echo(f"{robot.name}: NOT REACHED: {got}", err=True)
         elif got:
-            failed = True
+            unstopped.append(robot.name)
             typer.echo(f"{robot.name}: stopped with failures: {'; '.join(got)}", err=True)
         else:
             typer.echo(f"{robot.name}: E-STOP engaged")
+    for name in _driven_here_not_found(st, robots):
+        unstopped.append(name)
+        typer.echo(f"{name}: NOT FOUND on the graph now (driven from here before)", err=True)
+    if unstopped and settings.robot.backend == "ros2":
+        from astiop.cli.robot import keep_on_the_graph
+
+        for name in unstopped:  # each tried again, by a keeper, until it is stopped
+            keep_on_the_graph(st, at, name)
+        typer.echo(f"MAY STILL BE MOVING: {', '.join(unstopped)}", err=True)
+    if recorded:
+        typer.echo(f"astiop: {recorded}", err=True)
     typer.echo(f"E-STOP latched for {len(robots)} robots")
-    if failed:
+    if unstopped or recorded:
         raise typer.Exit(1)
+
+
+def _record_all(st, at: float) -> str:
+    """The press latched for every robot on this database; what went wrong ("")."""
+    from astiop.cli.robot import store_softly
+
+    store, why = store_softly(st)
+    if store is None:
+        return f"not latched in the database: {why}"
+    try:
+        store.latch_estop("estop --all", at)
+    except Exception as exc:  # noqa: BLE001 - full, damaged, locked, read-only
+        return f"not latched in the database: {exc}"
+    return ""
+
+
+def _driven_here_not_found(st, robots: list) -> list[str]:
+    """Robots of a discovered fleet this database drove (held a lease on) that are not on the
+    graph now: a hung process is not discovered by a new one."""
+    import os
+
+    from astiop.cli.robot import store_softly
+
+    if st.fleet_settings.fleet.discover != "auto":
+        return []  # a listed fleet's robots are all tried, found or not
+    store, _ = store_softly(st)
+    if store is None:
+        return []
+    found = {r.namespace.rstrip("/") for r in robots}
+    try:
+        leased = store.robots_leased(os.environ.get("ROS_DOMAIN_ID", "0") or "0")
+    except Exception:  # noqa: BLE001 - nothing more to name
+        return []
+    return sorted(
+        {ns.strip("/") for ns in leased if ns.rstrip("/") and ns.rstrip("/") not in found}
+    )
 
 
 def release_all(st, yes: bool) -> None:

@@ -206,12 +206,13 @@ def _release_gateway(st):
         fail(f"the robot was not reached to release its own stop: {exc}", code=1)
 
 
-ROBOT_GONE_S = 10.0  # a keeper whose robot left the graph this long has nothing to hold
+ROBOT_GONE_S = 60.0  # a keeper whose robot left the graph this long has nothing to hold
 
 
-def _keep_on_the_graph(st, at: float) -> None:
+def keep_on_the_graph(st, at: float, robot_name: str | None = None) -> None:
     """This process's press outlives it: a keeper (`astiop estop --hold`, in a session of its
-    own) says it on the robot's graph, and holds the robot's lock input, until it is released."""
+    own) says it on the robot's graph, holds the robot's lock input, and stops the robot again
+    whenever it comes back to the graph, until it is released. `robot_name`: one of a fleet."""
     import os
     import subprocess
     import sys
@@ -220,7 +221,8 @@ def _keep_on_the_graph(st, at: float) -> None:
 
     if not st.settings.robot.estop_keeper:
         return
-    argv = [sys.executable, "-m", "astiop", *global_args(), "estop", "--hold", repr(at)]
+    named = ["--robot-name", robot_name] if robot_name else []
+    argv = [sys.executable, "-m", "astiop", *global_args(), *named, "estop", "--hold", repr(at)]
     argv += ["--pressed-by", str(os.getpid())]
     try:
         keeper = subprocess.Popen(
@@ -233,7 +235,8 @@ def _keep_on_the_graph(st, at: float) -> None:
     except OSError as exc:
         typer.echo(f"astiop: no keeper of the E-STOP on the robot's graph: {exc}", err=True)
         return
-    typer.echo(f"held on the robot's graph until released (keeper pid {keeper.pid})", err=True)
+    robot = f"{robot_name}'s" if robot_name else "the robot's"
+    typer.echo(f"held on {robot} graph until released (keeper pid {keeper.pid})", err=True)
 
 
 def _hold(st, at: float, by: int) -> None:
@@ -246,7 +249,7 @@ def _hold(st, at: float, by: int) -> None:
     from astiop.robot.station_latch import Act
     from astiop.transports.base import BackendError
 
-    store, _why = _store_softly(st)
+    store, _why = store_softly(st)
     try:
         gateway = make_robot_gateway(
             st.settings, store, who="estop (keeper)", discover=False, restore_latch=False
@@ -258,19 +261,23 @@ def _hold(st, at: float, by: int) -> None:
         if graph is None or not graph.wait_ready() or not graph.on_graph:
             return
         graph.pressed(Act(at, "estop", Act.here("").host, by))
-        seen = time.monotonic()
+        seen, there = time.monotonic(), gateway.backend.robot_present()
         while graph.engaged:
             gateway.follow_latch()  # holds this process's robot (its lock input) as latched
-            if gateway.backend.robot_present() is not False:
+            present = gateway.backend.robot_present()
+            if present and not there:  # back on the graph (a hung node resumed): stopped now
+                gateway.backend.estop()
+            there = present
+            if present is not False:
                 seen = time.monotonic()
             elif time.monotonic() - seen > ROBOT_GONE_S:
                 return
-            time.sleep(0.5)
+            time.sleep(0.2)
     finally:
         gateway.close()
 
 
-def _store_softly(st):
+def store_softly(st):
     """The database, or why it cannot be had: an E-STOP is never held up by its record."""
     from astiop.store import Store, StoreError
 
@@ -302,14 +309,14 @@ def _press(st, ns: str) -> None:
             st.settings, None, who="estop", discover=False, restore_latch=False
         )
     except BackendError as exc:
-        store, why = _store_softly(st)
+        store, why = store_softly(st)
         said = _record_press(store, ns, at) if store is not None else why
         held = "E-STOP not latched anywhere" if said else "E-STOP latched in the database"
         fail(f"{held}, and the robot was not reached: {exc}", code=1)
     failures = gateway.estop(at)
     if gateway.station_latch is not None:  # said on the graph from now until released
-        _keep_on_the_graph(st, at)
-    store, why = _store_softly(st)
+        keep_on_the_graph(st, at)
+    store, why = store_softly(st)
     recorded = (
         _record_press(store, ns, at) if store is not None else f"not latched in the database: {why}"
     )

@@ -78,13 +78,27 @@ def _age(st: RobotState) -> float | None:
     return 0.0
 
 
+STILL_MOVING = 0.02  # m/s
+
+
+def _state_said(st: RobotState) -> str:
+    """The row's state word; a robot held by the E-STOP that still reports motion (a hung node
+    resumed with its goal) is never shown as held alone, nor as navigating."""
+    word = st.state_word
+    own = st.status.state if st.status else ""
+    moving = own in ("navigating", "docking") or (st.speed or 0.0) > STILL_MOVING
+    if word == "e_stopped" and moving:
+        return "e_stopped, STILL MOVING"
+    return word
+
+
 def row_from(name: str, namespace: str, make: str, st: RobotState, age_s: float | None):
     pose = st.pose
     return FleetRow(
         name=name,
         namespace=namespace,
         make=make,
-        state=st.state_word,
+        state=_state_said(st),
         battery=st.battery.percentage if st.battery else None,
         x=pose.x if pose else None,
         y=pose.y if pose else None,
