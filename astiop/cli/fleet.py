@@ -189,10 +189,8 @@ def _record_all(st, at: float) -> str:
 
 
 def _driven_here_not_found(st, robots: list) -> list[str]:
-    """Robots of a discovered fleet this database drove (held a lease on) that are not on the
-    graph now: a hung process is not discovered by a new one."""
-    import os
-
+    """Robots of a discovered fleet this database drove (a motion command under its namespace)
+    that are not on the graph now: a hung process is not discovered by a new one."""
     from astiop.cli.robot import store_softly
 
     if st.fleet_settings.fleet.discover != "auto":
@@ -202,7 +200,7 @@ def _driven_here_not_found(st, robots: list) -> list[str]:
         return []
     found = {r.namespace.rstrip("/") for r in robots}
     try:
-        leased = store.robots_leased(os.environ.get("ROS_DOMAIN_ID", "0") or "0")
+        leased = store.namespaces_driven()
     except Exception:  # noqa: BLE001 - nothing more to name
         return []
     return sorted(

@@ -162,6 +162,21 @@ class JournalTables:
                 [robot, who, time.time() if at is None else at],
             )
 
+    def namespaces_driven(self, limit: int = 1000) -> list[str]:
+        """The namespaces the last `limit` motion commands sent from here were under (a fleet's
+        robots this database drove), latest first."""
+        rows = self.db.conn.execute(
+            "SELECT command FROM commands WHERE kind = 'actuate' AND executed = 1 "
+            "ORDER BY id DESC LIMIT ?",
+            [limit],
+        ).fetchall()
+        found: dict[str, None] = {}
+        for (command,) in rows:
+            name = next((t for t in command.split()[3:] if t.startswith("/")), "")
+            if name.count("/") >= 2:  # its first name, under a namespace
+                found.setdefault("/" + name.split("/")[1], None)
+        return list(found)
+
     def latch_version(self) -> int:
         """SQLite's data_version on this thread's connection: it changes when another
         connection commits, so a watcher reads the latch only then (a few µs a look)."""

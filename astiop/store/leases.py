@@ -55,17 +55,5 @@ class LeaseTables:
         return cur.rowcount == 1
 
     def release_lease(self, robot: str, token: str) -> None:
-        """Let go: the robot is free at once; its row stays (a robot driven from here, which a
-        fleet's E-STOP names when it cannot find it)."""
         with self._tx():
-            self.db.conn.execute(
-                "UPDATE leases SET token = '', seen_at = 0 WHERE robot = ? AND token = ?",
-                [robot, token],
-            )
-
-    def robots_leased(self, domain: int | str) -> list[str]:
-        """The namespaces of the robots on `domain` this database has held a lease on (a
-        robot driven from here), latest first: a fleet's E-STOP names one it cannot find."""
-        rows = self.db.conn.execute("SELECT robot FROM leases ORDER BY taken_at DESC").fetchall()
-        suffix = f"@{domain}"
-        return [r[0][: -len(suffix)] for r in rows if r[0].endswith(suffix)]
+            self.db.conn.execute("DELETE FROM leases WHERE robot = ? AND token = ?", [robot, token])
