@@ -19,7 +19,14 @@ from urllib.parse import urlsplit
 from aiohttp import WSMsgType, web
 from textual_serve.download_manager import DownloadManager
 
-from astiop.web.access import COOKIE, Access, host_name, loopback_host
+from astiop.web.access import (
+    COOKIE,
+    Access,
+    Network,
+    client_address,
+    host_name,
+    loopback_host,
+)
 from astiop.web.consoles import ConsoleProcess
 from astiop.web.pages import console_page, login_page
 
@@ -41,6 +48,7 @@ class ServeConfig:
     console_env: dict[str, str] = field(default_factory=dict)
     max_consoles: int = 8
     warm: bool = True  # a console started ahead, waiting for the next tab
+    trusted_proxies: tuple[Network, ...] = ()  # whose X-Forwarded-For names the client
 
 
 class WebServer:
@@ -57,7 +65,8 @@ class WebServer:
     # --- who may ------------------------------------------------------------------------------
 
     def _address(self, request: web.Request) -> str:
-        return request.remote or "?"
+        forwarded = request.headers.getall("X-Forwarded-For", [])
+        return client_address(request.remote, forwarded, self.config.trusted_proxies)
 
     def _same_origin(self, request: web.Request) -> bool:
         """A browser says which page asked; only this server's pages may act (a page elsewhere
@@ -80,10 +89,18 @@ class WebServer:
 
     async def _token_given(self, request: web.Request, token: str) -> web.Response:
         address = self._address(request)
-        await asyncio.sleep(self.access.delay_s(address))  # repeated wrong tokens slow down
+        # the right token first: a guesser's penalty on the same address never holds it back
         if not self.access.token_matches(token):
-            self.access.wrong_token(address)
-            log.warning("wrong token from %s", address)
+            wait = self.access.wrong_try(address)  # counted before anything awaits
+            if wait is None:
+                log.warning("wrong token from %s: refused at once (too many waiting)", address)
+                return web.Response(
+                    status=429,
+                    text=f"Too many wrong tokens from {address}: try again in a minute.",
+                    headers={"Retry-After": "60"},
+                )
+            log.warning("wrong token from %s (answered in %.0f s)", address, wait)
+            await asyncio.sleep(wait)  # its turn, after this address's earlier wrong tries
             return web.Response(
                 status=401, text=login_page(self.config.robot, wrong=True), content_type="text/html"
             )
@@ -126,7 +143,10 @@ class WebServer:
             raise web.HTTPFound("./")
         if not self._same_origin(request):
             raise web.HTTPForbidden(text="not from this server's page")
-        form = await request.post()
+        try:
+            form = await request.post()
+        except ValueError:  # not a form a browser sends (the size is capped by aiohttp: 413)
+            raise web.HTTPBadRequest(text="not a log-in form") from None
         token = form.get("token")
         return await self._token_given(request, token if isinstance(token, str) else "")
 
