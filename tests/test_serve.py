@@ -215,6 +215,48 @@ async def test_a_storm_of_wrong_tokens_locks_out_no_operator(tmp_path):
 
 
 @pytest.mark.slow
+async def test_max_consoles_holds_under_a_burst_of_tabs(tmp_path):
+    """Six tabs at once against --max-consoles 2: two consoles start, the four others are told
+    why in one line and closed; a tab closed frees its place."""
+    port = free_port()
+    server = start_serve(tmp_path / "a.db", port, "--no-warm", "--max-consoles", "2")
+    url = f"http://127.0.0.1:{port}/ws?width=120&height=40"
+    try:
+        async with aiohttp.ClientSession() as http:
+            sockets = await asyncio.gather(*(http.ws_connect(url) for _ in range(6)))
+            first = [await socket.receive(timeout=60) for socket in sockets]
+            refused = [
+                (socket, message)
+                for socket, message in zip(sockets, first)
+                if b"the most this server allows" in (message.data or b"")
+            ]
+            assert len(refused) == 4, [m.data[:80] for m in first]
+            line = refused[0][1].data.decode().strip()
+            assert line == (
+                "astiop serve: 2 consoles are open, the most this server allows "
+                "(--max-consoles 2): close a tab, then reload this page."
+            )
+            for socket, _ in refused:
+                closing = await socket.receive(timeout=10)
+                assert closing.type == aiohttp.WSMsgType.CLOSE and closing.data == 1013
+            kept = [socket for socket in sockets if socket not in [r[0] for r in refused]]
+            terminal = Terminal()
+            await read_until(kept[0], terminal, r"Dashboard")
+            assert len(consoles_of(server.pid)) == 2
+            await kept[0].close()
+            wait_until(lambda: len(consoles_of(server.pid)) == 1, what="a console to end")
+            again = await http.ws_connect(url)
+            await read_until(again, Terminal(), r"Dashboard")  # its place was freed
+            assert len(consoles_of(server.pid)) == 2
+            await again.close()
+            await kept[1].close()
+            wait_until(lambda: descendants(server.pid) == [], what="every process to end")
+    finally:
+        log = stop_serve(server)
+    assert log.count("console refused to 127.0.0.1: 2 open") == 4, log
+
+
+@pytest.mark.slow
 async def test_a_page_elsewhere_cannot_open_a_console_nor_stop_nor_read(tmp_path):
     port = free_port()
     server = start_serve(tmp_path / "a.db", port, "--no-warm")

@@ -61,6 +61,7 @@ class WebServer:
         self._store = None  # made on the executor's thread, used only there
         self._estop_lock = asyncio.Lock()
         self.spare: ConsoleProcess | None = None
+        self.opening = 0  # tabs given a console, from before it starts to after it ends
 
     # --- who may ------------------------------------------------------------------------------
 
@@ -211,10 +212,29 @@ class WebServer:
     async def websocket(self, request: web.Request) -> web.StreamResponse:
         if not self._allowed(request):
             raise web.HTTPForbidden(text="log in first")  # refused before any process starts
-        if len(self.consoles) >= self.config.max_consoles:
-            raise web.HTTPServiceUnavailable(
-                text=f"{len(self.consoles)} consoles are open, the most this server allows"
-            )
+        if self.opening >= self.config.max_consoles:
+            return await self._refuse(request)
+        self.opening += 1  # taken before any await: a burst of tabs cannot all pass the check
+        try:
+            return await self._console_for(request)
+        finally:
+            self.opening -= 1
+
+    async def _refuse(self, request: web.Request) -> web.StreamResponse:
+        """A tab over the limit: told so in one line on its terminal, then closed."""
+        said = (
+            f"astiop serve: {self.opening} consoles are open, the most this server allows "
+            f"(--max-consoles {self.config.max_consoles}): close a tab, then reload this page."
+        )
+        log.warning("console refused to %s: %d open", self._address(request), self.opening)
+        socket = web.WebSocketResponse(max_msg_size=MAX_MESSAGE)
+        await socket.prepare(request)
+        with contextlib.suppress(Exception):
+            await socket.send_bytes(f"\r\n{said}\r\n".encode())
+            await socket.close(code=1013, message=said[:120].encode())  # 1013: try again later
+        return socket
+
+    async def _console_for(self, request: web.Request) -> web.StreamResponse:
         socket = web.WebSocketResponse(heartbeat=15, max_msg_size=MAX_MESSAGE)
         await socket.prepare(request)
         width = _bounded_int(request.query.get("width"), 80, 20, 500)
