@@ -4,10 +4,26 @@ A lease is taken in one write (BEGIN IMMEDIATE), so two consoles never both hold
 
 from __future__ import annotations
 
+import os
+import socket
 import time
 from typing import Any
 
 LEASE_TTL_S = 10.0
+
+
+def holder_alive(host: str, pid: int) -> bool:
+    """False when the holder was on this machine and its process is gone (killed: its heartbeat
+    would keep its lease for LEASE_TTL_S more)."""
+    if host != socket.gethostname() or pid <= 0:
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OverflowError):
+        return True
+    return True
 
 
 class LeaseTables:
@@ -19,7 +35,8 @@ class LeaseTables:
             [robot, time.time() - LEASE_TTL_S],
         ).fetchone()
         keys = ("robot", "token", "who", "host", "pid", "taken_at", "seen_at", "taken_from")
-        return dict(zip(keys, row, strict=True)) if row else None
+        held = dict(zip(keys, row, strict=True)) if row else None
+        return held if held is not None and holder_alive(held["host"], held["pid"]) else None
 
     def take_lease(
         self, robot: str, token: str, who: str, host: str, pid: int, force: bool
