@@ -40,23 +40,38 @@ async def storm(url: str, tries: int, proxy: bool) -> None:
         except aiohttp.ClientError as exc:
             return type(exc).__name__
 
+    async def right_token(headers: dict) -> tuple[str, float]:
+        # another process (curl), as an operator's browser is: not queued behind the storm's
+        # own client
+        said = [f"-H{k}: {v}" for k, v in headers.items()]
+        curl = await asyncio.create_subprocess_exec(
+            "curl", "-s", "-o", "/dev/null", "-w", "%{http_code} %{time_total}",
+            "--data-urlencode", f"token={TOKEN}", *said, url,
+            stdout=asyncio.subprocess.PIPE,
+        )  # fmt: skip
+        status, seconds = (await curl.communicate())[0].decode().split()
+        return status, float(seconds)
+
     started = time.monotonic()
+    times: dict[str, list[float]] = {"another client": [], "the guesser's address": []}
+    statuses_right: set[str] = set()
     async with aiohttp.ClientSession(connector=aiohttp.TCPConnector(limit=0)) as http:
         tasks = [asyncio.ensure_future(login(http, f"wrong-{i}", guesser)) for i in range(tries)]
-        await asyncio.sleep(1.0)  # the storm under way
-        for who, headers in (("another client", other), ("the guesser's address", guesser)):
-            # another process (curl), as an operator's browser is: not queued behind the storm's
-            # own client
-            said = [f"-H{k}: {v}" for k, v in headers.items()]
-            curl = await asyncio.create_subprocess_exec(
-                "curl", "-s", "-o", "/dev/null", "-w", "%{http_code} %{time_total}",
-                "--data-urlencode", f"token={TOKEN}", *said, url,
-                stdout=asyncio.subprocess.PIPE,
-            )  # fmt: skip
-            status, seconds = (await curl.communicate())[0].decode().split()
-            print(f"right token from {who}: {status} in {float(seconds):.3f} s")
+        while not all(t.done() for t in tasks):  # the right token, every 0.5 s of the storm
+            for who, headers in (("another client", other), ("the guesser's address", guesser)):
+                status, seconds = await right_token(headers)
+                statuses_right.add(status)
+                times[who].append(seconds)
+            await asyncio.sleep(0.5)
         statuses = await asyncio.gather(*tasks)
     took = time.monotonic() - started
+    for who, seconds in times.items():
+        seconds.sort()
+        print(
+            f"right token from {who}, {len(seconds)} tries during the storm: median "
+            f"{seconds[len(seconds) // 2]:.3f} s, max {seconds[-1]:.3f} s"
+        )
+    print(f"right token answers: {sorted(statuses_right)}")
     print(f"{tries} wrong tokens: {dict(collections.Counter(statuses))} in {took:.1f} s")
 
 

@@ -135,7 +135,11 @@ def serve(
         "ROS 2), or one per tab; auto: shared where ROS 2 is installed.",
     ),
     max_consoles: int = typer.Option(
-        8, "--max-consoles", min=1, max=64, help="Tabs open at once (each is a console process)."
+        4,
+        "--max-consoles",
+        min=1,
+        max=64,
+        help="Tabs open at once (each is a console process, ~430 MB with the embedded model).",
     ),
     warm: bool = typer.Option(
         True,

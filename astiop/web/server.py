@@ -46,7 +46,7 @@ class ServeConfig:
     db: Path
     robot: str  # said in the page's title and header
     console_env: dict[str, str] = field(default_factory=dict)
-    max_consoles: int = 8
+    max_consoles: int = 4  # benchmarks/serve_memory.py: ~430 MiB RSS a tab (embedded model)
     warm: bool = True  # a console started ahead, waiting for the next tab
     trusted_proxies: tuple[Network, ...] = ()  # whose X-Forwarded-For names the client
 
