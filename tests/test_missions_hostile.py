@@ -103,7 +103,7 @@ def test_a_place_removed_during_the_mission_fails_its_step_with_nothing_sent(sto
     m = view.as_json(store, mission_id)
     assert m["status"] == "failed", m
     assert m["steps"][1]["detail"] == (
-        "the place 'assembly_station' was removed from the locations during the mission: "
+        "the place 'assembly_station' was removed from this map's locations during the mission: "
         "nothing was sent"
     )
     assert at(store.mission_steps(mission_id)[1], places(store)["shipping"]), "it stayed there"

@@ -368,7 +368,7 @@ class MissionRunner:
         if step.kind == "goto" and step.place in self._known and step.place not in self.places():
             return StepEnd(
                 "failed",
-                f"the place '{step.place}' was removed from the locations during the mission: "
+                f"the place '{step.place}' was removed from this map's locations during the mission: "
                 "nothing was sent",
                 sent=False,
             )
