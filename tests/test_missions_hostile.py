@@ -9,6 +9,7 @@ import signal
 import subprocess
 import sys
 import textwrap
+import time
 
 import pytest
 
@@ -23,7 +24,9 @@ from astiop.robot.factory import make_sim_gateway
 from astiop.robot.lease import Lease
 from astiop.sim.simulator import Simulator
 from astiop.store import Store
+from astiop.store.leases import LEASE_TTL_S
 from tests.cli_runner import run_cli
+from tests.ros import until
 from tests.test_missions import at, gateway_for, places, wait_for_step
 
 YES = lambda _c: True  # noqa: E731
@@ -58,7 +61,11 @@ def test_a_killed_holders_lease_is_free_at_once(tmp_path):
         os.kill(proc.pid, signal.SIGKILL)
         proc.wait(10)
     try:
-        assert mine.take() is None, "its process is gone: no waiting out its heartbeat"
+        # its process gone and a heartbeat missed: free well before the lease's time is out
+        assert until(lambda: store.lease("/@0") is None, LEASE_TTL_S * 2)
+        seen_at = store.db.conn.execute("SELECT seen_at FROM leases").fetchone()[0]
+        assert time.time() - seen_at < LEASE_TTL_S, "not by waiting out the lease's time"
+        assert mine.take() is None
     finally:
         mine.release()
         store.close()

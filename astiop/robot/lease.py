@@ -24,7 +24,6 @@ from typing import Any
 from astiop.robot.safety import always_allowed
 from astiop.ros2.validation import Checked
 from astiop.store import Store
-from astiop.store.leases import holder_alive
 
 HEARTBEAT_S = 2.0
 
@@ -115,8 +114,7 @@ class Lease:
         (`released`: with those that let go since)."""
         channel = self.channel
         words = channel.holders(released) if channel is not None else []
-        holders = [_holder(w) for w in words if w.get("token") != self.token]
-        return [h for h in holders if holder_alive(h.host, h.pid)]  # a killed one is gone
+        return [_holder(w) for w in words if w.get("token") != self.token]
 
     def holder(self) -> Holder | None:
         """Who controls the robot now (None: no one): the latest live take."""

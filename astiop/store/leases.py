@@ -10,12 +10,16 @@ import time
 from typing import Any
 
 LEASE_TTL_S = 10.0
+# a holder on this machine whose pid is gone has let go once it missed a heartbeat (2 s): not
+# at once, for a live holder in another pid namespace (a container on the host's network has
+# the host's name) still renews its lease
+DEAD_AFTER_S = 3.0
 
 
-def holder_alive(host: str, pid: int) -> bool:
-    """False when the holder was on this machine and its process is gone (killed: its heartbeat
-    would keep its lease for LEASE_TTL_S more)."""
-    if host != socket.gethostname() or pid <= 0:
+def holder_alive(host: str, pid: int, seen_at: float) -> bool:
+    """False when the holder was on this machine, its process is gone and its heartbeat missed
+    (killed: its lease would otherwise hold for LEASE_TTL_S more)."""
+    if host != socket.gethostname() or pid <= 0 or time.time() - seen_at < DEAD_AFTER_S:
         return True
     try:
         os.kill(pid, 0)
@@ -36,7 +40,9 @@ class LeaseTables:
         ).fetchone()
         keys = ("robot", "token", "who", "host", "pid", "taken_at", "seen_at", "taken_from")
         held = dict(zip(keys, row, strict=True)) if row else None
-        return held if held is not None and holder_alive(held["host"], held["pid"]) else None
+        if held is None or holder_alive(held["host"], held["pid"], held["seen_at"]):
+            return held
+        return None
 
     def take_lease(
         self, robot: str, token: str, who: str, host: str, pid: int, force: bool
