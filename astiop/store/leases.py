@@ -4,10 +4,11 @@ A lease is taken in one write (BEGIN IMMEDIATE), so two consoles never both hold
 
 from __future__ import annotations
 
-import os
 import socket
 import time
 from typing import Any
+
+from astiop.store.liveness import _alive
 
 LEASE_TTL_S = 10.0
 # a holder on this machine whose pid is gone has let go once it missed a heartbeat (2 s): not
@@ -21,13 +22,7 @@ def holder_alive(host: str, pid: int, seen_at: float) -> bool:
     (killed: its lease would otherwise hold for LEASE_TTL_S more)."""
     if host != socket.gethostname() or pid <= 0 or time.time() - seen_at < DEAD_AFTER_S:
         return True
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except (PermissionError, OverflowError):
-        return True
-    return True
+    return _alive(pid)
 
 
 class LeaseTables:
