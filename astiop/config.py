@@ -114,6 +114,33 @@ class LLMSettings(_Section):
         return value
 
 
+class ServeSettings(_Section):
+    # the reverse proxies (addresses or networks) whose X-Forwarded-For names the client: behind
+    # one, every visitor's address is the proxy's; comma-separated in a variable
+    trusted_proxies: Annotated[list[str], NoDecode] = Field(default_factory=list)
+
+    @field_validator("trusted_proxies", mode="before")
+    @classmethod
+    def _comma_separated(cls, value: Any) -> Any:
+        if isinstance(value, str):
+            return [v.strip() for v in value.split(",") if v.strip()]
+        return value
+
+    @field_validator("trusted_proxies")
+    @classmethod
+    def _networks(cls, value: list[str]) -> list[str]:
+        import ipaddress
+
+        if len(value) > 64:
+            raise ValueError("at most 64 trusted proxies")
+        for entry in value:
+            try:
+                ipaddress.ip_network(entry, strict=False)
+            except ValueError:
+                raise ValueError(f"{entry!r} is not an address or a network") from None
+        return value
+
+
 class Settings(BaseSettings):
     """`Settings()` reads them as astiop does: flags > ASTIOP_* environment > the TOML file."""
 
@@ -129,6 +156,7 @@ class Settings(BaseSettings):
     sim: SimSettings = Field(default_factory=SimSettings)
     llm: LLMSettings = Field(default_factory=LLMSettings)
     fleet: FleetSettings = Field(default_factory=FleetSettings)
+    serve: ServeSettings = Field(default_factory=ServeSettings)
 
     @classmethod
     def settings_customise_sources(

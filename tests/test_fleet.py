@@ -168,3 +168,34 @@ def test_a_bad_robot_name_and_one_robot_released_from_every_robots_stop(tmp_path
     store.close()
     out = astiop(db, "--fleet", "auto", "--robot-name", "tb3_1", "estop", "--all")
     assert out.returncode == 2 and "leave out --robot-name" in out.stderr, out.stderr
+
+
+def test_a_fleet_robots_parameters_are_astiops_under_its_namespace():
+    """`ros2 param set /astibot_2/astibot_base max_linear_speed 0.5` under --robot-name
+    astibot_2: checked by astiop's limits whether or not the robot's parameters were read yet,
+    and a parameter astiop does not write says which it does, in one line."""
+    from astiop.ros2.profile_types import ProfileSpec
+    from astiop.ros2.validation import validate
+    from astiop.transports.live_catalog import describe_graph, nothing_listed
+
+    fixed = ProfileSpec(namespace="/astibot_2")
+    lists = nothing_listed()
+    lists["node"] = [("/astibot_2/astibot_base", ""), ("/astibot_2/navigator", "")]
+    not_read = describe_graph(lists, fixed)
+    read = describe_graph(
+        {
+            **lists,
+            "param": [
+                ("/astibot_2/astibot_base max_linear_speed", "double"),
+                ("/astibot_2/navigator goal_tolerance", "double"),
+            ],
+        },
+        fixed,
+    )
+    for catalog in (not_read, read):
+        ok = validate("ros2 param set /astibot_2/astibot_base max_linear_speed 0.5", catalog)
+        assert ok.valid and ok.message == {"value": 0.5}, ok.reason
+        too_fast = validate("ros2 param set /astibot_2/astibot_base max_linear_speed 5", catalog)
+        assert too_fast.reason == "max_linear_speed must be within 0.05..1.4"
+        fixed_one = validate("ros2 param set /astibot_2/navigator goal_tolerance 5.0", catalog)
+        assert fixed_one.reason == "parameter goal_tolerance of /astibot_2/navigator is read-only"

@@ -16,7 +16,14 @@ import aiohttp
 import pytest
 
 from astiop.store import Store
-from astiop.web.access import FREE_TRIES, Access, host_name, loopback_host
+from astiop.web.access import (
+    FREE_TRIES,
+    Access,
+    client_address,
+    host_name,
+    loopback_host,
+    proxy_networks,
+)
 from tests.cli_runner import run_cli
 from tests.ros import require_ros, ros_client
 from tests.web_console import (
@@ -49,25 +56,39 @@ async def read_until(ws, terminal: Terminal, pattern: str, timeout: float = 30.0
             raise AssertionError(f"the console closed:\n{terminal.text()}")
 
 
-def test_access_slows_wrong_tokens_and_forgets_them():
+def test_access_slows_wrong_tokens_in_turn_and_forgets_them():
     now = [0.0]
     access = Access(TOKEN, clock=lambda: now[0])
-    for _ in range(FREE_TRIES):
-        assert access.delay_s("10.0.0.9") == 0.0
-        access.wrong_token("10.0.0.9")
-    delays = []
-    for _ in range(6):
-        delays.append(access.delay_s("10.0.0.9"))
-        access.wrong_token("10.0.0.9")
-    assert delays == [1.0, 2.0, 4.0, 8.0, 16.0, 30.0]
-    assert access.delay_s("10.0.0.10") == 0.0, "another address is not slowed"
-    now[0] += 601
-    assert access.delay_s("10.0.0.9") == 0.0, "forgotten after ten quiet minutes"
+    waits = [access.wrong_try("10.0.0.9") for _ in range(FREE_TRIES + 6)]  # all at once
+    # each waits its turn after the ones before: 0, 0, 0, then +1, +2, +4, +8 s; past 30 s away,
+    # refused at once
+    assert waits == [0.0, 0.0, 0.0, 1.0, 3.0, 7.0, 15.0, None, None]
+    assert access.wrong_try("10.0.0.10") == 0.0, "another address is not slowed"
+    now[0] += 15
+    assert access.wrong_try("10.0.0.9") == 30.0, "one at a time, at most 30 s apart"
+    for _ in range(5000):  # a flood never overflows (2.0 ** 1027 did) nor waits past 30 s
+        assert access.wrong_try("10.0.0.9") in (None, 30.0)
+    assert access.wrong_try("2001:db8::1") == 0.0
+    assert [access.wrong_try("2001:db8::2") for _ in range(3)] == [0.0, 0.0, 1.0], "per /64"
+    now[0] += 10_000
+    assert access.wrong_try("10.0.0.9") == 0.0, "forgotten after ten quiet minutes"
     session = access.open_session()
     assert access.admitted(session) and not access.admitted("guess") and not access.admitted(None)
     now[0] += 13 * 3600
     assert not access.admitted(session), "a session ends"
     assert not access.token_matches(TOKEN + "x") and access.token_matches(TOKEN)
+
+
+def test_the_client_is_named_by_a_trusted_proxy_only():
+    proxy = proxy_networks(["127.0.0.1", "10.1.0.0/16"])
+    assert client_address("127.0.0.1", ["198.51.100.7"], proxy) == "198.51.100.7"
+    assert client_address("127.0.0.1", ["1.2.3.4, 198.51.100.7"], proxy) == "198.51.100.7", (
+        "what the client wrote left of its own address is not believed"
+    )
+    assert client_address("127.0.0.1", ["198.51.100.7, 10.1.2.3"], proxy) == "198.51.100.7"
+    assert client_address("192.0.2.1", ["198.51.100.7"], proxy) == "192.0.2.1", "not a proxy"
+    assert client_address("127.0.0.1", ["198.51.100.7"], ()) == "127.0.0.1", "none configured"
+    assert client_address("127.0.0.1", ["junk"], proxy) == "127.0.0.1"
 
 
 def test_loopback_names():
@@ -146,6 +167,93 @@ async def test_without_the_token_nothing_starts_and_with_it_a_console_does(tmp_p
             assert r.status == 302 and "astiop_session" in r.cookies
     finally:
         stop_serve(server)
+
+
+STORM = 2000
+
+
+@pytest.mark.slow
+async def test_a_storm_of_wrong_tokens_locks_out_no_operator(tmp_path):
+    """2,000 wrong tokens at once from one client behind the trusted proxy: each is counted and
+    answered in its turn or refused at once, never a 500, each logged with its address; the right
+    token gets in meanwhile, from another client and from the guesser's own address."""
+    port = free_port()
+    env = {**ENV, "ASTIOP_SERVE_TOKEN": TOKEN, "ASTIOP_SERVE__TRUSTED_PROXIES": "127.0.0.1"}
+    server = start_serve(tmp_path / "a.db", port, "--no-warm", env=env)
+    url = f"http://127.0.0.1:{port}/login"
+    guesser = {"X-Forwarded-For": "6.6.6.6, 203.0.113.5"}  # the proxy appended the real one
+
+    async def login(http, token: str, headers: dict) -> int:
+        async with http.post(
+            url, data={"token": token}, headers=headers, allow_redirects=False
+        ) as r:
+            return r.status
+
+    try:
+        connector = aiohttp.TCPConnector(limit=0)
+        async with aiohttp.ClientSession(connector=connector) as http:
+            storm = [
+                asyncio.ensure_future(login(http, f"wrong-token-{i:06d}", guesser))
+                for i in range(STORM)
+            ]
+            log = server.log_path
+            while "refused at once" not in log.read_text():  # the storm has filled its turns
+                assert not all(task.done() for task in storm), log.read_text()[-2000:]
+                await asyncio.sleep(0.1)
+            async with aiohttp.ClientSession() as operator:
+                assert await login(operator, TOKEN, {"X-Forwarded-For": "203.0.113.9"}) == 302
+                assert await login(operator, TOKEN, guesser) == 302, "checked before the penalty"
+            assert not all(task.done() for task in storm), "the guesser's tries still wait"
+            statuses = await asyncio.gather(*storm)
+        assert set(statuses) == {401, 429}, "never a 500"
+        assert statuses.count(401) == FREE_TRIES + 4, "after 0,0,0,1,2,4,8 s the next waits >30 s"
+        assert descendants(server.pid) == []
+    finally:
+        said = stop_serve(server)
+    assert said.count("wrong token from 203.0.113.5") == STORM, "every refused try is logged"
+    assert "6.6.6.6" not in said, "what the client wrote is not believed"
+
+
+@pytest.mark.slow
+async def test_max_consoles_holds_under_a_burst_of_tabs(tmp_path):
+    """Six tabs at once against --max-consoles 2: two consoles start, the four others are told
+    why in one line and closed; a tab closed frees its place."""
+    port = free_port()
+    server = start_serve(tmp_path / "a.db", port, "--no-warm", "--max-consoles", "2")
+    url = f"http://127.0.0.1:{port}/ws?width=120&height=40"
+    try:
+        async with aiohttp.ClientSession() as http:
+            sockets = await asyncio.gather(*(http.ws_connect(url) for _ in range(6)))
+            first = [await socket.receive(timeout=60) for socket in sockets]
+            refused = [
+                (socket, message)
+                for socket, message in zip(sockets, first)
+                if b"the most this server allows" in (message.data or b"")
+            ]
+            assert len(refused) == 4, [m.data[:80] for m in first]
+            line = refused[0][1].data.decode().strip()
+            assert line == (
+                "astiop serve: 2 consoles are open, the most this server allows "
+                "(--max-consoles 2): close a tab, then reload this page."
+            )
+            for socket, _ in refused:
+                closing = await socket.receive(timeout=10)
+                assert closing.type == aiohttp.WSMsgType.CLOSE and closing.data == 1013
+            kept = [socket for socket in sockets if socket not in [r[0] for r in refused]]
+            terminal = Terminal()
+            await read_until(kept[0], terminal, r"Dashboard")
+            assert len(consoles_of(server.pid)) == 2
+            await kept[0].close()
+            wait_until(lambda: len(consoles_of(server.pid)) == 1, what="a console to end")
+            again = await http.ws_connect(url)
+            await read_until(again, Terminal(), r"Dashboard")  # its place was freed
+            assert len(consoles_of(server.pid)) == 2
+            await again.close()
+            await kept[1].close()
+            wait_until(lambda: descendants(server.pid) == [], what="every process to end")
+    finally:
+        log = stop_serve(server)
+    assert log.count("console refused to 127.0.0.1: 2 open") == 4, log
 
 
 @pytest.mark.slow

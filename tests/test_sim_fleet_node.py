@@ -66,6 +66,7 @@ def test_two_astibots_in_one_warehouse_each_reached_by_its_name(tmp_path, monkey
             row = rows[f"astibot_{i}"]
             assert row["make"] == "astibot" and row["state"] == "charging", row
             assert abs(row["x_m"] - 1.15) < 0.05 and abs(row["y_m"] - (2.0 + i)) < 0.05, row
+        _a_parameter_set_under_its_namespace_and_no_robot_named_nosuch(db)
 
         # no --robot-name: the request names its robot
         out = astiop(db, "--fleet", "auto", "chat", "-m", "rules", "--yes",
@@ -103,6 +104,34 @@ def test_two_astibots_in_one_warehouse_each_reached_by_its_name(tmp_path, monkey
         # one MCP server for both: each tool names its robot; the approval names it too
         asyncio.run(_mcp_sends_astibot_1(db))
         assert until(lambda: math.dist(_xy(poses[1]), (1.15, 3.0)) > 0.5, 30), _xy(poses[1])
+
+
+def _a_parameter_set_under_its_namespace_and_no_robot_named_nosuch(db: Path) -> None:
+    """A parameter of astibot_2 set through the fleet, every time (it was intermittently an
+    AttributeError, otherwise 'no parameter'); a --robot-name of no robot refused, nothing
+    stored for it."""
+    from astiop.store import Store
+
+    to_2 = ("--fleet", "auto", "--robot-name", "astibot_2", "exec", "--yes")
+    for _ in range(3):
+        out = astiop(db, *to_2, "ros2 param set /astibot_2/astibot_base max_linear_speed 0.5")
+        assert out.returncode == 0 and "Set parameter successful" in out.stdout, out.stderr[-2000:]
+    out = astiop(db, *to_2, "ros2 param set /astibot_2/navigator goal_tolerance 5.0")
+    said = [line for line in out.stderr.splitlines() if line.startswith("astiop:")]
+    assert out.returncode == 2 and said == [
+        "astiop: parameter goal_tolerance of /astibot_2/navigator is read-only"
+    ], out.stderr[-2000:]
+    out = astiop(db, "--fleet", "auto", "--robot-name", "nosuch", "exec", "--yes", DRIVE.format(2))
+    said = [line for line in out.stderr.splitlines() if line.startswith("astiop:")]
+    assert out.returncode != 0 and said == [
+        "astiop: no robot named 'nosuch' on the ROS 2 domain (its robots: astibot_1, astibot_2)"
+    ], out.stderr[-2000:]
+    store = Store(db)
+    try:
+        stored = store.db.conn.execute("SELECT robot FROM leases").fetchall()
+        assert not any("nosuch" in row[0] for row in stored), stored
+    finally:
+        store.close()
 
 
 def _whole_domain_asks_the_robot_it_reaches(db: Path, client) -> None:

@@ -181,3 +181,32 @@ def test_interactions_are_committed_as_they_happen(store, tmp_path):
     other = sqlite3.connect(store.path)
     assert other.execute("SELECT prompt FROM interactions").fetchone()[0] == "battery?"
     assert other.execute("SELECT count(*) FROM commands").fetchone()[0] == 1
+
+
+def test_ten_writers_adding_one_name_are_told_the_same(tmp_path):
+    import threading
+
+    from astiop.store.records import LocationError
+
+    path = tmp_path / "w.db"
+    Store(path).close()
+    stores = [Store(path) for _ in range(10)]
+    start, said = threading.Barrier(10), []
+
+    def add(store):
+        start.wait()
+        try:
+            store.add_location("bay_7", 1.0, 2.0)
+            said.append("added")
+        except LocationError as exc:
+            said.append(str(exc))
+
+    writers = [threading.Thread(target=add, args=(s,)) for s in stores]
+    for w in writers:
+        w.start()
+    for w in writers:
+        w.join(30)
+    for s in stores:
+        s.close()
+    exists = "a location named 'bay_7' already exists (names ignore case)"
+    assert sorted(said) == sorted(["added"] + [exists] * 9), said

@@ -40,7 +40,20 @@ _OBSTACLE_IF = re.compile(
 _FIRST = re.compile(r"\s+(?:first|now|next|afterwards|at the end|again)\b", re.I)
 _UNKNOWN_PLACE = re.compile(r"\b(?:to|at|visit)\s+(?:the\s+)?([a-z][a-z0-9 _-]{1,40})$", re.I)
 _READ_WHAT = {"/battery_status": "battery", "/obstacles": "obstacles"}
-STEP_CAP = 40  # a repeat that would make more steps than this is not read as a mission
+STEP_CAP = 40  # the most steps a mission holds; a request of more is refused, saying so
+COUNT_DIGITS = 12  # a repeat count longer than this is not read (int() of 10**5 digits is slow)
+
+
+class TooManySteps(Exception):
+    """A request that would make a mission of more than STEP_CAP steps; counted, never built."""
+
+    def __init__(self, count: int | None):
+        self.count = count  # None: a repeat count of more than COUNT_DIGITS digits
+        has = f"{count} steps" if count is not None else "more steps than can be counted"
+        super().__init__(
+            f"this request has {has}; a mission holds at most {STEP_CAP}: nothing was sent "
+            "(split it, or repeat it until stopped)"
+        )
 
 
 _UNTIL_STOPPED = re.compile(
@@ -80,6 +93,7 @@ def steps_for(request: str, places: dict[str, tuple[float, float]]) -> list[Step
     or a condition or a repeat); None when it is not one, or a clause is not plain."""
     names = list(places)
     steps: list[Step] = []
+    count = 0  # the steps asked; built only while at most STEP_CAP (a repeat of 10**8 is not)
     shaped = False  # a condition or a repeat makes even one step a mission
     pending_if = ""  # "if the battery is under 30 %," said before the step it holds
     for clause in _pieces(request):
@@ -88,13 +102,17 @@ def steps_for(request: str, places: dict[str, tuple[float, float]]) -> list[Step
             pending_if = clause.rstrip(" ,.") + ", "
             continue
         clause, pending_if = pending_if + clause, ""
-        found = _clause_steps(clause, names, steps)
+        found = _clause_steps(clause, names, count > 0)
         if found is None:
             return None
-        more, special = found
-        steps.extend(more)
+        unit, times, special = found
+        count = count * times if unit is None else count + len(unit) * times
+        if count <= STEP_CAP:
+            steps = steps * times if unit is None else steps + unit * times
         shaped = shaped or special
-    if not steps or len(steps) > STEP_CAP or not any(s.moves for s in steps):
+    if count > STEP_CAP:
+        raise TooManySteps(count)
+    if not steps or not any(s.moves for s in steps):
         return None
     # one goal and a service after it ("go to shipping and unload there") stays a plain turn,
     # which waits for the goal before the service
@@ -118,28 +136,32 @@ def _pieces(request: str) -> list[str]:
 
 
 def _clause_steps(
-    clause: str, names: list[str], before: list[Step]
-) -> tuple[list[Step], bool] | None:
+    clause: str, names: list[str], before: bool
+) -> tuple[list[Step] | None, int, bool] | None:
+    """The clause's steps, once (None: all the steps before it) and how many times, and whether
+    it makes a mission of even one step; None: not a plain clause."""
     text = clause.strip(" ,.")
     times, m = 1, _TIMES.search(text)
     if m:
         word = (m.group(1) or m.group(2)).lower()
+        if len(word) > COUNT_DIGITS:
+            raise TooManySteps(None)
         times = _COUNTS.get(word) or int(word)
         text = (text[: m.start()] + text[m.end() :]).strip(" ,.")
     if not text or re.fullmatch(
         r"(?:and\s+)?(?:repeat|do)\s+(?:it|that|this|all)(?:\s+over)?", text, re.I
     ):
         if times > 1 and before:  # "…, twice": the whole mission so far, again
-            return list(before) * (times - 1), True
+            return None, times, True
         return None
     if p := _PATROL.search(text):
         a, b = (intent.resolve_place(p.group(i), names) for i in (1, 2))
         if not a or not b or a == b:
             return None
-        return [Step("goto", place=a), Step("goto", place=b)] * times, True
+        return [Step("goto", place=a), Step("goto", place=b)], times, True
     if w := _WAIT.match(text):
         seconds = float(w.group(1)) * (60 if w.group(2).lower().startswith("m") else 1)
-        return [Step("wait", seconds=seconds)] * times, times > 1
+        return [Step("wait", seconds=seconds)], times, times > 1
     when = None
     if c := _BATTERY_IF.match(text):
         op = "<" if c.group(1).lower() in ("under", "below", "less than", "lower than") else ">"
@@ -162,7 +184,7 @@ def _clause_steps(
         return None
     if when is not None:
         step = Step(**{**step.__dict__, "when": when})
-    return [step] * times, when is not None or times > 1
+    return [step], times, when is not None or times > 1
 
 
 def _step_of(it: Intent, text: str) -> Step | None:

@@ -175,7 +175,12 @@ async def without_model(agent: Any, request: str, intents: list[Intent], result,
     text, forever = mission_plan.until_stopped(request)
     if not (forever or mission_plan.may_be_mission(request, intents)):
         return False
-    steps = await asyncio.to_thread(mission_plan.steps_for, text, agent.places())
+    try:
+        steps = await asyncio.to_thread(mission_plan.steps_for, text, agent.places())
+    except mission_plan.TooManySteps as exc:  # said, never cut short into another plan
+        result.refused = result.answer = f"I did not start this mission: {exc}."
+        emit("answer_token", result.answer)
+        return True
     if steps:
         await begin(agent, request, steps, result, emit)
     return bool(steps)

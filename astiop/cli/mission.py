@@ -13,6 +13,11 @@ from astiop.cli.common import Ending, fail, print_json, state, take_control
 from astiop.cli.mission_follow import follow_mission
 
 app = typer.Typer(help="List, show, pause, resume and cancel missions.", no_args_is_help=True)
+ID_MAX = 2**63 - 1  # SQLite's INTEGER: a larger id is refused in one line, not by the database
+
+
+def _mission_id() -> int:
+    return typer.Argument(..., min=1, max=ID_MAX, help="The mission's id (astiop mission list).")
 
 
 def _one(ctx: typer.Context, mission_id: int) -> dict:
@@ -46,7 +51,9 @@ def list_missions(
 
 @app.command("show")
 def show(
-    ctx: typer.Context, mission_id: int, as_json: bool = typer.Option(False, "--json")
+    ctx: typer.Context,
+    mission_id: int = _mission_id(),
+    as_json: bool = typer.Option(False, "--json"),
 ) -> None:
     """One mission: each step, how it ended and where the robot was."""
     from astiop.missions import view
@@ -63,7 +70,9 @@ def show(
 
 @app.command("cancel")
 def cancel(
-    ctx: typer.Context, mission_id: int, as_json: bool = typer.Option(False, "--json")
+    ctx: typer.Context,
+    mission_id: int = _mission_id(),
+    as_json: bool = typer.Option(False, "--json"),
 ) -> None:
     """Cancel a running or paused mission (its process stops the robot) or drop an
     interrupted one."""
@@ -80,7 +89,9 @@ def cancel(
 
 @app.command("pause")
 def pause(
-    ctx: typer.Context, mission_id: int, as_json: bool = typer.Option(False, "--json")
+    ctx: typer.Context,
+    mission_id: int = _mission_id(),
+    as_json: bool = typer.Option(False, "--json"),
 ) -> None:
     """Hold a running mission at the end of its current step (that step ends as the robot
     reports it; the next starts only on `astiop mission resume`)."""
@@ -100,9 +111,9 @@ def pause(
 @app.command("resume")
 def resume(
     ctx: typer.Context,
-    mission_id: int,
+    mission_id: int = _mission_id(),
     from_step: int = typer.Option(
-        None, "--from", help="Step to resume from (default: the one it was on)."
+        None, "--from", min=1, max=10_000, help="Step to resume from (default: the one it was on)."
     ),
     yes: bool = typer.Option(False, "--yes", "-y", help="Do not ask before moving the robot."),
     as_json: bool = typer.Option(False, "--json"),
@@ -123,7 +134,7 @@ def resume(
         return
     if m["status"] not in ("interrupted", "queued"):
         fail(f"mission {mission_id} is {m['status']}, not paused or interrupted: nothing to resume")
-    start = from_step or m["step"]
+    start = m["step"] if from_step is None else from_step
     if not 1 <= start <= m["steps_total"]:
         fail(f"--from must be a step of mission {mission_id}: 1 to {m['steps_total']}")
     rest = "; ".join(s["label"] for s in m["steps"][start - 1 :])

@@ -189,7 +189,11 @@ def serve(
         "ROS 2), or one per tab; auto: shared where ROS 2 is installed.",
     ),
     max_consoles: int = typer.Option(
-        8, "--max-consoles", min=1, max=64, help="Tabs open at once (each is a console process)."
+        4,
+        "--max-consoles",
+        min=1,
+        max=64,
+        help="Tabs open at once (each is a console process, ~430 MB with the embedded model).",
     ),
     warm: bool = typer.Option(
         True,
@@ -217,6 +221,7 @@ def serve(
     st.settings  # a bad settings file fails here, not in every tab  # noqa: B018
     st.store  # the database opens (and is made) once, before any tab  # noqa: B018
 
+    from astiop.web.access import proxy_networks
     from astiop.web.server import ServeConfig, serve_until_stopped
 
     base = [sys.executable, "-m", "astiop", *_global_args(st)]
@@ -240,9 +245,12 @@ def serve(
         console_env=env,
         max_consoles=max_consoles,
         warm=warm,
+        trusted_proxies=proxy_networks(st.settings.serve.trusted_proxies),
     )
     logging.basicConfig(level=logging.INFO, format="astiop serve: %(message)s", stream=sys.stderr)
     access = "the token is asked first" if token else "no token: this machine only"
+    if config.trusted_proxies:
+        access += ", clients named by " + ", ".join(map(str, config.trusted_proxies))
 
     def ready(url: str) -> None:
         if host in ("0.0.0.0", "::"):

@@ -24,6 +24,32 @@ NO_STATUS_S = 15.0  # a robot that reports no status at all: the pose decides af
 class StepEnd:
     status: str  # succeeded | skipped | failed | replaced | canceled | e-stopped | lost
     detail: str
+    sent: bool = True  # False: refused before anything reached the robot
+
+
+@dataclass(frozen=True)
+class StepReport:
+    mission_id: int
+    seq: int
+    total: int
+    label: str
+    status: str
+    detail: str
+    round: int | None = None  # a mission repeated until stopped: which round
+
+    def line(self) -> str:
+        mark = {"succeeded": "✓", "skipped": "–"}.get(self.status, "✗")
+        where = f"round {self.round} step" if self.round else "step"
+        return (
+            f"{mark} {where} {self.seq + 1}/{self.total} {self.label}: {self.status} — "
+            f"{self.detail}"
+        )
+
+
+def as_replaced(end: StepEnd, by: int) -> StepEnd:
+    """The step a replacing mission cut short: 'replaced by mission M', never 'canceled'."""
+    said = end.detail.replace("canceled by the operator", f"replaced by mission {by}", 1)
+    return StepEnd("replaced", said)
 
 
 def accepted(ex: Execution) -> bool:

@@ -11,10 +11,9 @@ import logging
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
 
 from astiop.missions import follow, view
-from astiop.missions.follow import StepEnd
+from astiop.missions.follow import StepEnd, StepReport, as_replaced
 from astiop.missions.steps import Step
 from astiop.robot.gateway import RobotGateway
 from astiop.store import Store, StoreError
@@ -37,37 +36,12 @@ class MissionError(Exception):
         self.running = running  # the mission in the way, when another one runs on this robot
 
 
-@dataclass(frozen=True)
-class StepReport:
-    mission_id: int
-    seq: int
-    total: int
-    label: str
-    status: str
-    detail: str
-    round: int | None = None  # a mission repeated until stopped: which round
-
-    def line(self) -> str:
-        mark = {"succeeded": "✓", "skipped": "–"}.get(self.status, "✗")
-        where = f"round {self.round} step" if self.round else "step"
-        return (
-            f"{mark} {where} {self.seq + 1}/{self.total} {self.label}: {self.status} — "
-            f"{self.detail}"
-        )
-
-
 OnStep = Callable[[StepReport], None]
 
 
 def robot_key(gateway: RobotGateway) -> str:
     """Which robot a mission drives: one mission per robot at a time."""
     return gateway.label
-
-
-def _as_replaced(end: StepEnd, by: int) -> StepEnd:
-    """The step a replacing mission cut short: 'replaced by mission M', never 'canceled'."""
-    said = end.detail.replace("canceled by the operator", f"replaced by mission {by}", 1)
-    return StepEnd("replaced", said)
 
 
 class MissionRunner:
@@ -93,6 +67,7 @@ class MissionRunner:
         self._thread: threading.Thread | None = None
         self.mission_id: int | None = None
         self.queue_only = False  # start() stores the mission for another process to drive
+        self._known: set[str] = set()  # the places of the mission driven, when it was launched
 
     # -- starting -------------------------------------------------------------------
     def start(
@@ -178,17 +153,28 @@ class MissionRunner:
             raise MissionError(self._in_the_way(other["id"]), other["id"])
         if not self.store.claim_mission(mission_id, start):
             raise MissionError(f"mission {mission_id} was resumed or dropped meanwhile")
-        self._launch(mission_id, steps, start, bool(row["forever"]), row["round"] or 1)
+        self._launch(
+            mission_id, steps, start, bool(row["forever"]), row["round"] or 1, resumed=True
+        )
         return start
 
     def _launch(
-        self, mission_id: int, steps: list[Step], start: int, forever: bool, round_: int
+        self,
+        mission_id: int,
+        steps: list[Step],
+        start: int,
+        forever: bool,
+        round_: int,
+        resumed: bool = False,
     ) -> None:
         self.mission_id = mission_id
+        # the named places the mission goes to, as they are now: one removed meanwhile is
+        # refused when its step starts (a place the locations never held is the robot's to know)
+        self._known = {s.place for s in steps if s.place and s.place in self.places()}
         self._cancel = threading.Event()  # each mission its own: an old watcher cannot reach it
         self._thread = threading.Thread(
             target=self._run,
-            args=(mission_id, steps, start, forever, round_),
+            args=(mission_id, steps, start, forever, round_, resumed),
             name=f"mission-{mission_id}",
             daemon=True,
         )
@@ -210,7 +196,13 @@ class MissionRunner:
 
     # -- the run --------------------------------------------------------------------
     def _run(
-        self, mission_id: int, steps: list[Step], seq: int, forever: bool, round_: int
+        self,
+        mission_id: int,
+        steps: list[Step],
+        seq: int,
+        forever: bool,
+        round_: int,
+        resumed: bool = False,
     ) -> None:
         total = len(steps)
         status, reason = "succeeded", f"all {total} steps done"
@@ -226,7 +218,11 @@ class MissionRunner:
                 end = self._step(step)
                 by = self.store.mission_requests(mission_id)["replaced_by"]
                 if end.status == "canceled" and by:
-                    end = _as_replaced(end, by)
+                    end = as_replaced(end, by)
+                if resumed and end.status == "failed" and not end.sent:
+                    status, reason = self._resume_refused(mission_id, seq, total, step, end)
+                    break
+                resumed = False  # a step of this run reached the robot
                 pose, docked = self._where()
                 self.store.step_ended(mission_id, seq, end.status, end.detail, pose, docked)
                 if self.on_step:
@@ -266,6 +262,20 @@ class MissionRunner:
             self.store.finish_mission(mission_id, status, reason)
         except StoreError as exc:
             log.error("mission %s could not be recorded as %s: %s", mission_id, status, exc)
+
+    def _resume_refused(
+        self, mission_id: int, seq: int, total: int, step: Step, end: StepEnd
+    ) -> tuple[str, str]:
+        """A resume whose first step was refused with nothing sent (another holds the robot,
+        the robot unreached): the mission stays interrupted at that step, to be resumed again."""
+        reason = (
+            f"resume refused at step {seq + 1} ({step.label()}): {end.detail}; nothing was "
+            f"sent: `astiop mission resume {mission_id}` again once that is settled"
+        )
+        self.store.step_ended(mission_id, seq, "interrupted", end.detail, None, None)
+        if self.on_step:
+            self.on_step(StepReport(mission_id, seq, total, step.label(), "refused", reason))
+        return "interrupted", reason
 
     def _ended(
         self, end: StepEnd, seq: int, total: int, step: Step, round_: int, by: int | None
@@ -355,6 +365,13 @@ class MissionRunner:
                     "skipped",
                     f"the robot reports it is {'' if status.docked else 'not '}docked already",
                 )
+        if step.kind == "goto" and step.place in self._known and step.place not in self.places():
+            return StepEnd(
+                "failed",
+                f"the place '{step.place}' was removed from this map's locations during the mission: "
+                "nothing was sent",
+                sent=False,
+            )
         command = step.command(self.gateway.profile, self.places().get)
         if command is None:
             return StepEnd("failed", f"this robot cannot {step.label()} (`astiop robot profile`)")
@@ -362,7 +379,7 @@ class MissionRunner:
         if not follow.accepted(ex):
             if ex.reason and "E-STOP" in ex.reason:
                 return StepEnd("e-stopped", ex.reason)
-            return StepEnd("failed", follow.refusal(ex))
+            return StepEnd("failed", follow.refusal(ex), sent=ex.executed)
         if not step.moves:  # load, unload: the service's reply is their end
             v = ex.values if isinstance(ex.values, dict) else {}
             return StepEnd("succeeded", str(v.get("message") or f"{step.kind} done"))

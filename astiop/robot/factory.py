@@ -108,6 +108,8 @@ def make_robot_gateway(
                 fixed=fixed,
             )
             backend.label = f"ros2 via the CLI: {why}"
+        if discover:
+            _named_robot_found(settings, backend)
         gateway = RobotGateway(
             backend,
             make_safety(settings, store, backend.catalog.profile),
@@ -127,6 +129,34 @@ def make_robot_gateway(
     return make_sim_gateway(
         settings, store, realtime=realtime, who=who, restore_latch=restore_latch
     )
+
+
+def _named_robot_found(settings: Settings, backend) -> None:
+    """A fleet found on the graph (--fleet auto): the robot --robot-name names must be on it,
+    or nothing is sent, latched or stored for it (BackendError). Heard of until discovery is
+    over: a robot's participant may come seconds after another's."""
+    import time
+
+    from astiop.ros2.fleet_names import namespaces
+    from astiop.transports.base import BackendError
+
+    ns = settings.robot.namespace.rstrip("/")
+    if not ns or settings.fleet.discover != "auto":
+        return
+
+    def heard_of() -> bool:
+        cat = backend.catalog
+        return any(n.startswith(ns + "/") for n in (*cat.topics, *cat.services, *cat.nodes))
+
+    while not heard_of() and backend.discovering():
+        time.sleep(0.25)
+        backend.refresh(settle=False)
+    if not heard_of():
+        found = ", ".join(n.lstrip("/") for n in namespaces(backend.catalog)) or "none"
+        backend.close()
+        raise BackendError(
+            f"no robot named '{ns.lstrip('/')}' on the ROS 2 domain (its robots: {found})"
+        )
 
 
 def robot_lease(ns: str, store: Store, who: str, backend):

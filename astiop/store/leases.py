@@ -4,10 +4,25 @@ A lease is taken in one write (BEGIN IMMEDIATE), so two consoles never both hold
 
 from __future__ import annotations
 
+import socket
 import time
 from typing import Any
 
+from astiop.store.liveness import _alive
+
 LEASE_TTL_S = 10.0
+# a holder on this machine whose pid is gone has let go once it missed a heartbeat (2 s): not
+# at once, for a live holder in another pid namespace (a container on the host's network has
+# the host's name) still renews its lease
+DEAD_AFTER_S = 3.0
+
+
+def holder_alive(host: str, pid: int, seen_at: float) -> bool:
+    """False when the holder was on this machine, its process is gone and its heartbeat missed
+    (killed: its lease would otherwise hold for LEASE_TTL_S more)."""
+    if host != socket.gethostname() or pid <= 0 or time.time() - seen_at < DEAD_AFTER_S:
+        return True
+    return _alive(pid)
 
 
 class LeaseTables:
@@ -19,7 +34,10 @@ class LeaseTables:
             [robot, time.time() - LEASE_TTL_S],
         ).fetchone()
         keys = ("robot", "token", "who", "host", "pid", "taken_at", "seen_at", "taken_from")
-        return dict(zip(keys, row, strict=True)) if row else None
+        held = dict(zip(keys, row, strict=True)) if row else None
+        if held is None or holder_alive(held["host"], held["pid"], held["seen_at"]):
+            return held
+        return None
 
     def take_lease(
         self, robot: str, token: str, who: str, host: str, pid: int, force: bool

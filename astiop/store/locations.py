@@ -6,6 +6,8 @@ from __future__ import annotations
 import math
 import re
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 from astiop.bounded import has_controls
 from astiop.store.records import Location, LocationError, location_of
@@ -71,7 +73,7 @@ class LocationTables:
                 f"invalid location name '{name}': use 1-64 letters, digits, '_' or '-'"
             )
         if self.get_location(name) is not None:
-            raise LocationError(f"a location named '{name}' already exists (names ignore case)")
+            raise LocationError(_exists(name))
 
     def _check_pose(self, x: float, y: float, theta: float) -> None:
         if not all(math.isfinite(v) for v in (x, y, theta)):
@@ -90,7 +92,7 @@ class LocationTables:
             raise LocationError("a description is plain text of at most 500 characters")
         theta = math.atan2(math.sin(theta), math.cos(theta))
         now = time.time()
-        with self._tx():
+        with _said_exists(name), self._tx():  # another writer may have added it meanwhile
             self.db["locations"].insert(
                 {
                     "map": self.map_name,
@@ -111,7 +113,7 @@ class LocationTables:
             self._check_new_name(new)
         elif not NAME_RE.match(new):
             raise LocationError(f"invalid location name '{new}'")
-        with self._tx():
+        with _said_exists(new), self._tx():
             self.db.conn.execute(
                 "UPDATE locations SET name = ?, updated_at = ? "
                 "WHERE map = ? AND name = ? COLLATE NOCASE",
@@ -147,3 +149,18 @@ class LocationTables:
                 [self.map_name, loc.name],
             )
         return loc
+
+
+def _exists(name: str) -> str:
+    return f"a location named '{name}' already exists (names ignore case)"
+
+
+@contextmanager
+def _said_exists(name: str) -> Iterator[None]:
+    """A duplicate found by the database (another writer was first): said as the check says."""
+    try:
+        yield
+    except LocationError as exc:
+        if "already exists" in str(exc):
+            raise LocationError(_exists(name)) from None
+        raise

@@ -60,6 +60,8 @@ class MissionTables:
         return rows[0] if rows else None
 
     def mission(self, mission_id: int) -> dict[str, Any] | None:
+        if not 0 < mission_id < 2**63:  # SQLite's INTEGER: no such mission
+            return None
         rows = list(self.db.query("SELECT * FROM missions WHERE id = ?", [mission_id]))
         return rows[0] if rows else None
 

@@ -50,17 +50,22 @@ def navigation_actions(catalog: Catalog, namespace: str) -> list[str]:
     ]
 
 
-def _params(known: Catalog, listed: list[tuple[str, str]]) -> dict[tuple[str, str], ParamSpec]:
+def _params(
+    known: Catalog, listed: list[tuple[str, str]], namespace: str = ""
+) -> dict[tuple[str, str], ParamSpec]:
     """The robot's parameters: astiop's own entry where it has one (limits, writable), else
-    read-only with the type the robot gave. Before the robot lists any, astiop's table."""
+    read-only with the type the robot gave. Before the robot lists any, astiop's table. A
+    fleet's robot (`namespace`): astiop's entries under its namespace (/astibot_2/navigator)."""
+    ns = namespace.rstrip("/")
     if not listed:
-        return dict(known.params)
+        return {(ns + n, p): replace(spec, node=ns + n) for (n, p), spec in known.params.items()}
     params = {}
     for key, typ in listed:
         node, name = key.split(" ", 1)
-        spec = known.params.get((node, name))
+        own = node[len(ns) :] if ns and node.startswith(ns + "/") else node
+        spec = known.params.get((own, name))
         params[(node, name)] = (
-            replace(spec, type=typ) if spec else ParamSpec(node, name, None, type=typ)
+            replace(spec, node=node, type=typ) if spec else ParamSpec(node, name, None, type=typ)
         )
     return params
 
@@ -70,7 +75,8 @@ def describe_graph(lists: GraphLists, fixed: ProfileSpec | None = None) -> Catal
     operator `fixed` (a profile file, a namespace)."""
     known = astibot_catalog()
     nodes = tuple(n for n, _ in lists["node"]) or known.nodes
-    cat = Catalog(nodes=nodes, params=_params(known, lists.get("param", [])))
+    namespace = fixed.namespace if fixed is not None else ""
+    cat = Catalog(nodes=nodes, params=_params(known, lists.get("param", []), namespace or ""))
     for name, typ in lists["topic"]:
         spec = known.topics.get(name)
         if name == "/cmd_vel" and spec and typ == STAMPED:  # Jazzy's diff_drive_controller

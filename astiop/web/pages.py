@@ -18,7 +18,7 @@ header .robot { flex: 1; font-family: monospace; font-size: 15px; }
 #latch { font-family: monospace; font-size: 15px; }
 #latch.engaged { background: #c8102e; color: #fff; padding: 3px 8px; border-radius: 4px; }
 #terminal { flex: 1; min-height: 0; overflow: hidden; }
-#ended { display: none; position: absolute; top: 44px; left: 0; right: 0; padding: 40px;
+#ended { display: none; position: absolute; bottom: 0; left: 0; right: 0; padding: 24px;
   text-align: center; background: #0c181f; font-size: 18px; z-index: 5; }
 body.-closed #ended { display: block; }
 form { margin: 15vh auto; width: 420px; display: flex; flex-direction: column; gap: 12px; }

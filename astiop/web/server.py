@@ -20,7 +20,14 @@ from urllib.parse import urlsplit
 from aiohttp import WSMsgType, web
 from textual_serve.download_manager import DownloadManager
 
-from astiop.web.access import COOKIE, Access, host_name, loopback_host
+from astiop.web.access import (
+    COOKIE,
+    Access,
+    Network,
+    client_address,
+    host_name,
+    loopback_host,
+)
 from astiop.web.consoles import ConsoleProcess
 from astiop.web.pages import console_page, login_page
 
@@ -41,11 +48,12 @@ class ServeConfig:
     db: Path
     robot: str  # said in the page's title and header
     console_env: dict[str, str] = field(default_factory=dict)
-    max_consoles: int = 8
+    max_consoles: int = 4  # benchmarks/serve_memory.py: ~430 MiB RSS a tab (embedded model)
     # the robot stopped from this process (who pressed it -> failures), where it can be:
     # the button never waits for a new process
     stop_robot: Callable[[str], list[str]] | None = None
     warm: bool = True  # a console started ahead, waiting for the next tab
+    trusted_proxies: tuple[Network, ...] = ()  # whose X-Forwarded-For names the client
 
 
 class WebServer:
@@ -59,11 +67,13 @@ class WebServer:
         self._estop_lock = asyncio.Lock()
         self._stopper = ThreadPoolExecutor(1, thread_name_prefix="astiop-serve-estop")
         self.spare: ConsoleProcess | None = None
+        self.opening = 0  # tabs given a console, from before it starts to after it ends
 
     # --- who may ------------------------------------------------------------------------------
 
     def _address(self, request: web.Request) -> str:
-        return request.remote or "?"
+        forwarded = request.headers.getall("X-Forwarded-For", [])
+        return client_address(request.remote, forwarded, self.config.trusted_proxies)
 
     def _same_origin(self, request: web.Request) -> bool:
         """A browser says which page asked; only this server's pages may act (a page elsewhere
@@ -86,10 +96,18 @@ class WebServer:
 
     async def _token_given(self, request: web.Request, token: str) -> web.Response:
         address = self._address(request)
-        await asyncio.sleep(self.access.delay_s(address))  # repeated wrong tokens slow down
+        # the right token first: a guesser's penalty on the same address never holds it back
         if not self.access.token_matches(token):
-            self.access.wrong_token(address)
-            log.warning("wrong token from %s", address)
+            wait = self.access.wrong_try(address)  # counted before anything awaits
+            if wait is None:
+                log.warning("wrong token from %s: refused at once (too many waiting)", address)
+                return web.Response(
+                    status=429,
+                    text=f"Too many wrong tokens from {address}: try again in a minute.",
+                    headers={"Retry-After": "60"},
+                )
+            log.warning("wrong token from %s (answered in %.0f s)", address, wait)
+            await asyncio.sleep(wait)  # its turn, after this address's earlier wrong tries
             return web.Response(
                 status=401, text=login_page(self.config.robot, wrong=True), content_type="text/html"
             )
@@ -132,7 +150,10 @@ class WebServer:
             raise web.HTTPFound("./")
         if not self._same_origin(request):
             raise web.HTTPForbidden(text="not from this server's page")
-        form = await request.post()
+        try:
+            form = await request.post()
+        except ValueError:  # not a form a browser sends (the size is capped by aiohttp: 413)
+            raise web.HTTPBadRequest(text="not a log-in form") from None
         token = form.get("token")
         return await self._token_given(request, token if isinstance(token, str) else "")
 
@@ -214,10 +235,29 @@ class WebServer:
     async def websocket(self, request: web.Request) -> web.StreamResponse:
         if not self._allowed(request):
             raise web.HTTPForbidden(text="log in first")  # refused before any process starts
-        if len(self.consoles) >= self.config.max_consoles:
-            raise web.HTTPServiceUnavailable(
-                text=f"{len(self.consoles)} consoles are open, the most this server allows"
-            )
+        if self.opening >= self.config.max_consoles:
+            return await self._refuse(request)
+        self.opening += 1  # taken before any await: a burst of tabs cannot all pass the check
+        try:
+            return await self._console_for(request)
+        finally:
+            self.opening -= 1
+
+    async def _refuse(self, request: web.Request) -> web.StreamResponse:
+        """A tab over the limit: told so in one line on its terminal, then closed."""
+        said = (
+            f"astiop serve: {self.opening} consoles are open, the most this server allows "
+            f"(--max-consoles {self.config.max_consoles}): close a tab, then reload this page."
+        )
+        log.warning("console refused to %s: %d open", self._address(request), self.opening)
+        socket = web.WebSocketResponse(max_msg_size=MAX_MESSAGE)
+        await socket.prepare(request)
+        with contextlib.suppress(Exception):
+            await socket.send_bytes(f"\r\n{said}\r\n".encode())
+            await socket.close(code=1013, message=said[:120].encode())  # 1013: try again later
+        return socket
+
+    async def _console_for(self, request: web.Request) -> web.StreamResponse:
         socket = web.WebSocketResponse(heartbeat=15, max_msg_size=MAX_MESSAGE)
         await socket.prepare(request)
         width = _bounded_int(request.query.get("width"), 80, 20, 500)

@@ -25,7 +25,9 @@ def check(cmd, catalog):
     spec = param_spec(cmd, catalog)
     node = cmd.args["node"]
     if not spec.writable:
-        raise InterfaceError(f"parameter {spec.name} of {node} is read-only")
+        mine = sorted(p for (n, p), s in catalog.params.items() if n == node and s.writable)
+        said = f" (astiop writes: {', '.join(mine)})" if mine else ""
+        raise InterfaceError(f"parameter {spec.name} of {node} is read-only{said}")
     # typed by the parameter's declared type: rclcpp refuses `1` for a double
     try:
         value = float(cmd.args["value"])
