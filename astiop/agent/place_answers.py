@@ -65,14 +65,7 @@ def battery_time(name: str, v: dict, pct: float | None) -> str:
     """Time to full (charging) or to empty (discharging): the charge left to fill or to use,
     in Ah, over the current the battery reports, in A."""
 
-    def num(key: str) -> float | None:
-        try:
-            f = float(v.get(key))
-        except (TypeError, ValueError):
-            return None
-        return f if math.isfinite(f) else None
-
-    charge, capacity, current = num("charge"), num("capacity"), num("current")
+    charge, capacity, current = (battery_figure(v, k) for k in ("charge", "capacity", "current"))
     at = f"at {pct:.1f} %" if pct is not None else "charge unknown"
     if current is None or charge is None or (name == "time_to_full" and not capacity):
         return (
@@ -101,3 +94,22 @@ def battery_time(name: str, v: dict, pct: float | None) -> str:
 def _hm(hours: float) -> str:
     minutes = round(hours * 60)
     return f"{minutes // 60} h {minutes % 60:02d} min" if minutes >= 60 else f"{minutes} min"
+
+
+UNMEASURED_AT_ZERO = ("temperature", "charge", "capacity", "design_capacity")
+
+
+def battery_figure(values: dict, key: str) -> float | None:
+    """A BatteryState figure; None when unmeasured: NaN by the message's convention, or 0.0
+    where a robot leaves it unset (a TurtleBot3: temperature, charge, capacity; its current
+    too when nothing of the charge is measured)."""
+    v = values.get(key)
+    try:
+        f = float(v)
+    except (TypeError, ValueError):
+        return None
+    if not math.isfinite(f) or (f == 0.0 and key in UNMEASURED_AT_ZERO):
+        return None
+    if key == "current" and f == 0.0 and not battery_figure(values, "charge"):
+        return None
+    return f

@@ -83,7 +83,7 @@ _WHY_STILL = _rx(
     r"waiting|parked|halted|frozen|sitting)\b|\bwhat(?:'s| is) (?:stopping|keeping|holding)\b"
     r"|\bwhy (?:is|does|did) (?:it|the robot)\b.*\b(?:stop|wait)"
 )
-_DISTANCE = _rx(r"\bhow far\b|\bdistance\b|\bhow (?:many|much) (?:metres|meters|m)\b|\bfar from\b")
+_DISTANCE = _rx(r"\bfar\b|\bdistance\b|\bhow (?:many|much) (?:metres|meters|m)\b|\bfar from\b")
 _NEAREST = _rx(
     r"\b(?:nearest|closest)\b.*\b(?:places?|stations?|locations?|spots?|stops?)\b|"
     r"\b(?:places?|stations?|locations?|spots?)\b.*\b(?:nearest|closest)\b"
@@ -116,13 +116,15 @@ FIELDS: dict[tuple[str, str], str] = {
     ("battery", "voltage"): r"volt(?:age|s)?\b",
     ("battery", "current"): r"current\b(?=\s*(?:[?.!]|$|draw|flow|consumption|usage|of\b|"
     r"in amps|being|(?:does|is) (?:the )?(?:battery|robot|it)))|amps?\b(?![- ]?hours?)|amperage",
+    ("battery", "charge_ah"): r"(?:charge|left|remaining|stored)\b.{0,25}(?:amp[- ]?hours?|"
+    r"\bah\b)|(?:amp[- ]?hours?|\bah\b).{0,25}(?:left|remaining|stored)",
     ("battery", "capacity"): r"capacity|amp[- ]?hours?|\bah\b|how big is the battery",
     ("battery", "health"): r"(?:battery|pack)(?:'s)? (?:health|condition)|health of the battery",
     ("battery", "technology"): r"chemistry|technology|kind of battery|type of battery|"
     r"battery type|what battery|which battery|lithium|lead",
     ("pose", "heading"): r"facing|heading|direction|orientation|\byaw\b|pointing|which way",
     ("scan", "range_max"): r"max(?:imum)? range|how far (?:can|does) (?:the )?(?:lidar|laser|"
-    r"scanner|it) (?:see|reach)|\brange of\b|lidar(?:'s)? range|\brange\b",
+    r"scanner|it) (?:see|reach|detect|sense|measure)|\brange of\b|lidar(?:'s)? range|\brange\b",
     ("scan", "range_min"): r"min(?:imum)? range|closest (?:it|the lidar) can",
     ("scan", "beams"): r"beams|rays|how many (?:points|readings|measurements)|resolution",
     ("scan", "rate"): r"scan rate|frequency|how often|\bhz\b|refresh",
@@ -139,13 +141,17 @@ _OTHER_THINGS = (
 )
 
 
-def subjects_of(request: str, intents: list[Intent], places: list[str]) -> list[Subject] | None:
+def subjects_of(
+    request: str, intents: list[Intent], places: list[str], unknown: bool = True
+) -> list[Subject] | None:
     """A subject for each clause of a request that only asks; None when any clause asks the
-    robot to act, or is a plain reading of a role the turn plans as before."""
+    robot to act, or is a plain reading of a role the turn plans as before. `unknown`: a
+    question nothing understands is a subject of its own (declined); else left to the plan
+    (the rules say what they understand)."""
     if not intents or any(i.actuating or i.kind == "none" for i in intents):
         return None
     found = [subject_of(i, places) for i in intents]
-    if any(s is None for s in found):
+    if any(s is None or (s.kind == "unknown" and not unknown) for s in found):
         return None
     return [s for s in found if s is not None]
 
@@ -175,14 +181,16 @@ def subject_of(intent: Intent, places: list[str]) -> Subject | None:
         return found
     if _PARAMETER.search(text):
         return Subject("parameter", _param_words(text))
-    if intent.kind == "unknown" and _is_question(text):
+    if (intent.kind == "unknown" or (intent.kind == "read" and not intent.topic)) and (
+        _is_question(text)
+    ):
         return Subject("unknown")
     return None
 
 
 def _is_question(text: str) -> bool:
     return text.endswith("?") or bool(
-        re.match(r"(?:what|which|who|why|how|when|where|is|are|does|do|can|tell me)\b", text, re.I)
+        re.match(r"(?:what|which|who|why|how|when|where|tell me)\b", text, re.I)
     )
 
 
@@ -240,6 +248,19 @@ def _named_places(text: str, places: list[str]) -> list[str]:
 
 
 def _field(text: str) -> Subject | None:
+    """The role's fields a question names ("the battery's temperature and voltage")."""
+    found = _one_field(text)
+    if found is None or found.thing != found.what.split(".")[0] or "time_to" in found.what:
+        return found
+    role = found.thing
+    names = [f for (r, f), words in FIELDS.items() if r == role and not f.startswith("time_to")
+             and re.search(rf"\b(?:{words})", text, re.I)]  # fmt: skip
+    if role == "battery" and "charge_ah" in names and "capacity" in names:
+        names.remove("capacity")  # "charge in amp hours" is not the capacity
+    return Subject("field", f"{role}.{','.join(names)}", thing=role) if names else found
+
+
+def _one_field(text: str) -> Subject | None:
     for (role, field), words in FIELDS.items():
         if not re.search(rf"\b(?:{words})", text, re.I):
             continue

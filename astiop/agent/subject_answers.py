@@ -141,14 +141,18 @@ def parameter(words: str, reads: Reads) -> str:
             f"The robot has no parameter for '{words}': I listed the parameters of its nodes "
             f"({nodes}) and none is named so."
         )
-    said = []
+    said, read = [], 0
     for node, name in found:
-        v = reads.values(f"ros2 param get {node} {name}")
+        ex = reads.run(f"ros2 param get {node} {name}")
+        v = ex.values if ex.executed and not ex.error else None
         value = v.get("value") if isinstance(v, dict) else None
-        said.append(
-            f"{node}'s {name} is {value}" if value is not None else f"{node} {name}: unread"
-        )
-    how = " (its own parameter, read from the node)" if len(found) == 1 else ""
+        if value is not None:
+            said.append(f"{node}'s {name} is {value}")
+            read += 1
+        else:  # listed, but its value did not come: said so, never a guess
+            why = (ex.error or ex.reason or "no value came").split("\n")[0][:120]
+            said.append(f"{node} lists {name}, but its value could not be read ({why})")
+    how = " (its own parameter, read from the node)" if len(said) == 1 and read else ""
     return "; ".join(said) + how + "."
 
 
@@ -228,27 +232,22 @@ def field_answer(subject: Subject, reads: Reads) -> str:
             return f"The robot publishes no {role} reading, so it reports no {_said(name)}."
         return f"I could not read the robot's {role}: the read failed."
     if role == "battery":
-        return _battery(subject, name, values, reads.role_ex("battery"))
+        ex = reads.role_ex("battery")
+        return " ".join(_battery(subject, n, values, ex) for n in name.split(","))
     if role == "pose":
         pose = pose_of(values)
         if pose is None:
             return "The robot's pose has no position I can read."
         deg = math.degrees(pose[2])
         return f"The robot faces {deg:.0f}° ({_compass(deg)}; 0° is the map's +x axis)."
-    return _scan(name, values)
+    return " ".join(_scan(n, values) for n in name.split(","))
 
 
 def _said(name: str) -> str:
     return name.replace("_", " ")
 
 
-def _num(values: dict, key: str) -> float | None:
-    v = values.get(key)
-    try:
-        f = float(v)
-    except (TypeError, ValueError):
-        return None
-    return f if math.isfinite(f) else None
+_num = place_answers.battery_figure
 
 
 def _battery(subject: Subject, name: str, v: dict, ex: Execution | None) -> str:
@@ -270,7 +269,13 @@ def _battery(subject: Subject, name: str, v: dict, ex: Execution | None) -> str:
             if health
             else (f"{_battery_reports(v)}; it reports no health (unknown).")
         )
-    key = {"capacity": "capacity"}.get(name, name)
+    if name == "charge_ah":
+        charge, capacity = _num(v, "charge"), _num(v, "capacity")
+        if not charge:
+            return f"{_battery_reports(v)}; it reports no charge in Ah."
+        of = f" of {capacity:.1f} Ah" if capacity else ""
+        return f"The battery holds {charge:.1f} Ah{of} ({pct:.1f} %)."
+    key = name
     value = _num(v, key)
     unit = {"temperature": "°C", "voltage": "V", "current": "A", "capacity": "Ah"}[name]
     if value is None or (name == "capacity" and value == 0.0):

@@ -175,7 +175,10 @@ class Agent(InterpretingMixin):
             ):  # asked only of readings this robot does not publish, or of a place its map
                 result.answer = said  # does not hold on a robot that cannot look it up
                 return await self._finish(request, result, t0)
-            if asked := subject.subjects_of(request, intents, self.locations()):
+            asked = subject.subjects_of(
+                request, intents, self.locations(), unknown=not self.endpoint.is_rules
+            )
+            if asked:
                 await self._answer_subjects(asked, result, emit)  # its reads, no model
                 return await self._finish(request, result, t0)
             place = local_save.asked(intents, self.gateway.profile)
