@@ -51,13 +51,14 @@ def _rx(pattern: str) -> re.Pattern[str]:
 _OUTSIDE = _rx(
     r"\b(?:weather|rain(?:ing)?|snow(?:ing)?|forecast|joke|funny|poem|song|sing|news|stock|"
     r"football|soccer|score of|recipe|cook|meaning of life|capital of|president|who won|"
-    r"movie|film|translate|horoscope|lottery|your favou?rite|how old are you|are you (?:human|"
+    r"movie|film|story|stories|sunny|cloudy|windy|stormy|translate|horoscope|lottery|your favou?rite|how old are you|are you (?:human|"
     r"alive|conscious)|time is it|what day is|today's date|date today)\b"
 )
 _CAPABILITIES = _rx(
     r"\bwhat (?:can|could) (?:you|i|astiop|this console) (?:do|ask|help)|\bwhat are you "
     r"(?:able|capable)|\byour (?:capabilities|abilities|features|skills)\b|\bhow can you help\b|"
-    r"\bwhat (?:do|can) you (?:know|understand|support)\b|\bwhat (?:questions|commands) can\b|"
+    r"\bwhat (?:do|can) you (?:know|understand|support)\b|\bwhat \w+ (?:do|can) you (?:support|"
+    r"offer|handle|do)\b|\bwhat (?:questions|commands) can\b|"
     r"^help\b|\bwhat is astiop\b|\bwho are you\b"
 )
 _JOURNAL = _rx(
@@ -65,6 +66,7 @@ _JOURNAL = _rx(
     r"|\b(?:history|journal|log|logbook|recent(?:ly)?|so far today|earlier|past|last)\b.*"
     r"\b(?:requests?|commands?|events?|activity|actions?|done|did|happen(?:ed)?)\b"
     r"|\bwhat happened\b|\bwhat has happened\b"
+    r"|\b(?:what|anything)\b.*\b(?:been done|was done|happened|did)\b.*\b(?:last|past|today)\b"
 )
 _HOURS = _rx(r"\b(?:last|past)\s+(\d+(?:\.\d+)?|an?|one|two|three|few)?\s*(minute|hour|day)s?\b")
 _GRAPH = {
@@ -99,7 +101,8 @@ _TOP_SPEED = _rx(
 )
 _TURN_SPEED = _rx(
     r"\bmax(?:imum)? (?:angular|turn(?:ing)?|rotation(?:al)?|yaw) (?:speed|rate|velocity)\b|"
-    r"\bhow fast can (?:it|the robot|you) (?:turn|rotate|spin)\b"
+    r"\bhow fast can (?:it|the robot|you) (?:turn|rotate|spin)\b|"
+    r"\b(?:angular|turn(?:ing)?|rotation(?:al)?) (?:speed|velocity|rate) limit\b"
 )
 _PARAMETER = _rx(
     r"\b(?:parameters?|params?|settings?|configured|configuration|tolerance|inflation|"
@@ -203,7 +206,29 @@ def _hours(text: str) -> float:
     return number * {"minute": 1 / 60, "hour": 1.0, "day": 24.0}[m.group(2).lower()]
 
 
+_WHO_PUBLISHES = _rx(
+    r"\b(?:which|what) nodes? (?:publish(?:es)?|sends?|subscribes? to|reads?|listens? to)\s+"
+    r"(?:the\s+|on\s+)?(/?[\w/]+)|\bwho (?:publishes|subscribes to)\s+(?:the\s+)?(/?[\w/]+)"
+)
+
+
+_ROLE_OF_WORD = {
+    "scan": "scan", "lidar": "scan", "laser": "scan", "battery": "battery", "pose": "pose",
+    "position": "pose", "odometry": "odometry", "odom": "odometry", "velocity": "velocity_command",
+    "status": "status", "map": "map", "obstacles": "obstacles", "diagnostics": "diagnostics",
+}  # fmt: skip
+
+
 def _graph(text: str) -> Subject | None:
+    if m := _WHO_PUBLISHES.search(text):
+        sub = bool(re.search(r"subscrib|reads|listens", m.group(0), re.I))
+        named = re.search(r"(?<!\w)(/[\w/]+)", text)  # a topic's own name, else its role's word
+        topic = (
+            named.group(1)
+            if named
+            else _ROLE_OF_WORD.get((m.group(1) or m.group(2)).lower(), m.group(1) or m.group(2))
+        )
+        return Subject("graph", "subscribers" if sub else "publishers", place=topic)
     if not _GRAPH_ASK.search(text) and not re.match(r"(?:nodes|topics|services|actions)\b", text):
         return None
     for what, words in _GRAPH.items():
@@ -266,7 +291,11 @@ def _one_field(text: str) -> Subject | None:
             continue
         named_role = re.search(rf"\b(?:{_ROLE_WORDS[role]})", text, re.I)
         other = re.findall(rf"\b({_OTHER_THINGS})\b", text, re.I)  # "wheel motors": motor
-        if field == "temperature" and other and not re.search(r"\bbatter", text, re.I):
+        if (
+            field in ("temperature", "current", "voltage")
+            and other
+            and not re.search(r"\bbatter", text, re.I)
+        ):
             return Subject("field", f"{role}.{field}", thing=other[-1].lower().rstrip("s"))
         if role == "pose" or named_role or (role == "battery" and field.startswith("time_to")):
             return Subject("field", f"{role}.{field}", thing=role)

@@ -94,6 +94,8 @@ def answer(subject: Subject, reads: Reads, places: dict, store: Any) -> str:
 
 # -- the graph ---------------------------------------------------------------------------
 def graph(subject: Subject, reads: Reads) -> str:
+    if subject.what in ("publishers", "subscribers"):
+        return who_uses(subject, reads)
     names = reads.values(f"ros2 {subject.what[:-1]} list")
     if not isinstance(names, list):
         return f"I could not list the robot's {subject.what}: the read failed."
@@ -102,6 +104,30 @@ def graph(subject: Subject, reads: Reads) -> str:
         return f"The robot's graph has {len(names)} {subject.what}."
     shown = ", ".join(names[:40]) + (f" and {len(names) - 40} more" if len(names) > 40 else "")
     return f"The robot's graph has {len(names)} {subject.what}: {shown}."
+
+
+MAX_NODES_ASKED = 25  # each node's info is one read: a large graph is not read whole
+
+
+def who_uses(subject: Subject, reads: Reads) -> str:
+    """The nodes that publish (or subscribe to) a topic, named by the robot's role for it
+    ("the scan") or by its name, from each node's info."""
+    said = subject.place or ""
+    topic = reads.gateway.profile.name(said.strip("/")) or ("/" + said.strip("/"))
+    nodes = reads.values("ros2 node list")
+    if not isinstance(nodes, list):
+        return "I could not list the robot's nodes: the read failed."
+    side = "Publishers" if subject.what == "publishers" else "Subscribers"
+    verb = "publishes" if subject.what == "publishers" else "subscribes to"
+    found = []
+    for node in sorted(nodes)[:MAX_NODES_ASKED]:
+        info = reads.values(f"ros2 node info {node}")
+        if isinstance(info, dict) and any(t == topic for t, _ in info.get(side) or []):
+            found.append(node)
+    asked = min(len(nodes), MAX_NODES_ASKED)
+    if not found:
+        return f"None of the {asked} nodes I asked {verb} {topic}."
+    return f"{', '.join(found)} {verb} {topic} (from the info of {asked} nodes)."
 
 
 # -- parameters --------------------------------------------------------------------------
@@ -254,8 +280,8 @@ def _battery(subject: Subject, name: str, v: dict, ex: Execution | None) -> str:
     pct = battery_percent(ex) if ex is not None else None
     if name in ("time_to_full", "time_to_empty"):
         return place_answers.battery_time(name, v, pct)
-    if name == "temperature" and subject.thing not in ("battery", ""):
-        return f"{_battery_reports(v)}; it reports no {subject.thing} temperature."
+    if name in ("temperature", "current", "voltage") and subject.thing not in ("battery", ""):
+        return f"{_battery_reports(v)}; it reports no {subject.thing} {name}."
     if name == "technology":
         tech = TECHNOLOGY.get(int(v.get("power_supply_technology") or 0))
         where = f" ({v['location']})" if v.get("location") else ""
