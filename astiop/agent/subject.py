@@ -90,7 +90,10 @@ _NEAREST = _rx(
     r"\b(?:nearest|closest)\b.*\b(?:places?|stations?|locations?|spots?|stops?)\b|"
     r"\b(?:places?|stations?|locations?|spots?)\b.*\b(?:nearest|closest)\b"
 )
-_PLACE_COUNT = _rx(r"\bhow many\b.*\b(?:places|locations|stations|spots|destinations)\b")
+_PLACE_COUNT = _rx(
+    r"\bhow many\b.*\b(?:places|locations|stations|spots|destinations)\b|"
+    r"\bnames? of (?:(?:the|all|every|your|its)\s+)*(?:places|locations|stations|spots)\b"
+)
 _REACHABLE = _rx(
     r"\bcan (?:it|the robot|you|we) (?:reach|get to|make it to|drive to|go to)\b|\breachable\b"
     r"|\bable to reach\b|\bpossible to (?:reach|get to)\b"
@@ -125,6 +128,12 @@ FIELDS: dict[tuple[str, str], str] = {
     ("battery", "health"): r"(?:battery|pack)(?:'s)? (?:health|condition)|health of the battery",
     ("battery", "technology"): r"chemistry|technology|kind of battery|type of battery|"
     r"battery type|what battery|which battery|lithium|lead",
+    ("status", "e_stopped"): r"e-?stop(?:ped)?|emergency[- ]stop(?:ped)?",
+    ("pose", "x"): r"\bx[- ]?(?:coordinate|position|value)\b",
+    ("pose", "y"): r"\by[- ]?(?:coordinate|position|value)\b",
+    ("odometry", "angular"): r"angular (?:velocity|speed)|turn(?:ing)? rate|yaw rate|"
+    r"(?:is it|is the robot) (?:rotating|spinning|turning)",
+    ("scan", "frame"): r"\b(?:tf )?frame\b",
     ("pose", "heading"): r"facing|heading|direction|orientation|\byaw\b|pointing|which way",
     ("scan", "range_max"): r"max(?:imum)? range|how far (?:can|does) (?:the )?(?:lidar|laser|"
     r"scanner|it) (?:see|reach|detect|sense|measure)|\brange of\b|lidar(?:'s)? range|\brange\b",
@@ -212,6 +221,7 @@ _WHO_PUBLISHES = _rx(
 )
 
 
+_TOPIC_TYPE = _rx(r"\b(?:type|message type|interface|msg type)\b")
 _ROLE_OF_WORD = {
     "scan": "scan", "lidar": "scan", "laser": "scan", "battery": "battery", "pose": "pose",
     "position": "pose", "odometry": "odometry", "odom": "odometry", "velocity": "velocity_command",
@@ -220,6 +230,8 @@ _ROLE_OF_WORD = {
 
 
 def _graph(text: str) -> Subject | None:
+    if (m := _TOPIC_TYPE.search(text)) and (named := re.search(r"(?<!\w)(/[\w/]+)", text)):
+        return Subject("graph", "type", place=named.group(1))
     if m := _WHO_PUBLISHES.search(text):
         sub = bool(re.search(r"subscrib|reads|listens", m.group(0), re.I))
         named = re.search(r"(?<!\w)(/[\w/]+)", text)  # a topic's own name, else its role's word
@@ -289,7 +301,8 @@ def _one_field(text: str) -> Subject | None:
     for (role, field), words in FIELDS.items():
         if not re.search(rf"\b(?:{words})", text, re.I):
             continue
-        named_role = re.search(rf"\b(?:{_ROLE_WORDS[role]})", text, re.I)
+        words_of_role = _ROLE_WORDS.get(role, "(?!)")  # never, for a role always asked of
+        named_role = re.search(rf"\b(?:{words_of_role})", text, re.I)
         other = re.findall(rf"\b({_OTHER_THINGS})\b", text, re.I)  # "wheel motors": motor
         if (
             field in ("temperature", "current", "voltage")
@@ -297,7 +310,11 @@ def _one_field(text: str) -> Subject | None:
             and not re.search(r"\bbatter", text, re.I)
         ):
             return Subject("field", f"{role}.{field}", thing=other[-1].lower().rstrip("s"))
-        if role == "pose" or named_role or (role == "battery" and field.startswith("time_to")):
+        if (
+            role in ("pose", "status", "odometry")
+            or named_role
+            or (role == "battery" and field.startswith("time_to"))
+        ):
             return Subject("field", f"{role}.{field}", thing=role)
         if role == "battery" and field in ("voltage", "current", "temperature"):
             return Subject("field", f"{role}.{field}", thing=role)  # the robot's own supply

@@ -96,6 +96,14 @@ def answer(subject: Subject, reads: Reads, places: dict, store: Any) -> str:
 def graph(subject: Subject, reads: Reads) -> str:
     if subject.what in ("publishers", "subscribers"):
         return who_uses(subject, reads)
+    if subject.what == "type":
+        info = reads.values(f"ros2 topic info {subject.place}")
+        if not isinstance(info, dict):
+            return f"The robot's graph has no topic {subject.place}."
+        return (
+            f"{subject.place} carries {info.get('type')} ({info.get('publishers', 0)} "
+            f"publisher(s), {info.get('subscribers', 0)} subscriber(s))."
+        )
     names = reads.values(f"ros2 {subject.what[:-1]} list")
     if not isinstance(names, list):
         return f"I could not list the robot's {subject.what}: the read failed."
@@ -252,6 +260,9 @@ def _span(hours: float) -> str:
 # -- a field of a role -------------------------------------------------------------------
 def field_answer(subject: Subject, reads: Reads) -> str:
     role, name = subject.what.split(".")
+    latch = "engaged" if reads.gateway.e_stopped else "released"
+    if role == "status" and not reads.gateway.profile.has("status"):  # astiop's own latch
+        return f"The robot reports no E-STOP state of its own; astiop's E-STOP latch is {latch}."
     values = reads.role(role)
     if values is None:
         if not reads.gateway.profile.has(role):
@@ -260,10 +271,22 @@ def field_answer(subject: Subject, reads: Reads) -> str:
     if role == "battery":
         ex = reads.role_ex("battery")
         return " ".join(_battery(subject, n, values, ex) for n in name.split(","))
+    if role == "status":
+        held = bool(values.get("e_stopped"))
+        return (
+            f"The robot is {'E-stopped' if held else 'not E-stopped'} (its status says "
+            f"e_stopped {str(held).lower()}); astiop's E-STOP latch is {latch}."
+        )
+    if role == "odometry":
+        twist = (values.get("twist") or {}).get("twist") or {}
+        wz = float((twist.get("angular") or {}).get("z", 0.0))
+        return f"The robot turns at {wz:.2f} rad/s ({math.degrees(wz):.0f} °/s), by its odometry."
     if role == "pose":
         pose = pose_of(values)
         if pose is None:
             return "The robot's pose has no position I can read."
+        if name in ("x", "y"):
+            return f"The robot is at x {pose[0]:.2f} m, y {pose[1]:.2f} m in the map."
         deg = math.degrees(pose[2])
         return f"The robot faces {deg:.0f}° ({_compass(deg)}; 0° is the map's +x axis)."
     return " ".join(_scan(n, values) for n in name.split(","))
@@ -335,6 +358,9 @@ def _compass(deg: float) -> str:
 
 
 def _scan(name: str, v: dict) -> str:
+    if name == "frame":
+        frame = (v.get("header") or {}).get("frame_id") or ""
+        return f"The scan is in the '{frame}' frame." if frame else "The scan names no frame."
     if name in ("range_max", "range_min"):
         value = _num(v, name)
         word = "maximum" if name == "range_max" else "minimum"
