@@ -94,6 +94,29 @@ async def test_the_graph_is_listed(store):
     assert ran(r) == ["ros2 service list"] and "/dock" in r.answer
 
 
+async def test_who_publishes_a_topic_is_read_from_each_nodes_info(store):
+    _, r = await ask("which node publishes the scan?", store)
+    assert r.answer == "[rules] /lidar_driver publishes /scan (from the info of 7 nodes)."
+
+
+async def test_a_topics_type_is_its_own(store):
+    _, r = await ask("what message type is /odom?", store)
+    assert ran(r) == ["ros2 topic info /odom"] and "nav_msgs/msg/Odometry" in r.answer
+
+
+async def test_the_estop_state_is_the_robots_and_astiops_latch(store):
+    sim = Simulator(seed=3)
+    sim.e_stopped = True
+    sim.step(0.2)
+    _, r = await ask("is the robot e-stopped?", store, sim)
+    assert "The robot is E-stopped" in r.answer and "latch is released" in r.answer
+
+
+async def test_another_components_current_is_said_missing_not_the_batterys(store):
+    _, r = await ask("what current are the motors drawing?", store)
+    assert "reports no motor current" in r.answer
+
+
 async def test_why_a_docked_robot_is_still(store):
     sim = Simulator(seed=3)  # starts docked, charging
     _, r = await ask("why is the robot standing still?", store, sim)

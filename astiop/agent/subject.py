@@ -120,8 +120,10 @@ FIELDS: dict[tuple[str, str], str] = {
     r"battery last|die|dies|go(?:es)? flat|be flat|run(?:s)? dry)\b",
     ("battery", "temperature"): r"temp(?:erature)?s?\b|\bhow (?:hot|warm)\b|\boverheat",
     ("battery", "voltage"): r"volt(?:age|s)?\b",
-    ("battery", "current"): r"current\b(?=\s*(?:[?.!]|$|draw|flow|consumption|usage|of\b|"
-    r"in amps|being|(?:does|is) (?:the )?(?:battery|robot|it)))|amps?\b(?![- ]?hours?)|amperage",
+    ("battery", "current"): r"current\b(?!\s+(?:battery|charge|position|pose|location|state|"
+    r"status|speed|goal|task|level|percentage|heading|mode|path|plan|route|map|job|mission|time|"
+    r"coordinates?|orientation|place|station|area|zone|reading|value|temperature|voltage|x|y)\b)"
+    r"|amps?\b(?![- ]?hours?)|amperage",
     ("battery", "charge_ah"): r"(?:charge|left|remaining|stored)\b.{0,25}(?:amp[- ]?hours?|"
     r"\bah\b)|(?:amp[- ]?hours?|\bah\b).{0,25}(?:left|remaining|stored)",
     ("battery", "capacity"): r"capacity|amp[- ]?hours?|\bah\b|how big is the battery",

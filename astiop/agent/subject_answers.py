@@ -260,7 +260,7 @@ def _span(hours: float) -> str:
 # -- a field of a role -------------------------------------------------------------------
 def field_answer(subject: Subject, reads: Reads) -> str:
     role, name = subject.what.split(".")
-    latch = "engaged" if reads.gateway.e_stopped else "released"
+    latch = "engaged" if reads.gateway.latched else "released"
     if role == "status" and not reads.gateway.profile.has("status"):  # astiop's own latch
         return f"The robot reports no E-STOP state of its own; astiop's E-STOP latch is {latch}."
     values = reads.role(role)

@@ -167,6 +167,12 @@ class Agent(InterpretingMixin):
             if profile.pending() or profile.make == "unknown":  # role or the make is missing:
                 await asyncio.to_thread(self.gateway.confirm_missing)  # read it whole first
             intents = intent.classify(request, self.locations())
+            asked = subject.subjects_of(
+                request, intents, self.locations(), unknown=not self.endpoint.is_rules
+            )
+            if asked:
+                await self._answer_subjects(asked, result, emit)  # its reads, no model
+                return await self._finish(request, result, t0)
             if said := await self._unless_discovered(
                 lambda: (
                     roles.nothing_to_read(intents, self.gateway.profile)
@@ -174,12 +180,6 @@ class Agent(InterpretingMixin):
                 )
             ):  # asked only of readings this robot does not publish, or of a place its map
                 result.answer = said  # does not hold on a robot that cannot look it up
-                return await self._finish(request, result, t0)
-            asked = subject.subjects_of(
-                request, intents, self.locations(), unknown=not self.endpoint.is_rules
-            )
-            if asked:
-                await self._answer_subjects(asked, result, emit)  # its reads, no model
                 return await self._finish(request, result, t0)
             place = local_save.asked(intents, self.gateway.profile)
             if place and self.store is not None:  # no save service: kept in astiop's store

@@ -166,7 +166,9 @@ class RobotGateway(EstopLatch, GraphReading):
     # -- commands --------------------------------------------------------------------------
     def review(self, text: str) -> Review:
         checked = validate(text, self.catalog)
-        if not checked.valid and checked.reason.startswith("there is no"):
+        if not checked.valid and (
+            checked.reason.startswith("there is no") or " has no parameter " in checked.reason
+        ):
             checked = self.checked_once_heard(text, checked)  # it may have appeared since
         if self.safety.geofence is None and checked.valid and checked.kind == "actuate":
             self.use_map()  # the robot's /map may have come in since

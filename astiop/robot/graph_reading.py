@@ -108,7 +108,7 @@ class GraphReading(_Host):
         whose participant comes seconds after another's), until discovery is over."""
         if not self.backend.discovering():
             return validate(text, self.catalog) if self._refresh() else checked
-        name = checked.command.name if checked.command else ""
+        name = (checked.command.name if checked.command else "") or ""  # param get: no name
         namespace = "/" + name.strip("/").split("/")[0] if name.count("/") > 1 else ""
         seen, changed_at = _names(self.catalog), time.monotonic()
         while self.backend.discovering():
