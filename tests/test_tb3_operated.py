@@ -394,7 +394,8 @@ async def test_an_outside_agent_reads_and_drives_a_turtlebot3_through_mcp(tmp_pa
 def test_a_turtlebot3_answers_each_question_in_its_own_names_or_says_what_it_lacks(tmp_path):
     """The subjects on a robot astiop did not write: its battery's unset 0.0 temperature is
     said missing (never 0 °C), its heading read from /amcl_pose, its lidar's range from its own
-    /scan, why it is still from its odometry (it has no status)."""
+    /scan, why it is still from its odometry (it has no status), its top speed from Nav2's
+    controller parameters."""
     require_ros()
     from tests.ros import tb3_node
 
@@ -411,5 +412,7 @@ def test_a_turtlebot3_answers_each_question_in_its_own_names_or_says_what_it_lac
             r, _ = ask(gateway, "why is the robot not moving?")
             assert r.commands[0].command == "ros2 topic echo /odom --once"
             assert "reports no status" in r.answer
+            r, _ = ask(gateway, "what is the robot's top speed?")  # Nav2's own parameter
+            assert "/controller_server's FollowPath.max_vel_x is 0." in r.answer, r.answer
         finally:
             gateway.close()
