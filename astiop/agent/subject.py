@@ -143,6 +143,8 @@ FIELDS: dict[tuple[str, str], str] = {
     ("scan", "beams"): r"beams|rays|how many (?:points|readings|measurements)|resolution",
     ("scan", "rate"): r"scan rate|frequency|how often|\bhz\b|refresh",
     ("scan", "fov"): r"field of view|\bfov\b|angle|how wide|degrees? (?:does|can)",
+    # last: "which way does it face on the dock" asks the heading
+    ("status", "docked"): r"\bdocked\b|\bon (?:the|its) (?:dock|charger)\b|\bplugged in\b",
 }
 _ROLE_WORDS = {
     "battery": r"batter(?:y|ies)|pack|cells?|charg",

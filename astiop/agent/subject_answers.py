@@ -261,7 +261,9 @@ def _span(hours: float) -> str:
 def field_answer(subject: Subject, reads: Reads) -> str:
     role, name = subject.what.split(".")
     latch = "engaged" if reads.gateway.latched else "released"
-    if role == "status" and not reads.gateway.profile.has("status"):  # astiop's own latch
+    if role == "status" and not reads.gateway.profile.has("status"):
+        if name == "docked":
+            return "The robot publishes no status, so it reports no docked state."
         return f"The robot reports no E-STOP state of its own; astiop's E-STOP latch is {latch}."
     values = reads.role(role)
     if values is None:
@@ -271,6 +273,12 @@ def field_answer(subject: Subject, reads: Reads) -> str:
     if role == "battery":
         ex = reads.role_ex("battery")
         return " ".join(_battery(subject, n, values, ex) for n in name.split(","))
+    if role == "status" and name == "docked":
+        docked = bool(values.get("docked"))
+        return (
+            f"The robot is {'docked' if docked else 'not docked'} (its status says docked "
+            f"{str(docked).lower()}, state {values.get('state', '?')})."
+        )
     if role == "status":
         held = bool(values.get("e_stopped"))
         return (
