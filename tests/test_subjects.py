@@ -117,6 +117,12 @@ async def test_another_components_current_is_said_missing_not_the_batterys(store
     assert "reports no motor current" in r.answer
 
 
+async def test_a_robot_without_a_camera_says_so_and_is_missing_nothing(store):
+    sim, r = await ask("what is the camera showing?", store)
+    assert r.commands == [] and "publishes no camera image" in r.answer
+    assert agent_on(sim, store).gateway.profile.missing() == ["map"]
+
+
 async def test_why_a_docked_robot_is_still(store):
     sim = Simulator(seed=3)  # starts docked, charging
     _, r = await ask("why is the robot standing still?", store, sim)
