@@ -389,3 +389,30 @@ async def test_an_outside_agent_reads_and_drives_a_turtlebot3_through_mcp(tmp_pa
             state = json.loads((await call(c, "robot_state"))[1])
             assert "still going" not in json.dumps(state.get("last_goal")), state
             assert state["pose"]["x_m"] < 11.0, state  # stopped on its way, not arrived
+
+
+def test_a_turtlebot3_answers_each_question_in_its_own_names_or_says_what_it_lacks(tmp_path):
+    """The subjects on a robot astiop did not write: its battery's unset 0.0 temperature is
+    said missing (never 0 °C), its heading read from /amcl_pose, its lidar's range from its own
+    /scan, why it is still from its odometry (it has no status), its top speed from Nav2's
+    controller parameters."""
+    require_ros()
+    from tests.ros import tb3_node
+
+    with tb3_node(speed=8.0):
+        gateway, _ = gateway_on(tmp_path)
+        try:
+            r, _ = ask(gateway, "what temperature is the battery?")
+            assert "reports no battery temperature" in r.answer, r.answer
+            r, _ = ask(gateway, "which way is the robot facing?")
+            assert [c.command for c in r.commands] == ["ros2 topic echo /amcl_pose --once"]
+            assert "faces" in r.answer
+            r, _ = ask(gateway, "what is the lidar's maximum range?")
+            assert f"{r.commands[0].values['range_max']:g} m" in r.answer
+            r, _ = ask(gateway, "why is the robot not moving?")
+            assert r.commands[0].command == "ros2 topic echo /odom --once"
+            assert "reports no status" in r.answer
+            r, _ = ask(gateway, "what is the robot's top speed?")  # Nav2's own parameter
+            assert "/controller_server's FollowPath.max_vel_x is 0." in r.answer, r.answer
+        finally:
+            gateway.close()

@@ -114,6 +114,7 @@ _READ_VERB = re.compile(
 
 # read topics: (pattern, topic), first match wins
 READS = [
+    (r"camera|image|picture|photo|video|webcam", "/camera/image_raw"),
     (r"conveyor|load sensor|lamp|belt|carrying|loaded|cargo|payload", "/conveyor/status"),
     (
         r"battery|charge|charged|charging|juice|power|voltage|percent|energy",

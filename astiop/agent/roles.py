@@ -22,6 +22,7 @@ KEY_ROLES = {
     "/conveyor/status": "conveyor",
     "/odom": "odometry",
     "/plan": "plan",
+    "/camera/image_raw": "camera",
 }
 # what a role is called in an answer
 WHAT = {
@@ -34,6 +35,7 @@ WHAT = {
     "conveyor": "conveyor status",
     "odometry": "odometry",
     "plan": "path",
+    "camera": "camera image",
 }
 # the same question answered by another sensor of the robot: obstacles seen in its scan
 STANDS_IN = {"obstacles": "scan"}

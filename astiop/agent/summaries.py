@@ -80,6 +80,12 @@ def _summary(ex: Execution, v: Any) -> str | None:
         r, i = min(hits)
         bearing = _deg(v["angle_min"] + i * v["angle_increment"])
         return f"scan of {len(v['ranges'])} beams: nearest return {r:.2f} m at {bearing:.0f} deg"
+    if role == "camera" and ("width" in v or "format" in v):  # its size, never its pixels
+        size = v.get("data_bytes", len(v.get("data") or []))
+        if "width" in v:
+            encoding = v.get("encoding") or "no encoding"
+            return f"camera image {v['width']} x {v['height']} px, {encoding}, {size} bytes"
+        return f"camera image, compressed {v.get('format') or '(format not said)'}, {size} bytes"
     if role == "diagnostics" and "status" in v:
         levels = {0: "OK", 1: "WARN", 2: "ERROR", 3: "STALE"}
         return "; ".join(

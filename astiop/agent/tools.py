@@ -48,6 +48,7 @@ TOPIC_TOOLS = {
     "/conveyor/status": "conveyor",
     "/odom": "speed",
     "/plan": "path",
+    "/camera/image_raw": "camera",
 }
 # the same short names by role, whatever the robot calls the topic (ros2/profile.py)
 ROLE_TOOLS = {
@@ -60,6 +61,7 @@ ROLE_TOOLS = {
     "conveyor": "conveyor",
     "odometry": "speed",
     "plan": "path",
+    "camera": "camera",
 }
 UNREADABLE_ROLES = ("velocity_command", "map", "plan")  # commands, or too big to read out
 SERVICE_TOOLS = {

@@ -24,6 +24,8 @@ from astiop.agent import (
     planner,
     roles,
     rules,
+    subject,
+    subject_answers,
 )
 from astiop.agent.intent import Intent
 from astiop.agent.interpretation import InterpretingMixin
@@ -165,6 +167,12 @@ class Agent(InterpretingMixin):
             if profile.pending() or profile.make == "unknown":  # role or the make is missing:
                 await asyncio.to_thread(self.gateway.confirm_missing)  # read it whole first
             intents = intent.classify(request, self.locations())
+            asked = subject.subjects_of(
+                request, intents, self.locations(), unknown=not self.endpoint.is_rules
+            )
+            if asked:
+                await self._answer_subjects(asked, result, emit)  # its reads, no model
+                return await self._finish(request, result, t0)
             if said := await self._unless_discovered(
                 lambda: (
                     roles.nothing_to_read(intents, self.gateway.profile)
@@ -221,6 +229,22 @@ class Agent(InterpretingMixin):
             self.recorder.finish_now(result, status="error")
             raise
         return await self._finish(request, result, t0)
+
+    async def _answer_subjects(self, asked: list, result: TurnResult, emit) -> None:
+        """A question's subject answered from the reads it takes, computed, for every model."""
+        reads = subject_answers.Reads(self.gateway)
+        texts = []
+        for s in asked:
+            texts.append(
+                await asyncio.to_thread(subject_answers.answer, s, reads, self.places(), self.store)
+            )
+        for seq, ex in enumerate(reads.ran):
+            result.commands.append(ex)
+            await self.recorder.command(result, seq, ex)
+            emit("command", ex)
+        result.grounding = "subject: " + ", ".join(s.kind for s in asked)
+        result.answer = ("[rules] " if self.endpoint.is_rules else "") + " ".join(texts)
+        emit("answer_token", result.answer)
 
     async def _unless_discovered(self, missing) -> str:
         """`missing()`'s answer, said only once the robot's graph has been read whole."""

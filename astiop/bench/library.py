@@ -34,6 +34,7 @@ BUILTIN = {
     "astiop-stage1": "stage1.yaml",
     "astiop-stage2": "stage2.yaml",
     "multistep": "multistep.yaml",  # stage 2: missions, scored by order (`bench.multistep`)
+    "questions": "questions.yaml",  # stage 2: questions, right / declined / else (`questions`)
 }
 
 

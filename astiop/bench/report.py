@@ -10,7 +10,7 @@ from collections import defaultdict
 from dataclasses import dataclass, field
 from typing import Any
 
-from astiop.bench import scoring
+from astiop.bench import questions, scoring
 from astiop.bench.runner import BenchError
 from astiop.store import Store
 
@@ -171,6 +171,9 @@ def _stage2(groups) -> list[ModelResult]:
             "wrong_actuations": float(sum(r["metrics"].get("wrong_actuations", 0) for r in rows)),
             "refused": float(sum(bool(r["metrics"].get("refused")) for r in rows)),
         }
+        verdicts = [r["metrics"]["verdict"] for r in rows if "verdict" in r["metrics"]]
+        if verdicts:  # the questions suite: right / honestly declined / answered something else
+            comps |= {f"questions_{k}": float(v) for k, v in questions.tally(verdicts).items()}
 
         def both_valid(r):
             return 100.0 * bool(r["metrics"].get("c_valid") and r["metrics"].get("i_valid"))
@@ -255,6 +258,18 @@ def _ranking(stage: int, protocol: str, results: list[ModelResult]) -> list[str]
     if stage == 2 and protocol == "astiop":
         wrong = {r.model: r.components.get("wrong_actuations", 0) for r in results}
         lines += ["", "Wrong actuations: " + ", ".join(f"{m} {v:.0f}" for m, v in wrong.items())]
+        asked = [r for r in results if "questions_right" in r.components]
+        if asked:
+            lines += [
+                "",
+                "Questions (right / honestly declined / answered something else): "
+                + ", ".join(
+                    f"{r.model} {r.components['questions_right']:.0f} / "
+                    f"{r.components['questions_declined']:.0f} / "
+                    f"{r.components['questions_other']:.0f}"
+                    for r in asked
+                ),
+            ]
     return lines + [""]
 
 

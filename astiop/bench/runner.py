@@ -17,7 +17,7 @@ from pathlib import Path
 
 from astiop.agent.models.llm import LLMError, LLMTimeout
 from astiop.agent.models.specs import LLMEndpoint, open_endpoint, parse_spec
-from astiop.bench import library, multistep, paper_protocol, stage1, stage2
+from astiop.bench import library, multistep, paper_protocol, questions, stage1, stage2
 from astiop.bench.case_turn import case_agent, scored
 from astiop.bench.live import close_live, live_case
 from astiop.bench.suites import SuiteError
@@ -294,6 +294,8 @@ async def _drive_case(store, config, endpoint, case, mode, sim, gateway):
         return await multistep.drive(store, case, agent, sim)
     agent = case_agent(store, config, endpoint, mode, gateway)
     turn = await agent.turn(case.request)
+    if questions.is_questions(case):  # a question: right, honestly declined, or else
+        return questions.scored(case, turn)
     truth = stage2.Truth.of_sim(sim)
     if sim.goal is not None:
         await asyncio.to_thread(sim.run_goal, 600.0)

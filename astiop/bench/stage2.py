@@ -275,6 +275,8 @@ def live_refusal(case: RobotCase) -> str:
     """Why the case cannot run on a live robot ("" when it can)."""
     if "visits" in case.outcome:
         return "a multi-step case's ground truth (the places visited) is the simulator's"
+    if "expect" in case.outcome:
+        return "a question's expected figures are the seeded simulator's"
     extra = sorted(set(case.setup) - LIVE_SETUP)
     if extra:
         return f"its set-up ({', '.join(extra)}) can only be made in the simulator"

@@ -185,7 +185,9 @@ class RobotGateway(EstopLatch, GraphReading):
     # -- commands --------------------------------------------------------------------------
     def review(self, text: str) -> Review:
         checked = validate(text, self.catalog)
-        if not checked.valid and checked.reason.startswith("there is no"):
+        if not checked.valid and (
+            checked.reason.startswith("there is no") or " has no parameter " in checked.reason
+        ):
             checked = self.checked_once_heard(text, checked)  # it may have appeared since
         if self.safety.geofence is None and checked.valid and checked.kind == "actuate":
             self.use_map()  # the robot's /map may have come in since
@@ -288,6 +290,11 @@ class RobotGateway(EstopLatch, GraphReading):
         result.role = next((r for r, m in profile.matches.items() if name and m.name == name), "")
         if result.role == "battery":
             result.units = profile.units.battery_percentage
+        data = result.values.get("data") if isinstance(result.values, dict) else None
+        if result.role == "camera" and isinstance(data, list | tuple | bytes | str):
+            # an image is read as what it is, not as its pixels (megabytes kept in the store)
+            kept = {k: v for k, v in result.values.items() if k != "data"}
+            result.values = {**kept, "data_bytes": len(data)}
 
     def _date_reading(self, topic: str, result: Execution) -> None:
         """A reading's period and its age by its header stamp, when the robot's clock is known

@@ -102,7 +102,7 @@ class Profile:
         return m.kind if m is not None else ""
 
     def missing(self) -> list[str]:
-        return [r for r in ROLE_NAMES if not self.has(r)]
+        return [r for r in ROLE_NAMES if not self.has(r) and not ROLE_BY_NAME[r].optional]
 
     def pending(self) -> list[str]:
         """Roles a profile file names that the graph has not shown yet."""

@@ -13,6 +13,8 @@ TWIST_STAMPED = "geometry_msgs/msg/TwistStamped"
 TRIGGER = "std_srvs/srv/Trigger"
 NAVIGATE_TO_POSE = "nav2_msgs/action/NavigateToPose"
 TF = "tf2_msgs/msg/TFMessage"
+IMAGE = "sensor_msgs/msg/Image"
+COMPRESSED_IMAGE = "sensor_msgs/msg/CompressedImage"
 TF_ROLES = ("transforms", "static_transforms")  # watched only for a pose that needs them
 
 
@@ -27,6 +29,7 @@ class Role:
     never: tuple[str, ...] = ()  # a name holding one of these words is not a candidate
     state: bool = False  # the live state is built from it: watched, recorded
     by_name_only: bool = False  # its type is too common (Trigger): only its names play it
+    optional: bool = False  # a robot without it lacks nothing (a camera): never "missing"
     description: str = ""
 
 
@@ -138,6 +141,19 @@ ROLES: tuple[Role, ...] = (
         (("topic", "astiop_msgs/msg/ConveyorStatus"),),
         ("/conveyor/status",),
         state=True,
+    ),
+    Role(
+        "camera",
+        (("topic", IMAGE), ("topic", COMPRESSED_IMAGE)),
+        (
+            "/camera/image_raw",
+            "/image_raw",
+            "/camera/image_raw/compressed",
+            "/image_raw/compressed",
+        ),
+        never=("depth", "theora", "zstd", "/ir/"),
+        optional=True,
+        description="the camera's images (read as their size and encoding, not their pixels)",
     ),
     Role("save_location", (("service", "astiop_msgs/srv/SaveLocation"),), ("/save_location",)),
     Role("list_locations", (("service", "astiop_msgs/srv/ListLocations"),), ("/list_locations",)),

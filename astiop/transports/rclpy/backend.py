@@ -176,7 +176,8 @@ class RclpyBackend(RclpyEstop, RclpyTeleop, RclpyStateWatches, RclpyVerbs, Robot
             and (not ns or n.startswith(ns + "/"))
         ]  # fmt: skip
         stale = time.monotonic() - self.refreshed_at > PARAMS_REFRESH_S
-        new = nodes if stale else [n for n in nodes if n not in self._params_of]
+        # a node read before its parameter services answered listed none: read it again
+        new = nodes if stale else [n for n in nodes if not self._params_of.get(n)]
         if new:
             read = read_params(self.proc, new, min(self.timeout_s, 2.0))
             for node in new:
