@@ -277,6 +277,23 @@ def _check_profile(profile, add) -> None:
         add("FAIL", "roles missing", ", ".join(missing) + f": no {' and no '.join(lacking)}")
     elif missing:
         add("warn", "roles missing", ", ".join(missing), needed=False)
+    add(*_estop_held_by(profile), needed=False)
+
+
+def _estop_held_by(profile) -> tuple[str, str, str]:
+    """What holds the robot once the E-STOP latches: its own stop service, its lock input, or
+    astiop's stations alone."""
+    own = [f"{role} {profile.name(role)}" for role in ("stop", "estop_lock") if profile.has(role)]
+    if own:
+        return "ok", "e-stop", "held by the robot's own " + " and ".join(own) + " too"
+    return (
+        "warn",
+        "e-stop",
+        (
+            "the robot has neither a stop service nor a lock input: held by astiop stations only "
+            "(and its navigation goals cancelled)"
+        ),
+    )
 
 
 def _finish(rows: list[dict], as_json: bool) -> None:

@@ -106,6 +106,7 @@ ROLES: tuple[Role, ...] = (
         (("topic", "std_msgs/msg/Bool"),),
         ("/e_stop", "/estop", "/emergency_stop"),
         by_name_only=True,
+        optional=True,  # said by `astiop doctor` on its own line: what holds the robot
         description="the robot's own E-STOP or lock input (a twist_mux lock): held true while "
         "the E-STOP latches",
     ),

@@ -75,20 +75,30 @@ class ConsoleSafety(_Host):
             self.notify("The e-stop is not engaged.")
             return
 
+        graph = self.services.gateway.station_latch
+        pressed = graph.press if graph is not None and graph.engaged else None
+
         def done(ok: bool | None) -> None:
             if ok:
-                self.run_worker(self._release, thread=True, group="estop", exit_on_error=False)
+                self.run_worker(
+                    lambda: self._release(pressed), thread=True, group="estop", exit_on_error=False
+                )
 
         question = "Release the e-stop? The robot may move again."
+        if pressed is not None and not pressed.is_here():  # pressed at another station
+            question = f"Release the e-stop pressed by {pressed.words}? The robot may move again."
         if self.fleet is not None:
             names = ", ".join(name for name, _, _ in self.fleet.robots)
             question = f"Release the e-stop of {names}? They may move again."
         self.push_screen(ConfirmModal(question), done)
 
-    def _release(self) -> None:
+    def _release(self, pressed=None) -> None:
+        failures = self.services.gateway.release_estop(pressed)
+        if failures and failures[0].startswith("pressed again since"):  # not what was asked
+            self.call_from_thread(self.notify, failures[0], severity="error", markup=False)
+            return
         # the latch of every robot goes too: this console's robots are all it holds
         self.services.store.release_estop("console")
-        failures = self.services.gateway.release_estop()
         if self.fleet is not None:
             failures += self.fleet.release_all(self.current_robot)
         if failures:  # the latch let go; the robot's own stop did not
