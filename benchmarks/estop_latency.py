@@ -12,6 +12,9 @@ drives the robot; once its Twists arrive, `astiop estop` starts (t0). Measured:
 - estop zero: t0 -> the first zero Twist at the robot;
 - speed zero (rclpy only): t0 -> the robot's own /odom speed under 0.01 m/s;
 - exec ended: t0 -> the publishing `astiop exec` process exited.
+With --stations the publishing `astiop exec` is another station, on a database of its own: it
+follows the E-STOP only as said on the robot's graph (rclpy: robot/station_latch.py), and
+"last moving Twist" is how long that took from the press.
 Kinds: rclpy, against `astiop sim node` on real DDS (Twists taken at the robot's side by
 tests/cmd_vel_probe.py); cli, against the emulated `ros2` (tests/emulator.py, --latency-ms of
 start-up per call, the robot logs each Twist's arrival). time.monotonic() and time.time() are
@@ -103,15 +106,19 @@ class Console:
         self.store.close()
 
 
+STATIONS = False  # --stations: the publisher on a database of its own
+
+
 def one_trial(
     kind: str, env: dict, work: Path, twists, odom=None, trigger: str = "astiop estop"
 ) -> dict[str, float]:
     db = work / f"{kind}-{time.monotonic_ns()}.db"
+    other = db.with_name(db.stem + "-b.db") if STATIONS else db
     subprocess.run(cli(db, "estop", "--release", "--yes"), env=env, capture_output=True)
     transport = env["ASTIOP_ROBOT__ROS2_TRANSPORT"]
     console = Console(db, transport, env) if trigger == "ctrl+e" else None
     publisher = subprocess.Popen(
-        cli(db, "exec", "--yes", PUBLISH), env=env, stdout=subprocess.DEVNULL,
+        cli(other, "exec", "--yes", PUBLISH), env=env, stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
     )  # fmt: skip
     n0 = len(twists())
@@ -229,6 +236,7 @@ def main() -> None:
     ap.add_argument("--kinds", default="rclpy,cli")
     ap.add_argument("--latency-ms", type=int, default=300)
     ap.add_argument("--domain", type=int, default=int(os.environ.get("ROS_DOMAIN_ID", 86)))
+    ap.add_argument("--stations", action="store_true", help="the publisher on its own database")
     ap.add_argument(
         "--trigger",
         choices=["astiop estop", "ctrl+e"],
@@ -236,6 +244,8 @@ def main() -> None:
         help="a second shell's `astiop estop`, or a console's ctrl+e (its gateway.estop())",
     )
     args = ap.parse_args()
+    global STATIONS
+    STATIONS = args.stations
     os.environ.update(
         ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
         ROS_LOCALHOST_ONLY="1",
@@ -252,7 +262,8 @@ def main() -> None:
         if "cli" in kinds:
             name = f"cli (emulated, {args.latency_ms} ms a call)"
             results[name] = run_cli(env, work, args.repeats, args.latency_ms, args.trigger)
-    print(f"trigger: {args.trigger}; load average {os.getloadavg()[0]:.2f}")
+    where = "another station (its own database)" if args.stations else "the same database"
+    print(f"trigger: {args.trigger}; publisher on {where}; load {os.getloadavg()[0]:.2f}")
     print(table(results))
 
 
