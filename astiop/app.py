@@ -1,4 +1,4 @@
-"""The Textual console: six screens over one set of services (store, robot gateway, model).
+"""The Textual console: seven screens over one set of services (store, robot gateway, model).
 
 The robot is reached only through the gateway: its state is sampled off the UI thread and
 arrives as `RobotStateSampled`; every robot call runs in a worker; the E-STOP key is handled
