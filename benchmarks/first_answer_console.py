@@ -5,8 +5,9 @@
 Each run is a new process with a new config, store and an empty cache (nothing of the embedded
 model's prompts kept): the console built as `astiop` builds it (`make_app`, the simulator, the
 embedded model), driven headless with Textual's Pilot. When the Dashboard shows, it waits
-`--at` seconds, goes to the Chat screen, types the request and sends it. Figures: the seconds
-from the request sent to its answer shown, and the answer.
+`--at` seconds, goes to the Chat screen, types the request and sends it; once the model's
+warm-up is over, it asks the same again (the model's own first answer). Figures: the seconds
+from each request sent to its answer shown, and the answers.
 """
 
 from __future__ import annotations
@@ -31,6 +32,22 @@ request, at = sys.argv[1], float(sys.argv[2])
 settings = load_settings()
 store = Store(settings.db)
 
+async def ask(app, pilot):
+    before = len(app.screen.query(".answer"))
+    app.screen.query_one(Input).value = request
+    t0 = time.perf_counter()
+    await pilot.press("enter")
+    while True:
+        shown = [str(w.render()) for w in list(app.screen.query(".answer"))[before:]]
+        if any(" · " in s for s in shown):  # the turn's status line: the answer is in
+            break
+        if time.perf_counter() - t0 > 600:
+            raise SystemExit("no answer in 600 s")
+        await asyncio.sleep(0.02)
+    answer = " | ".join(s for s in shown if s.strip() and "thinking" not in s)
+    return time.perf_counter() - t0, answer
+
+
 async def main():
     t_start = time.perf_counter()
     app = make_app(settings, store)
@@ -39,20 +56,14 @@ async def main():
         await asyncio.sleep(at)
         await pilot.press("f2")
         await pilot.pause()
-        before = len(app.screen.query(".answer"))
-        app.screen.query_one(Input).value = request
-        t0 = time.perf_counter()
-        await pilot.press("enter")
-        while True:
-            shown = [str(w.render()) for w in list(app.screen.query(".answer"))[before:]]
-            if any(" · " in s for s in shown):  # the turn's status line: the answer is in
-                break
-            if time.perf_counter() - t0 > 600:
-                raise SystemExit("no answer in 600 s")
-            await asyncio.sleep(0.02)
-        t1 = time.perf_counter()
-        answer = " | ".join(s for s in shown if s.strip() and "thinking" not in s)
-    return {"open_s": t_open - t_start, "answer_s": t1 - t0, "answer": answer}
+        first_s, first = await ask(app, pilot)
+        while app.services.endpoint.warming:
+            await asyncio.sleep(0.1)
+        await app.workers.wait_for_complete()
+        warmed_s = time.perf_counter() - t_open
+        then_s, then = await ask(app, pilot)
+    return {"open_s": t_open - t_start, "answer_s": first_s, "answer": first,
+            "warmed_s": warmed_s, "then_s": then_s, "then": then}
 
 print(json.dumps(asyncio.run(main())))
 """
@@ -98,6 +109,12 @@ def main() -> int:
         f"{statistics.median(r['open_s'] for r in rows):.2f} s"
     )
     print("  answers:", sorted({r["answer"][:160] for r in rows}))
+    then = [r["then_s"] for r in rows]
+    print(
+        f"warm-up over at +{statistics.median(r['warmed_s'] for r in rows):.1f} s; the same asked "
+        f"then: median {statistics.median(then):5.2f} s (min {min(then):.2f}, max {max(then):.2f})"
+    )
+    print("  answers:", sorted({r["then"][:160] for r in rows}))
     return 0
 
 
