@@ -1,4 +1,4 @@
-"""The Textual console: six screens over one set of services (store, robot gateway, model).
+"""The Textual console: seven screens over one set of services (store, robot gateway, model).
 
 The robot is reached only through the gateway: its state is sampled off the UI thread and
 arrives as `RobotStateSampled`; every robot call runs in a worker; the E-STOP key is handled
@@ -28,16 +28,11 @@ from astiop.robot.sampler import StateSampler
 from astiop.ros2.render import goto_command
 from astiop.screens import control
 from astiop.screens.approvals import ApprovalDesk
-from astiop.screens.bench import BenchScreen
-from astiop.screens.chat import ChatScreen
 from astiop.screens.console_palette import ConsolePalette
 from astiop.screens.console_safety import ConsoleSafety
-from astiop.screens.dashboard import DashboardScreen, motion_key
-from astiop.screens.fleet import FleetScreen
-from astiop.screens.locations import LocationsScreen
-from astiop.screens.logs import LogsScreen
+from astiop.screens.dashboard import motion_key
 from astiop.screens.messages import RobotStateSampled, TurnFinished
-from astiop.screens.teleop import TeleopScreen
+from astiop.screens.registry import SCREENS
 from astiop.services import Services
 from astiop.store import Store
 from astiop.transports.state import RobotState, TopicStat
@@ -48,24 +43,10 @@ STILL_HZ = 4.0  # a still robot's sampling: only its clock, scan noise and batte
 class AstiopApp(ConsoleSafety, ConsolePalette, App):
     TITLE = "astiop"
     CSS_PATH = "app.tcss"
-    MODES = {
-        "dashboard": DashboardScreen,
-        "chat": ChatScreen,
-        "logs": LogsScreen,
-        "locations": LocationsScreen,
-        "teleop": TeleopScreen,
-        "bench": BenchScreen,
-        "fleet": FleetScreen,
-    }
+    MODES = {s.mode: s.screen for s in SCREENS}
     BINDINGS = [
         Binding("ctrl+e", "estop", "E-STOP", priority=True),
-        Binding("f1", "switch_mode('dashboard')", "Dashboard"),
-        Binding("f2", "switch_mode('chat')", "Chat"),
-        Binding("f3", "switch_mode('logs')", "Logs"),
-        Binding("f4", "switch_mode('locations')", "Locations"),
-        Binding("f5", "switch_mode('teleop')", "Teleop"),
-        Binding("f6", "switch_mode('bench')", "Bench"),
-        Binding("f7", "switch_mode('fleet')", "Fleet"),
+        *(Binding(s.key, f"switch_mode('{s.mode}')", s.title) for s in SCREENS),
         Binding("ctrl+t", "take_control", "Take control / let go", show=False),
         Binding("ctrl+r", "release_estop", "Release e-stop", priority=True),
         Binding("ctrl+q", "quit", "Quit", priority=True),

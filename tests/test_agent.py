@@ -335,3 +335,28 @@ def test_the_interpretation_prompt_names_each_command_by_its_topic_or_service():
     assert "ros2 topic echo" not in text
     param = "ros2 param get /astibot_base max_linear_speed\n  Double value is: 0.8"
     assert param in interpret_user("how fast may it go?", param), "the parameter stays named"
+
+
+async def test_while_the_model_warms_up_a_reading_is_answered_from_the_robot_and_said_so(
+    llm, store
+):
+    """The console's warm-up (agent/warm.py) holds `endpoint.warming`: a question that only
+    reads the robot is answered at once from its readings, labelled; the model hears nothing."""
+    agent = make_agent(llm, store, mode="tool")
+    agent.endpoint.warming = True
+    result = await agent.turn("what is the battery level?")
+    assert result.answer.startswith("[model warming up]") and "85.0 %" in result.answer
+    assert result.commands[0].executed and llm.requests == []
+    assert store.interactions()[0]["answer"] == result.answer
+
+
+async def test_while_the_model_warms_up_a_request_to_act_still_waits_for_the_model(llm, store):
+    llm.replies = ['{"commands": ["ros2 service call /dock std_srvs/srv/Trigger"]}', "Docking."]
+    agent = make_agent(llm, store)
+    agent.endpoint.warming = True
+    result = await agent.turn("dock the robot")
+    assert len(llm.requests) == 2 and not result.answer.startswith("[model warming up]")
+    assert result.commands[0].command == "ros2 service call /dock std_srvs/srv/Trigger"
+    agent.endpoint.warming = False  # warmed: the model plans a reading again
+    llm.replies = ['{"commands": ["ros2 topic echo /battery_status --once"]}', "85 %."]
+    assert (await agent.turn("battery level?")).answer == "85 %." and len(llm.requests) == 4

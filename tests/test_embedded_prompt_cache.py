@@ -236,14 +236,16 @@ async def test_warming_keeps_this_robots_prompts_before_its_first_question(model
                             cache_dir=tmp_path / "cache").start()  # fmt: skip
 
     class Embedded:  # the console's endpoint, on this server
-        local, is_rules = True, False
+        local, is_rules, warming = True, False, False
 
         def client(self):
             return server.client()
 
     try:
         assert await warm(open_endpoint("rules"), gateway, store, "command") is None
-        assert await warm(Embedded(), gateway, store, settings.llm.mode) > 0
+        endpoint = Embedded()
+        assert await warm(endpoint, gateway, store, settings.llm.mode) > 0
+        assert not endpoint.warming  # warmed: the model answers every question again
         assert server.prompt_cache.saves == 2 and len(state_files(tmp_path / "cache")) == 2
         places = [loc.name for loc in store.list_locations()]
         req = planner.plan_request(

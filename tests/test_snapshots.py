@@ -6,6 +6,7 @@ import time
 import pytest
 from textual.widgets import Input
 
+from astiop.screens.registry import SCREENS
 from astiop.sim.simulator import Simulator
 from tests.tui_helpers import console
 
@@ -33,7 +34,7 @@ def showing(key: str):
     return run_before
 
 
-@pytest.mark.parametrize("key", ["f1", "f2", "f4", "f5", "f6", "f7"])
+@pytest.mark.parametrize("key", [s.key for s in SCREENS if s.mode != "logs"])  # logs: below
 def test_screen_snapshots(snap_compare, tmp_path, key):
     app = console(tmp_path, sim=scene())
     assert snap_compare(app, terminal_size=SIZE, run_before=showing(key))

@@ -40,13 +40,12 @@ else:
 
 
 class InterpretingMixin(_Host):
-    async def _interpret(self, request: str, result: TurnResult, emit, fallback: bool) -> str:
+    async def _interpret(self, request: str, result: TurnResult, emit, fallback: str) -> str:
         if self.endpoint.is_rules or fallback:
             answer = rules.interpret(request, result.commands, self._waited_lines(result))
             if result.started:
                 answer += f" | {result.started}"
-            if fallback:
-                answer = "[rules fallback] " + answer
+            answer = fallback + answer  # the label of an answer the model did not write
             result.grounding = "rules"
             emit("answer_token", answer)
             return answer

@@ -26,6 +26,7 @@ from astiop.agent import (
     rules,
     subject,
     subject_answers,
+    warm,
 )
 from astiop.agent.intent import Intent
 from astiop.agent.interpretation import InterpretingMixin
@@ -161,7 +162,6 @@ class Agent(InterpretingMixin):
         self._reviews, self._turn_places = {}, None  # this turn reads them afresh
         await self.recorder.start(result)
         try:
-            fallback = False
             # classified once: the planner narrows the tools by it, the gate holds plans to it
             profile = self.gateway.profile  # on half a graph (a new process: astiop chat), a
             if profile.pending() or profile.make == "unknown":  # role or the make is missing:
@@ -190,8 +190,10 @@ class Agent(InterpretingMixin):
                 return await self._finish(request, result, t0)
             if await mission_turn.without_model(self, request, intents, result, emit):
                 return await self._finish(request, result, t0)
+            commands = warm.readings_meanwhile(self.endpoint, intents, self._rules_plan)
+            fallback = warm.WARMING if commands else ""  # who answers, when not the model
             try:
-                commands = await self._plan(request, intents, result, emit)
+                commands = commands or await self._plan(request, intents, result, emit)
             except (LLMUnavailable, LLMTimeout, LLMHTTPError) as exc:
                 _keep_partial(result, exc)
                 unavailable = not isinstance(exc, LLMHTTPError) or exc.status in (502, 503, 504)
@@ -199,7 +201,7 @@ class Agent(InterpretingMixin):
                     raise
                 # the baseline answers instead, labelled so; the turn still records the error
                 result.error = f"{exc}; answered by the rules fallback"
-                commands, fallback = self._rules_plan(intents), True
+                commands, fallback = self._rules_plan(intents), "[rules fallback] "
             refused = await asyncio.to_thread(self._gate_reason, intents, commands)
             steps = None
             if not refused and self.missions is not None:

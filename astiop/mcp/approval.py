@@ -62,7 +62,8 @@ def clear(
     if not checked.valid:
         return Clearance(review, checked.reason or "not a valid command")
     own = gateway.profile.name("release")
-    if releases_a_stop(checked, own):  # a held robot is let go by a person, never an agent
+    # a held robot is let go by a person, never an agent
+    if checked.command is not None and releases_a_stop(checked, own):
         said = f"{checked.command.name} releases a held robot: a person does, with ctrl+r or astiop estop --release"
         return Clearance(review, said)
     if not review.allowed:

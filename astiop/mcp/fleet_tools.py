@@ -103,7 +103,7 @@ class FleetTools:
 
         call.__name__ = name
         call.__doc__ = method.__doc__
-        call.__signature__ = inspect.Signature(
+        call.__signature__ = inspect.Signature(  # type: ignore[attr-defined]
             [*params, robot], return_annotation=hints.get("return", inspect.Signature.empty)
         )
         return call

@@ -3,15 +3,19 @@ The mission runs in this server's process, through the gateway, like a console's
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from astiop.bounded import escape_controls, one_line
-from astiop.mcp.approval import NO_CONSOLE, wait_for_decision
+from astiop.mcp.approval import NO_CONSOLE, Policy, wait_for_decision
 from astiop.mcp.audit import CALL
 from astiop.mcp.refusals import Refused
 from astiop.missions import view
 from astiop.missions.runner import MissionError, MissionRunner
 from astiop.missions.steps import KINDS, Condition, Step, describe
+
+if TYPE_CHECKING:
+    from astiop.robot.gateway import RobotGateway
+    from astiop.store import Store
 
 MAX_STEPS = 20
 STEP_KEYS = {"kind", "place", "x", "y", "seconds", "what", "if"}
@@ -67,8 +71,12 @@ def _number(value: Any, name: str) -> float:
 
 
 class MissionTools:
-    """Mixed into RobotTools: uses its gateway, store, policy and audit."""
+    """Mixed into RobotTools: uses its gateway, store, policy and name."""
 
+    gateway: RobotGateway
+    store: Store
+    policy: Policy
+    name: str
     _runner: MissionRunner | None = None
 
     def _missions(self) -> MissionRunner:

@@ -186,8 +186,9 @@ class AstiopMCP(MCPServer):
                        description="`ros2 interface show` of every type in the catalog.")  # fmt: skip
         def interfaces() -> str:
             c = gw.catalog
-            types = sorted({x.type for x in [*c.topics.values(), *c.services.values(),
-                                             *c.actions.values()]})  # fmt: skip
+            types = sorted({*(t.type for t in c.topics.values()),
+                            *(s.type for s in c.services.values()),
+                            *(a.type for a in c.actions.values())})  # fmt: skip
             parts = []
             for type_ in types:
                 try:
@@ -230,7 +231,6 @@ def serve_http(server: AstiopMCP, host: str, port: int, token: str | None) -> No
     import uvicorn
 
     app = server.streamable_http_app(host=host)
-    if token:
-        app = BearerGate(app, token)
+    served = BearerGate(app, token) if token else app
     logging.getLogger("uvicorn.error").setLevel(logging.WARNING)
-    uvicorn.Server(uvicorn.Config(app, host=host, port=port, log_level="warning")).run()
+    uvicorn.Server(uvicorn.Config(served, host=host, port=port, log_level="warning")).run()

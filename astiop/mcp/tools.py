@@ -165,6 +165,8 @@ class RobotTools(MissionTools):
             text = command_for(Intent("navigate", xy=(loc.x, loc.y), theta=loc.theta), profile)
         else:
             text = goto_command(loc.name)
+        if text is None:
+            raise Refused(f"this robot has nothing that goes to {preview(name)}")
         return self._actuate(text, goal=(loc.name, (loc.x, loc.y)))
 
     def go_to_pose(self, x: float, y: float, theta_deg: float) -> str:

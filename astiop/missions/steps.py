@@ -86,7 +86,7 @@ class Step:
         action = profile.name("navigation") if profile is not None else None
         if self.kind == "goto" and action and profile.kind("navigation") == "action":
             xy = self.xy or (locate(self.place) if locate and self.place else None)
-            return nav_goal_command(action, *xy, self.theta or 0.0) if xy else None
+            return nav_goal_command(action, xy[0], xy[1], self.theta or 0.0) if xy else None
         if self.kind in SERVICES:
             return f"ros2 service call {SERVICES[self.kind]} {TRIGGER}"
         if self.kind == "goto" and self.xy is not None:

@@ -1,4 +1,4 @@
-"""The ASTIbot's ROS 2 graph: topics, services, actions, nodes and parameters (DESIGN.md §4).
+"""The ASTIbot's ROS 2 graph: topics, services, actions, nodes and parameters.
 
 A contract: prompts, the rules baseline, the benchmark and the tests all use these names.
 """

@@ -39,7 +39,8 @@ def _struct(type_name: str, values: dict[str, Any], part: int, offset: int) -> i
             items = list(value or ())
             offset = _align(offset, 4) + 4  # a sequence's length
         elif f.is_array:  # a fixed array: exactly its size
-            items = (list(value or ()) + [None] * f.array_size)[: f.array_size]
+            size = f.array_size or 0
+            items = (list(value or ()) + [None] * size)[:size]
         else:
             items = [value]
         for item in items:

@@ -41,7 +41,7 @@ def _element(slot: Any) -> Any:
     return getattr(slot, "value_type", None)  # a sequence or an array: its element's type
 
 
-def to_message(cls: type, data: dict[str, Any]) -> Any:
+def to_message(cls: Any, data: dict[str, Any]) -> Any:
     """A message object of `cls` with the fields given in `data` (others keep their default)."""
     msg = cls()
     slots = dict(zip(cls.get_fields_and_field_types(), cls.SLOT_TYPES))
@@ -54,8 +54,9 @@ def to_message(cls: type, data: dict[str, Any]) -> Any:
             value = to_message(nested, value)
         else:
             element = _element(slot)
-            if element is not None and _nested_class(element) is not None:
-                value = [to_message(_nested_class(element), v) for v in value]
+            element_class = _nested_class(element) if element is not None else None
+            if element_class is not None:
+                value = [to_message(element_class, v) for v in value]
         try:
             setattr(msg, key, value)
         except (AssertionError, TypeError, ValueError) as exc:

@@ -144,7 +144,7 @@ def _pose_source(matches: dict[str, Match]) -> Match:
     """The pose's match, its "why" saying how the state builds it from TF where it does."""
     pose, tf = matches["pose"], matches.get("transforms")
     on_tf = tf is not None and bool(tf.name)
-    if pose.type == AMCL_POSE and on_tf:
+    if pose.type == AMCL_POSE and tf is not None and on_tf:
         # amcl publishes its pose only after update_min_d/update_min_a of motion, but map → odom
         # on /tf with every scan: composed with odom → base, the pose is as fresh as odometry
         how = f"; between its updates, {tf.name}'s map → odom ∘ odom → base"

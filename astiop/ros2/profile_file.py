@@ -26,7 +26,7 @@ from astiop.ros2.roles import ROLE_NAMES
 try:
     import tomllib
 except ModuleNotFoundError:  # Python 3.10: the Jetson's ROS 2 Humble
-    import tomli as tomllib
+    import tomli as tomllib  # type: ignore[no-redef]
 
 SECTIONS = ("robot", "roles", "units", "limits", "map")
 MAP_NAME_RE = re.compile(r"^[A-Za-z0-9_.-]{1,64}$")
@@ -61,8 +61,8 @@ def read_spec(setting: str, namespace: str = "") -> ProfileSpec:
         raise ProfileError(str(exc)) from None
     if setting in ("", "auto"):
         spec = ProfileSpec()
-    elif setting in shipped_names():
-        spec = shipped(setting)
+    elif (found := shipped(setting) if setting in shipped_names() else None) is not None:
+        spec = found
     else:
         path = Path(setting).expanduser()
         if not path.is_file():
@@ -131,7 +131,8 @@ def _map_table(data: dict, source: str) -> MapSpec:
         raise ProfileError(
             f"{source}: map.geofence is [x_min, y_min, x_max, y_max] in metres, min below max"
         )
-    return MapSpec(name, tuple(float(v) for v in fence))
+    x_min, y_min, x_max, y_max = (float(v) for v in fence)
+    return MapSpec(name, (x_min, y_min, x_max, y_max))
 
 
 def _table(data: dict, section: str, source: str, keys: dict[str, type]) -> dict[str, Any]:

@@ -64,6 +64,9 @@ def flow_yaml(message: dict) -> str:
 def sent_argv(checked: Checked) -> list[str]:
     """What follows `ros2` on the command line for this checked command."""
     cmd = checked.command
+    if cmd is None:
+        raise ValueError(f"'{checked.text}' was not read as a command: nothing to send")
+    name, type_, message = cmd.name or "", checked.type or "", checked.message or {}
     key = cmd.key
     if key == ("topic", "pub"):
         argv = ["topic", "pub"]
@@ -75,17 +78,17 @@ def sent_argv(checked: Checked) -> list[str]:
             argv += ["-r", f"{cmd.options['rate']:g}"]
         return [
             *argv,
-            cmd.name,
-            checked.type,
-            flow_yaml(stamped_now(checked.type, checked.message)),
+            name,
+            type_,
+            flow_yaml(stamped_now(type_, message)),
         ]
     if key == ("service", "call"):
-        return ["service", "call", cmd.name, checked.type, flow_yaml(checked.message)]
+        return ["service", "call", name, type_, flow_yaml(message)]
     if key == ("action", "send_goal"):
-        argv = ["action", "send_goal", cmd.name, checked.type, flow_yaml(checked.message)]
+        argv = ["action", "send_goal", name, type_, flow_yaml(message)]
         return argv + (["--feedback"] if "feedback" in cmd.flags else [])
     if key == ("param", "set"):
-        return ["param", "set", cmd.args["node"], cmd.args["param"], repr(checked.message["value"])]
+        return ["param", "set", cmd.args["node"], cmd.args["param"], repr(message["value"])]
     if key == ("param", "get"):
         return ["param", "get", cmd.args["node"], cmd.args["param"]]
     return _full_names(cmd)

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Container
 from dataclasses import replace
 
 from astiop.ros2.catalog import Catalog
@@ -32,7 +33,7 @@ def validate(text: str, catalog: Catalog, distro: str | None = None) -> Checked:
 
 
 def _named(cmd: Ros2Command) -> str:
-    return cmd.args["node"] if cmd.verb == "param" else cmd.name
+    return cmd.args["node"] if cmd.verb == "param" else (cmd.name or "")
 
 
 def in_namespace(cmd: Ros2Command, catalog: Catalog, namespace: str) -> Ros2Command:
@@ -41,8 +42,14 @@ def in_namespace(cmd: Ros2Command, catalog: Catalog, namespace: str) -> Ros2Comm
     ROS 2: the commands the rules and the model write in a robot's own names reach it."""
     if not namespace:
         return cmd
-    tables = {"topic": catalog.topics, "service": catalog.services, "action": catalog.actions}
-    known = tables.get(cmd.verb, catalog.nodes if cmd.verb in ("node", "param") else None)
+    tables: dict[str, Container[str]] = {
+        "topic": catalog.topics,
+        "service": catalog.services,
+        "action": catalog.actions,
+    }
+    known: Container[str] | None = tables.get(
+        cmd.verb, catalog.nodes if cmd.verb in ("node", "param") else None
+    )
     key = "node" if cmd.verb == "param" else "name"
     name = cmd.args.get(key)
     if known is None or not name or name in known:

@@ -1,4 +1,4 @@
-"""Chat (Fig. 16c): a request becomes ros2 commands, each shown checked, run and explained."""
+"""Chat: a request becomes ros2 commands, each shown checked, run and explained."""
 
 from __future__ import annotations
 

@@ -14,13 +14,13 @@ from astiop.recording import SessionRecorder
 from astiop.screens import mission_commands
 from astiop.screens.chat import ChatScreen
 from astiop.screens.logs import LogsScreen
+from astiop.screens.registry import SCREENS
 from astiop.services import Services
 
 
 class PaletteHost(Protocol):
     """What `ConsolePalette` needs of the app it is mixed into."""
 
-    MODES: dict[str, Any]
     services: Services
     recorder: SessionRecorder | None
 
@@ -58,10 +58,10 @@ class ConsolePalette(_Host):
         yield from super().get_system_commands(screen)
         yield SystemCommand("E-STOP", "Stop all motion now (ctrl+e)", self.action_estop)
         # every screen's key has a second way here: a browser or a tablet may lack F-keys
-        for key, mode in enumerate(self.MODES, start=1):
+        for s in SCREENS:
             yield SystemCommand(
-                f"Screen: {mode.title()}", f"Show the {mode} screen (f{key})",
-                partial(self.switch_mode, mode),
+                f"Screen: {s.title}", f"Show the {s.mode} screen ({s.key})",
+                partial(self.switch_mode, s.mode),
             )  # fmt: skip
         yield from mission_commands.palette(self)
         yield SystemCommand(

@@ -1,4 +1,4 @@
-"""Dashboard (Fig. 16a): the robot, the graph's topics, the agent, the map, the latest events.
+"""Dashboard: the robot, the graph's topics, the agent, the map, the latest events.
 
 Everything here comes from the robot layer's `RobotState`, so it reads the same on the
 simulator and on a real robot; a topic the robot lacks shows as absent.

@@ -1,4 +1,4 @@
-"""Locations (Fig. 16d): named waypoints; add, rename, delete and send the robot there."""
+"""Locations: named waypoints; add, rename, delete and send the robot there."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Logs (Fig. 16b): every interaction and robot event from the store, filtered, exportable."""
+"""Logs: every interaction and robot event from the store, filtered, exportable."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Mecanum kinematics of the ASTIbot in physical units (paper Eq. 3-6, DESIGN.md §3).
+"""Mecanum kinematics of the ASTIbot in physical units (paper Eq. 3-6).
 
 Body velocity u = [vx, vy, wz] (x forward, y left), wheel speeds w = [FL, FR, RL, RR] in rad/s,
 roller angles -45°, 45°, 45°, -45° (Table 4). The paper sets r = 1 and drops T's 1/4; here

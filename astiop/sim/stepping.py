@@ -99,10 +99,10 @@ class SteppingMixin(_Host):
             n = int(self._carry / self.dt + 1e-9)
             self._carry -= n * self.dt
             before, world_step, dt = self._before_physics, self.world.step, self.dt
-            for _ in range(n):  # _substep, with its lookups made once
+            for _ in range(n):  # a substep: the robot, the world, then its contacts
                 before()
                 world_step(dt)
-                if self._contact is not None:  # _after_physics
+                if self._contact is not None:  # _after_physics, inlined
                     self._on_collision(self._contact)
         for observe in self.after_step:  # e.g. a recorder, in fast mode
             observe()
@@ -122,11 +122,6 @@ class SteppingMixin(_Host):
             with self.lock:
                 self._finish("aborted", f"timed out after {max_sim_s:.0f} s")
         return self.last_result
-
-    def _substep(self) -> None:
-        self._before_physics()
-        self.world.step(self.dt)
-        self._after_physics()
 
     def _before_physics(self) -> None:
         """The robot's share of a substep before the world moves: control, lidar, its motors.

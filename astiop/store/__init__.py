@@ -8,15 +8,12 @@ import random
 import sqlite3
 import threading
 import time
-from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
-
-import sqlite_utils
 
 from astiop.bounded import one_line
 from astiop.store.approvals import ApprovalTables
 from astiop.store.bench import BenchTables
+from astiop.store.connection import BUSY_TIMEOUT_MS
 from astiop.store.journal import JournalTables
 from astiop.store.leases import LeaseTables
 from astiop.store.liveness import _alive
@@ -32,8 +29,6 @@ from astiop.store.schema import (
 from astiop.store.zones import ZoneTables
 from astiop.warehouse import Rect, default_map
 
-BUSY_TIMEOUT_MS = 10_000  # how long a write waits for another process's
-
 __all__ = ["SCHEMA_VERSION", "Location", "LocationError", "Store", "StoreError"]
 
 
@@ -45,15 +40,6 @@ def _writable(path: Path) -> bool:
     if path.exists() and not os.access(path, os.W_OK):
         return False
     return os.access(folder, os.W_OK | os.X_OK)
-
-
-def _read_only_uri(path: Path) -> str:
-    """mode=ro; and immutable where SQLite could not make a WAL file's shared-memory file (no
-    -shm beside it, in a folder astiop may not write): it is then read as it stands on disk."""
-    shm = path.with_name(path.name + "-shm")
-    if not shm.exists() and not os.access(path.parent, os.W_OK | os.X_OK):
-        return f"{path.as_uri()}?mode=ro&immutable=1"
-    return f"{path.as_uri()}?mode=ro"
 
 
 class Store(
@@ -83,19 +69,6 @@ class Store(
             self._mark_interrupted()
 
     # -- connections and schema -------------------------------------------------
-    @property
-    def db(self) -> sqlite_utils.Database:
-        db = getattr(self._local, "db", None)
-        if db is None:
-            if self.readonly:  # reads work; any write fails, and _tx says so first
-                conn = sqlite3.connect(_read_only_uri(self.path), uri=True, timeout=10)
-            else:
-                conn = sqlite3.connect(self.path, timeout=10)
-            conn.execute(f"PRAGMA busy_timeout={BUSY_TIMEOUT_MS}")  # SQLite retries, bounded
-            db = sqlite_utils.Database(conn)
-            self._local.db = db
-        return db
-
     def schema_version(self) -> int:
         """How many of the schema's migrations this file has had."""
         return self.db.conn.execute("PRAGMA user_version").fetchone()[0]
@@ -114,22 +87,6 @@ class Store(
             self.close()
             why = one_line(rows[0][0], 160)
             raise StoreError(f"{self.path} is damaged ({why}); it was left untouched")
-
-    @contextmanager
-    def _tx(self) -> Iterator[None]:
-        """One write transaction; a read-only or busy database and a broken write become one
-        StoreError, a duplicate name a LocationError."""
-        if self.readonly:
-            raise StoreError(f"{self.path} is read-only: nothing was written")
-        try:
-            with self.db.conn:
-                yield
-        except sqlite3.IntegrityError as exc:
-            if "UNIQUE" in str(exc) and "locations.name" in str(exc):
-                raise LocationError("a location with that name already exists") from None
-            raise StoreError(f"{self.path}: {exc}") from None
-        except sqlite3.OperationalError as exc:
-            raise StoreError(f"{self.path}: {exc}; nothing was written") from None
 
     def _mark_interrupted(self) -> None:
         """Turns left `running` by a process that is gone are marked `interrupted`."""
@@ -216,9 +173,3 @@ class Store(
                 f"{self.path} was upgraded meanwhile to schema version {version}, newer than "
                 f"this astiop understands ({SCHEMA_VERSION}); upgrade astiop"
             )
-
-    def close(self) -> None:
-        db = getattr(self._local, "db", None)
-        if db is not None:
-            db.conn.close()
-            self._local.db = None

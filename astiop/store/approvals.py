@@ -8,10 +8,12 @@ import os
 import time
 from typing import Any
 
+from astiop.store.connection import Connection, row_id
+
 CONSOLE_ALIVE_S = 3.0  # a console whose heartbeat is older than this is not open
 
 
-class ApprovalTables:
+class ApprovalTables(Connection):
     def console_heartbeat(self) -> None:
         """This process is an open console (called about once a second)."""
         now = time.time()
@@ -42,7 +44,7 @@ class ApprovalTables:
                 "robot) VALUES (?, ?, ?, ?, ?, ?)",
                 [client, command, detail, now, now + timeout_s, robot],
             )
-            return int(cur.lastrowid)
+            return row_id(cur.lastrowid)
 
     def approval(self, approval_id: int) -> dict[str, Any] | None:
         rows = list(self.db.query("SELECT * FROM approvals WHERE id = ?", [approval_id]))

@@ -6,12 +6,14 @@ import json
 import time
 from typing import Any
 
+from astiop.store.connection import Connection, row_id
 
-class BenchTables:
+
+class BenchTables(Connection):
     # -- benchmark runs ----------------------------------------------------------------
     def create_bench_run(self, stage: int, config: dict[str, Any]) -> int:
         with self._tx():
-            row = self.db["bench_runs"].insert(
+            row = self.db.table("bench_runs").insert(
                 {
                     "started_at": time.time(),
                     "stage": stage,
@@ -23,7 +25,7 @@ class BenchTables:
                     "config": json.dumps(config),
                 }
             )
-        return int(row.last_pk)
+        return row_id(row.last_pk)
 
     def bench_run(self, run_id: int) -> dict[str, Any] | None:
         rows = list(self.db.query("SELECT * FROM bench_runs WHERE id = ?", [run_id]))
@@ -44,11 +46,13 @@ class BenchTables:
 
     def add_bench_result(self, run_id: int, row: dict[str, Any]) -> None:
         with self._tx():
-            self.db["bench_results"].insert(
+            self.db.table("bench_results").insert(
                 {"run_id": run_id, **row, "created_at": time.time()}, replace=True
             )
 
     def end_bench_run(self, run_id: int, status: str) -> None:
         """done or interrupted; an interrupted run keeps its results and can resume."""
         with self._tx():
-            self.db["bench_runs"].update(run_id, {"status": status, "finished_at": time.time()})
+            self.db.table("bench_runs").update(
+                run_id, {"status": status, "finished_at": time.time()}
+            )

@@ -9,15 +9,16 @@ from collections.abc import Collection
 from typing import Any
 
 from astiop import latch
+from astiop.store.connection import Connection, row_id
 
 
-class JournalTables:
+class JournalTables(Connection):
     # -- interactions, commands, events --------------------------------------------
     def start_interaction(
         self, *, model: str, mode: str, prompt: str, session: str = "", robot: str = ""
     ) -> int:
         with self._tx():
-            row = self.db["interactions"].insert(
+            row = self.db.table("interactions").insert(
                 {
                     "session": session,
                     "started_at": time.time(),
@@ -29,26 +30,26 @@ class JournalTables:
                     "robot": robot,
                 }
             )
-        return int(row.last_pk)
+        return row_id(row.last_pk)
 
     def update_interaction(self, interaction_id: int, **fields: Any) -> None:
         if "raw_replies" in fields and not isinstance(fields["raw_replies"], str):
             fields["raw_replies"] = json.dumps(fields["raw_replies"])
         with self._tx():
-            self.db["interactions"].update(interaction_id, fields)
+            self.db.table("interactions").update(interaction_id, fields)
 
     def add_command(self, interaction_id: int | None, **fields: Any) -> int:
         record = {"interaction_id": interaction_id, "created_at": time.time(), **fields}
         if "values" in record and not isinstance(record["values"], (str, type(None))):
             record["values"] = json.dumps(record["values"], default=str)
         with self._tx():
-            return int(self.db["commands"].insert(record).last_pk)
+            return row_id(self.db.table("commands").insert(record).last_pk)
 
     def add_event(
         self, kind: str, message: str, *, severity: str = "info", sim_t: float | None = None
     ) -> None:
         with self._tx():
-            self.db["events"].insert(
+            self.db.table("events").insert(
                 {
                     "t": time.time(),
                     "sim_t": sim_t,
@@ -70,7 +71,7 @@ class JournalTables:
         if rows:
             try:
                 with self._tx():
-                    self.db["events"].insert_all(rows)
+                    self.db.table("events").insert_all(rows)
             except Exception as exc:  # noqa: BLE001 - said by the caller, never raised
                 return f"robot events not kept: {exc}"
         return None
@@ -80,7 +81,7 @@ class JournalTables:
         if "values" in fields and not isinstance(fields["values"], (str, type(None))):
             fields["values"] = json.dumps(fields["values"], default=str)
         with self._tx():
-            self.db["commands"].update(command_id, fields)
+            self.db.table("commands").update(command_id, fields)
 
     def interactions(self, limit: int = 500) -> list[dict[str, Any]]:
         return list(self.db.query("SELECT * FROM interactions ORDER BY id DESC LIMIT ?", [limit]))
@@ -237,10 +238,10 @@ class JournalTables:
             row["robot"] = str(row["robot"] or "")
             row.update(session="replay", started_at=started_at, prompt=str(row["prompt"] or ""))
             row.update(model=str(row["model"] or ""), mode=str(row["mode"] or ""))
-            interaction_id = int(self.db["interactions"].insert(row).last_pk)
+            interaction_id = row_id(self.db.table("interactions").insert(row).last_pk)
             for seq, cmd in enumerate(turn.get("commands") or []):
                 keep = ("command", "valid", "executed", "reason", "source")
-                self.db["commands"].insert(
+                self.db.table("commands").insert(
                     {"interaction_id": interaction_id, "created_at": started_at, "seq": seq}
                     | {k: cmd.get(k) for k in keep}
                 )

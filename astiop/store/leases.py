@@ -8,6 +8,7 @@ import socket
 import time
 from typing import Any
 
+from astiop.store.connection import Connection
 from astiop.store.liveness import _alive
 
 LEASE_TTL_S = 10.0
@@ -25,7 +26,7 @@ def holder_alive(host: str, pid: int, seen_at: float) -> bool:
     return _alive(pid)
 
 
-class LeaseTables:
+class LeaseTables(Connection):
     def lease(self, robot: str) -> dict[str, Any] | None:
         """The robot's lease while its holder is live, else None."""
         row = self.db.conn.execute(

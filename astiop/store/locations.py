@@ -10,6 +10,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 
 from astiop.bounded import has_controls
+from astiop.store.connection import Connection
 from astiop.store.records import Location, LocationError, location_of
 from astiop.warehouse import fence_text, inside_fence
 
@@ -19,7 +20,7 @@ NAME_RE = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
 DEFAULT_MAP = "warehouse"  # the simulator's, where the seeded places are
 
 
-class LocationTables:
+class LocationTables(Connection):
     map_name: str = DEFAULT_MAP  # the map this store's places are read from and saved on
     bounds: tuple[float, float, float, float] | None = None  # its geofence, when known
 
@@ -47,7 +48,7 @@ class LocationTables:
         with self._tx():
             self.db.execute("DELETE FROM locations")
             if rows:
-                self.db["locations"].insert_all(rows)
+                self.db.table("locations").insert_all(rows)
 
     def get_location(self, name: str) -> Location | None:
         rows = list(
@@ -93,7 +94,7 @@ class LocationTables:
         theta = math.atan2(math.sin(theta), math.cos(theta))
         now = time.time()
         with _said_exists(name), self._tx():  # another writer may have added it meanwhile
-            self.db["locations"].insert(
+            self.db.table("locations").insert(
                 {
                     "map": self.map_name,
                     "name": name,

@@ -12,6 +12,7 @@ import os
 import time
 from typing import Any
 
+from astiop.store.connection import Connection, row_id
 from astiop.store.liveness import _alive
 
 # a mission in one of these is over; `interrupted` may still be resumed or dropped
@@ -20,7 +21,7 @@ LIVE = ("running", "paused", "queued")  # one of these per robot at a time
 QUEUED_S = 60.0  # a queued mission no process claimed within this is interrupted
 
 
-class MissionTables:
+class MissionTables(Connection):
     def create_mission(
         self,
         robot: str,
@@ -40,7 +41,7 @@ class MissionTables:
                 "VALUES (?, ?, ?, ?, ?, ?, ?)",
                 [robot, request, source, status, pid, now, int(forever)],
             )
-            mission_id = int(cur.lastrowid)
+            mission_id = row_id(cur.lastrowid)
             self.db.conn.executemany(
                 "INSERT INTO mission_steps (mission_id, seq, spec, label) VALUES (?, ?, ?, ?)",
                 [(mission_id, seq, spec, label) for seq, (spec, label) in enumerate(steps)],

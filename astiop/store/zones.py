@@ -7,6 +7,7 @@ import json
 import time
 from collections.abc import Sequence
 
+from astiop.store.connection import Connection
 from astiop.zones import MapZone, Point, ZoneError, check_zone
 
 
@@ -15,7 +16,10 @@ def _zone_of(row: dict) -> MapZone:
     return MapZone(row["name"], row["kind"], corners, row["speed"])
 
 
-class ZoneTables:
+class ZoneTables(Connection):
+    map_name: str  # the map the zones are on and its fence: `LocationTables`'s
+    bounds: tuple[float, float, float, float] | None
+
     def list_zones(self) -> list[MapZone]:
         rows = self.db.query(
             "SELECT * FROM zones WHERE map = ? ORDER BY name COLLATE NOCASE", [self.map_name]
@@ -46,7 +50,7 @@ class ZoneTables:
             raise ZoneError(f"a zone named '{same.name}' already exists (names ignore case)")
         now = time.time()
         with self._tx():
-            self.db["zones"].insert(
+            self.db.table("zones").insert(
                 {
                     "map": self.map_name,
                     "name": zone.name,

@@ -99,6 +99,7 @@ class LLMEndpoint:
         self.server: EmbeddedServer | None = None
         self._client: ChatClient | None = None
         self._lock = threading.Lock()  # the console's warm-up and its first question at once
+        self.warming = False  # set while `astiop.agent.warm` evaluates this robot's prompts
 
     @property
     def is_rules(self) -> bool:

@@ -4,6 +4,7 @@ match, the topic looked up, the topics that move the robot, an action's hidden c
 from __future__ import annotations
 
 import difflib
+from collections.abc import Set as AbstractSet
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -36,10 +37,12 @@ class Checked:
         return name
 
 
-def suggest(name: str, known, avoid: set[str] | frozenset = frozenset()) -> str:
+def suggest(name: str | None, known, avoid: AbstractSet[str] = frozenset()) -> str:
     """A close name the robot has; `avoid`: names never offered (one that moves the robot for
     one that reads it: /goal_pose for /robot_pose)."""
-    close = difflib.get_close_matches(name, [k for k in known if k not in avoid], n=1, cutoff=0.5)
+    close = difflib.get_close_matches(
+        name or "", [k for k in known if k not in avoid], n=1, cutoff=0.5
+    )
     return f"; did you mean {close[0]}?" if close else ""
 
 
@@ -65,7 +68,7 @@ def moving_topics(catalog: Catalog) -> set[str]:
 
 
 def topic_spec(cmd: Ros2Command, catalog: Catalog):
-    spec = catalog.topics.get(cmd.name)
+    spec = catalog.topics.get(cmd.name or "")
     if spec is None:
         avoid = moving_topics(catalog) if cmd.sub != "pub" else frozenset()
         raise InterfaceError(
@@ -104,7 +107,7 @@ def checked_topic(cmd: Ros2Command, catalog: Catalog) -> Checked:
 
 
 def service_spec(cmd: Ros2Command, catalog: Catalog) -> ServiceSpec:
-    spec = catalog.services.get(cmd.name) or cancel_service(catalog, cmd.name or "")
+    spec = catalog.services.get(cmd.name or "") or cancel_service(catalog, cmd.name or "")
     if spec is None:
         raise InterfaceError(
             f"there is no service {cmd.name} on this robot"
@@ -115,7 +118,7 @@ def service_spec(cmd: Ros2Command, catalog: Catalog) -> ServiceSpec:
 
 
 def action_spec(cmd: Ros2Command, catalog: Catalog):
-    spec = catalog.actions.get(cmd.name)
+    spec = catalog.actions.get(cmd.name or "")
     if spec is None:
         raise InterfaceError(
             f"there is no action {cmd.name} on this robot" + suggest(cmd.name, catalog.actions)
@@ -132,7 +135,7 @@ def param_node(cmd: Ros2Command, catalog: Catalog) -> str | None:
 
 def param_spec(cmd: Ros2Command, catalog: Catalog):
     node = param_node(cmd, catalog)
-    spec = catalog.params.get((node, cmd.args["param"]))
+    spec = catalog.params.get((node or "", cmd.args["param"]))
     if spec is None:
         names = [p for n, p in catalog.params if n == node]
         raise InterfaceError(

@@ -31,7 +31,7 @@ def check(cmd, catalog):
 def reports(arrivals: list[tuple[float, int]], window: int) -> list[tuple[float, list[int]]]:
     """bw.py's prints, a second apart from the first message: (bytes per second, the sizes of
     the last `window` messages), once two have come."""
-    out = []
+    out: list[tuple[float, list[int]]] = []
     if not arrivals:
         return out
     at = arrivals[0][0] + 1.0
