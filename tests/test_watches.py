@@ -4,7 +4,13 @@ from __future__ import annotations
 
 import pytest
 
+from astiop.agent.models.specs import open_endpoint
+from astiop.agent.turn import Agent
+from astiop.robot.gateway import RobotGateway
+from astiop.robot.safety import SafetyPolicy
+from astiop.sim.simulator import Simulator
 from astiop.store import Store
+from astiop.transports.simulator.backend import SimBackend
 from astiop.transports.state import Battery, RobotState, Status
 from astiop.watches.evaluator import Evaluator
 from astiop.watches.model import Watch, WatchError, validate
@@ -15,13 +21,6 @@ def _state(battery=None, *, fault="", lost_s=None, e_stopped=False, t=0.0) -> Ro
     bat = None if battery is None else Battery(battery / 100, 24.0, -1.0, False)
     status = Status("idle", "auto", "", fault, 0.0, False, False)
     return RobotState(t, battery=bat, status=status, e_stopped=e_stopped, lost_s=lost_s)
-
-
-@pytest.fixture
-def store(tmp_path):
-    s = Store(tmp_path / "w.db")
-    yield s
-    s.close()
 
 
 def _add(store, watch: Watch) -> int:
@@ -105,3 +104,30 @@ def test_the_operators_words_become_a_typed_watch_or_a_one_line_reason():
         watch_from_words("tell me when the battery is below 20 m")
     with pytest.raises(WatchError, match="between 0 and 100"):
         validate(watch_from_words("tell me when the battery is below 120 %"))
+
+
+class _RobotWithout:
+    """The roles of a robot that has no battery topic."""
+
+    def has(self, role: str) -> bool:
+        return role != "battery"
+
+
+def test_a_watch_on_a_reading_the_robot_lacks_is_refused():
+    with pytest.raises(WatchError, match="no battery"):
+        validate(watch_from_words("tell me when the battery is below 20 %"), _RobotWithout())
+
+
+async def test_the_agent_keeps_a_watch_said_in_plain_language_and_says_it_in_one_sentence(store):
+    gateway = RobotGateway(SimBackend(Simulator(seed=0), store), SafetyPolicy())
+    agent = Agent(gateway, open_endpoint("rules"), store, session="test")
+    result = await agent.turn("Tell me when the battery is below 20 %")
+    assert result.answer == "Watch 1: I will tell you when the battery is below 20 % (once)."
+    assert result.commands == []  # nothing was read or sent
+    (row,) = store.list_watches()
+    assert (row["field"], row["op"], row["threshold"], row["armed"]) == ("battery", "<", 20, 1)
+    result = await agent.turn("alert me if the battery drops under 30 volts")
+    assert result.answer.startswith("Not watched: the battery is measured in %, not 'volts'")
+    assert len(store.list_watches()) == 1  # nothing stored
+    result = await agent.turn("what is the battery level?")  # a question, as before
+    assert "%" in result.answer and result.commands and len(store.list_watches()) == 1

@@ -152,8 +152,5 @@ def validate(watch: Watch, profile: Any = None) -> Watch:
     if watch.reaction != "notify":
         raise WatchError("a watch's reaction is to notify (moving the robot is not yet kept)")
     if profile is not None and not any(profile.has(r) for r in spec.roles):
-        raise WatchError(
-            f"this robot has no {' or '.join(spec.roles)} to read {spec.words} from: "
-            "nothing was stored"
-        )
+        raise WatchError(f"this robot has no {' or '.join(spec.roles)} to read {spec.words} from")
     return watch

@@ -57,9 +57,7 @@ def _value(field: str, num: str, unit: str | None) -> float:
     factor = _UNITS[field].get(unit)
     if factor is None:
         spec = FIELDS[field]
-        raise WatchError(
-            f"{spec.words} is measured in {spec.unit}, not '{unit}': nothing was stored"
-        )
+        raise WatchError(f"{spec.words} is measured in {spec.unit}, not '{unit}'")
     return float(num) * factor
 
 
