@@ -37,7 +37,7 @@ def test_a_battery_watch_fires_once_when_the_battery_crosses_its_threshold(store
     assert ev.step(_state(35), now=0) == []
     fired = ev.step(_state(29.5), now=1)
     assert kinds(fired) == ["watch"] and fired[0]["watch_id"] == wid
-    assert fired[0]["reading"] == "29.5 %" and "below 30 %" in fired[0]["message"]
+    assert fired[0]["reading"] == "29.50 %" and "below 30 %" in fired[0]["message"]
     assert ev.step(_state(29), now=2) == []
     assert ev.step(_state(40), now=3) == [] and ev.step(_state(20), now=4) == []  # once: done
     assert store.watch(wid)["armed"] == 0

@@ -57,7 +57,7 @@ class Field:
 
 
 FIELDS: dict[str, Field] = {
-    "battery": Field("battery", ("battery",), "%", "the battery", _battery, 0, 100, 1.0, 1),
+    "battery": Field("battery", ("battery",), "%", "the battery", _battery, 0, 100, 1.0, 2),
     "speed": Field(
         "speed", ("odometry", "status"), "m/s", "the speed", lambda s: s.speed, 0, 10, 0.02, 2
     ),
