@@ -3,6 +3,7 @@ console; each new alert handed to `on_alert` (the store has it already)."""
 
 from __future__ import annotations
 
+import logging
 import threading
 from collections.abc import Callable
 
@@ -10,6 +11,7 @@ from astiop.robot.gateway import RobotGateway
 from astiop.watches.evaluator import Evaluator
 from astiop.watches.model import FIELDS
 
+log = logging.getLogger("astiop.watches")
 AGE_ROLES = sorted({r for f in FIELDS.values() for r in f.roles} | {"status"})
 
 
@@ -51,3 +53,24 @@ class WatchRunner:
                 continue
             for alert in alerts:
                 self.on_alert(alert)
+
+
+class Watching:
+    """The evaluator on samples taken elsewhere (the console's sampler thread): a failure (a
+    read-only or busy database) is logged once per streak, never raised into the sampler."""
+
+    def __init__(self, gateway: RobotGateway, evaluator: Evaluator):
+        self.gateway = gateway
+        self.evaluator = evaluator
+        self._failing = False
+
+    def step(self, state) -> list[dict]:
+        try:
+            alerts = self.evaluator.step(state, reading_ages(self.gateway, state.t))
+        except Exception as exc:  # noqa: BLE001 - the console goes on showing the robot
+            if not self._failing:
+                log.info("watches not evaluated: %s", exc)
+            self._failing = True
+            return []
+        self._failing = False
+        return alerts
