@@ -55,11 +55,26 @@ def test_a_battery_watch_fires_once_when_the_simulated_battery_crosses_it(tmp_pa
     assert added.stdout.strip() == "watch 1: I will tell you when the battery is above 21 % (once)"
     marker = run_cli("--db", str(db), "watch", "add", "--field", "battery", "--above", "21.5")
     assert marker.returncode == 0, marker.stderr
+    follower = subprocess.Popen(
+        [sys.executable, "-m", "astiop", "--db", str(db), "alerts", "--follow", "--json"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     proc = _watch_run(db)
     try:
         _wait_for_alerts(db, 2)  # the battery went on past 21.5 %: watch 1 had its chance again
     finally:
         printed = _stop(proc)
+    followed = []  # `alerts --follow` in another process prints each as it is written
+    for line in follower.stdout:
+        followed.append(json.loads(line))
+        if len(followed) == 2:
+            break
+    follower.send_signal(signal.SIGINT)
+    follower.communicate(timeout=30)
+    assert follower.returncode == 0
+    assert [a["watch_id"] for a in followed] == [1, 2]
     lines = [json.loads(line) for line in printed.splitlines()]
     assert [(a["kind"], a["watch_id"]) for a in lines] == [("watch", 1), ("watch", 2)]
     alerts = json.loads(run_cli("--db", str(db), "alerts", "--json").stdout)

@@ -96,6 +96,13 @@ class WatchTables:
     def end_episode(self, name: str) -> None:
         """The condition `name` watches has cleared: its next event is a new one (once, however
         many processes say so)."""
+        fired = self.db.conn.execute(  # a read first: most ends follow no alert, and a
+            "SELECT 1 FROM alert_episodes e JOIN alerts a "  # write would wait for the lock
+            "ON a.event_key = e.name || '#' || e.episode WHERE e.name = ?",
+            [name],
+        ).fetchone()
+        if fired is None:
+            return
         with self._tx():
             self.db.conn.execute(
                 "UPDATE alert_episodes SET episode = episode + 1 WHERE name = ? AND EXISTS "
