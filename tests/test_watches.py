@@ -131,3 +131,50 @@ async def test_the_agent_keeps_a_watch_said_in_plain_language_and_says_it_in_one
     assert len(store.list_watches()) == 1  # nothing stored
     result = await agent.turn("what is the battery level?")  # a question, as before
     assert "%" in result.answer and result.commands and len(store.list_watches()) == 1
+
+
+WATCHES = {  # said -> (field, op, threshold, held s, once or every)
+    "tell me when the battery is below 20 %": ("battery", "<", 20, 0, "once"),
+    "Tell me when the battery is below 20%.": ("battery", "<", 20, 0, "once"),
+    "alert me if the battery drops under 30 percent": ("battery", "<", 30, 0, "once"),
+    "let me know when the battery level falls below 15": ("battery", "<", 15, 0, "once"),
+    "please notify me if the battery goes under 25 % for 10 s": ("battery", "<", 25, 10, "once"),
+    "can you tell me when the battery is above 95 %": ("battery", ">", 95, 0, "once"),
+    "warn me whenever the battery is less than 40 per cent": ("battery", "<", 40, 0, "every"),
+    "tell me every time the battery is under 20% for 1 minute": ("battery", "<", 20, 60, "every"),
+    "warn me if anything comes within 0.5 m": ("obstacle_distance", "<", 0.5, 0, "once"),
+    "warn me if an obstacle is within 50 cm for 2 seconds": (
+        "obstacle_distance",
+        "<",
+        0.5,
+        2,
+        "once",
+    ),
+    "alert me if someone gets closer than 1 metre": ("obstacle_distance", "<", 1, 0, "once"),
+    "tell me whenever the speed goes above 0.3 m/s": ("speed", ">", 0.3, 0, "every"),
+    "let me know if the robot moves faster than 0.5 m/s": ("speed", ">", 0.5, 0, "once"),
+    "tell me if the speed is below 0.05 m/s for 30 s": ("speed", "<", 0.05, 30, "once"),
+}
+NOT_WATCHES = (
+    "what is the battery level?",
+    "tell me the battery",
+    "Can you tell me if it's charging?",
+    "Visit zone B and tell me if anything is blocking.",
+    "let me know when astibot_2 reaches shipping",
+    "tell me when the conveyor is loaded",
+    "go to shipping",
+    "is anything within 0.5 m?",
+    "how fast is the robot going?",
+)
+
+
+@pytest.mark.parametrize("said", sorted(WATCHES))
+def test_what_is_said_as_a_watch_becomes_that_watch(said):
+    w = validate(watch_from_words(said))
+    got = (w.field, w.op, w.threshold, w.duration_s, w.repeat)
+    assert got == WATCHES[said]
+
+
+@pytest.mark.parametrize("said", NOT_WATCHES)
+def test_requests_that_are_no_watch_are_planned_as_before(said):
+    assert watch_from_words(said) is None

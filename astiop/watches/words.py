@@ -9,7 +9,8 @@ import re
 from astiop.watches.model import FIELDS, Watch, WatchError
 
 _ASK = re.compile(
-    r"^\s*(?:please\s+)?(?:(?:tell|alert|warn|notify|ping)\s+me|let\s+me\s+know)\s*,?\s*"
+    r"^\s*(?:(?:can|could|would|will)\s+you\s+)?(?:please\s+)?"
+    r"(?:(?:tell|alert|warn|notify|ping)\s+me|let\s+me\s+know)\s*,?\s*"
     r"(?P<when>when(?:ever)?|if|once|as\s+soon\s+as|each\s+time|every\s+time)\s+(?P<rest>.+?)"
     r"[\s.!?]*$",
     re.I,
