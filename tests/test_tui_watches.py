@@ -14,6 +14,6 @@ async def test_a_watch_said_in_the_chat_notifies_the_console_when_it_fires(tmp_p
             return [n.message for n in app._notifications if n.title == "alert"]
 
         await wait_for(pilot, lambda: alerted(), what="the watch's notification")
-        assert alerted() == ["the battery is below 90 % (once): 85.00 %"]
+        assert alerted() == ["the battery is below 90 %: 85.00 %"]
         (alert,) = app.services.store.list_alerts()
         assert alert["watch_id"] == 1 and alert["reading"] == "85.00 %"

@@ -80,7 +80,7 @@ def test_a_battery_watch_fires_once_when_the_simulated_battery_crosses_it(tmp_pa
     alerts = json.loads(run_cli("--db", str(db), "alerts", "--json").stdout)
     assert [a["watch_id"] for a in alerts] == [1, 2]
     first = alerts[0]
-    assert first["message"].startswith("the battery is above 21 % (once): 21.")
+    assert first["message"].startswith("the battery is above 21 %: 21.")
     assert 21.0 <= float(first["reading"].removesuffix(" %")) < 21.5
     assert first["reading_age_s"] is not None and first["reading_age_s"] >= 0
     listed = json.loads(run_cli("--db", str(db), "watch", "list", "--json").stdout)

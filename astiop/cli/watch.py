@@ -139,7 +139,10 @@ def _alert_line(a: dict) -> str:
     at = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(a["fired_at"]))
     age = a["reading_age_s"]
     aged = f", {age:.2f} s old" if age is not None else ""
-    reading = f" ({a['reading']}{aged})" if a["reading"] else ""
+    if a["reading"] and a["reading"] in a["message"]:
+        reading = f" ({age:.2f} s old)" if age is not None else ""
+    else:
+        reading = f" ({a['reading']}{aged})" if a["reading"] else ""
     ack = f" — acknowledged by {a['acknowledged_by']}" if a["acknowledged_by"] else ""
     return f"{a['id']:>5}  {at}  {a['robot'] or '-'}  {a['kind']}: {a['message']}{reading}{ack}"
 

@@ -109,7 +109,7 @@ class Evaluator:
         edge = self._edge(name).update(holds, clear, now, watch.duration_s)
         if edge == "rise":
             self._fire(
-                fired, name, "watch", f"{watch.sentence()}: {watch.reading(value)}",
+                fired, name, "watch", f"{watch.condition()}: {watch.reading(value)}",
                 watch.reading(value), ages.get(watch.role), watch.id, watch.repeat == "once",
             )  # fmt: skip
             if watch.repeat == "once":
@@ -153,7 +153,7 @@ class Evaluator:
         by = self._estop_by() if engaged and not self._edge(self._name("estop")).on else ""
         self._builtin(
             "estop", engaged, not engaged, now, fired,
-            f"E-STOP engaged{f' by {by}' if by else ''}", by or None, None,
+            f"E-STOP engaged{f' by {by}' if by else ''}", None, None,
         )  # fmt: skip
 
     def _builtin(self, kind, holds, clear, now, fired, message, reading, age) -> None:

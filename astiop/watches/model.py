@@ -101,6 +101,10 @@ class Watch:
 
     def sentence(self) -> str:
         """The watch in one clause: "the battery is below 20 % for 5 s (every time)"."""
+        return f"{self.condition()} ({'every time' if self.repeat == 'every' else 'once'})"
+
+    def condition(self) -> str:
+        """ "the battery is below 20 % for 5 s"."""
         s = self.spec
         what = s.words if not self.robot else f"{s.words} of {self.robot}"
         verb = "is within" if self.field == "obstacle_distance" and self.op in "<=" else "is"
@@ -111,7 +115,7 @@ class Watch:
             else f"{what} is {OP_WORDS[self.op]} {limit}"
         )
         held = f" for {self.duration_s:g} s" if self.duration_s else ""
-        return f"{cond}{held} ({'every time' if self.repeat == 'every' else 'once'})"
+        return f"{cond}{held}"
 
     def row(self) -> dict[str, Any]:
         return {
