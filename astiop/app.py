@@ -31,7 +31,7 @@ from astiop.screens.approvals import ApprovalDesk
 from astiop.screens.console_palette import ConsolePalette
 from astiop.screens.console_safety import ConsoleSafety
 from astiop.screens.dashboard import motion_key
-from astiop.screens.messages import RobotStateSampled, TurnFinished
+from astiop.screens.messages import AlertsFired, RobotStateSampled, TurnFinished
 from astiop.screens.registry import SCREENS
 from astiop.services import Services
 from astiop.store import Store
@@ -88,6 +88,7 @@ class AstiopApp(ConsoleSafety, ConsolePalette, App):
             services.gateway, self._state_sampled, self._sampler_failed, sample_hz, last
         )
         self._motion: tuple = ()  # the last sample's motion_key
+        self._watching = _watching(services) if fleet is None else None
 
     def on_mount(self) -> None:
         gateway = self.services.gateway
@@ -161,6 +162,14 @@ class AstiopApp(ConsoleSafety, ConsolePalette, App):
     # -- live state ---------------------------------------------------------------------
     def _state_sampled(self, state, events, stats) -> None:  # the sampler's thread
         self.post_message(RobotStateSampled(state, events, stats))
+        alerts = self._watching.step(state) if self._watching is not None else []
+        if alerts:
+            self.post_message(AlertsFired(alerts))
+
+    def on_alerts_fired(self, msg: AlertsFired) -> None:
+        for a in msg.alerts:  # the robot's own events say contact, faults and the E-STOP
+            if a["kind"] in ("watch", "battery_low"):
+                self.notify(a["message"], title="alert", severity="warning", markup=False)
 
     def _sampler_failed(self, text: str) -> None:  # the sampler's thread
         self.call_from_thread(self.notify, text, severity="error", markup=False)
@@ -357,3 +366,16 @@ class _Notices(logging.Handler):
 
     def emit(self, record: logging.LogRecord) -> None:
         self.app.notify(record.getMessage(), severity="error", title="robot", markup=False)
+
+
+def _watching(services: Services):
+    """The watches and built-in alerts of the console's robot, evaluated on each sample (not
+    on a replay: it happened already)."""
+    if services.gateway.playback is not None:
+        return None
+    from astiop.watches.evaluator import Evaluator
+    from astiop.watches.runner import Watching
+
+    w = services.settings.watches
+    ev = Evaluator(services.store, battery_low=w.battery_low, builtins=w.builtins)
+    return Watching(services.gateway, ev)

@@ -93,6 +93,15 @@ class SimSettings(_Section):
     speed: float = Field(
         1.0, gt=0, le=100, allow_inf_nan=False, description="real-time factor of the console's sim"
     )
+    battery: float = Field(
+        0.85, ge=0, le=1, allow_inf_nan=False, description="the simulated battery's charge at start"
+    )
+
+
+class WatchSettings(_Section):
+    builtins: StrictBool = True  # battery low, fault, contact, E-STOP alerts
+    battery_low: float = Field(default=20.0, ge=0, le=100, allow_inf_nan=False)  # %
+    hz: float = Field(default=10.0, gt=0, le=50, allow_inf_nan=False)  # `watch run` samples
 
 
 class LLMSettings(_Section):
@@ -157,6 +166,7 @@ class Settings(BaseSettings):
     llm: LLMSettings = Field(default_factory=LLMSettings)
     fleet: FleetSettings = Field(default_factory=FleetSettings)
     serve: ServeSettings = Field(default_factory=ServeSettings)
+    watches: WatchSettings = Field(default_factory=WatchSettings)
 
     @classmethod
     def settings_customise_sources(

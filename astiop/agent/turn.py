@@ -27,6 +27,7 @@ from astiop.agent import (
     subject,
     subject_answers,
     warm,
+    watch_turn,
 )
 from astiop.agent.intent import Intent
 from astiop.agent.interpretation import InterpretingMixin
@@ -166,6 +167,9 @@ class Agent(InterpretingMixin):
             profile = self.gateway.profile  # on half a graph (a new process: astiop chat), a
             if profile.pending() or profile.make == "unknown":  # role or the make is missing:
                 await asyncio.to_thread(self.gateway.confirm_missing)  # read it whole first
+            if said := await asyncio.to_thread(watch_turn.kept, request, self):  # a watch
+                result.answer = said
+                return await self._finish(request, result, t0)
             intents = intent.classify(request, self.locations())
             asked = subject.subjects_of(
                 request, intents, self.locations(), unknown=not self.endpoint.is_rules
@@ -235,11 +239,10 @@ class Agent(InterpretingMixin):
     async def _answer_subjects(self, asked: list, result: TurnResult, emit) -> None:
         """A question's subject answered from the reads it takes, computed, for every model."""
         reads = subject_answers.Reads(self.gateway)
-        texts = []
-        for s in asked:
-            texts.append(
-                await asyncio.to_thread(subject_answers.answer, s, reads, self.places(), self.store)
-            )
+        texts = [
+            await asyncio.to_thread(subject_answers.answer, s, reads, self.places(), self.store)
+            for s in asked
+        ]
         for seq, ex in enumerate(reads.ran):
             result.commands.append(ex)
             await self.recorder.command(result, seq, ex)
@@ -267,8 +270,7 @@ class Agent(InterpretingMixin):
         result.llm_s += c.total_s
         result.prompt_tokens += c.prompt_tokens or 0
         result.completion_tokens += c.completion_tokens or 0
-        if result.ttft_s is None:
-            result.ttft_s = c.ttft_s
+        result.ttft_s = c.ttft_s if result.ttft_s is None else result.ttft_s
         await self.recorder.replies(result)
 
     async def _ask(

@@ -25,6 +25,7 @@ from astiop.cli import (
     ros2,
     serve,
     sim,
+    watch,
     zones,
 )
 from astiop.cli.common import CliState
@@ -45,6 +46,7 @@ app.add_typer(ros2.app, name="ros2")
 app.add_typer(mission.app, name="mission")
 app.add_typer(robot_profile.app, name="robot")
 app.add_typer(fleet.app, name="fleet")
+app.add_typer(watch.app, name="watch")
 app.command("exec")(robot.exec_command)
 app.command("estop")(robot.estop)
 app.command("chat")(agent.chat)
@@ -55,6 +57,7 @@ app.command("record")(record.record)
 app.command("replay")(console.replay)
 app.command("mcp")(mcp.mcp)
 app.command("serve")(serve.serve)
+app.command("alerts")(watch.alerts)
 
 
 def _version(value: bool) -> None:

@@ -46,7 +46,11 @@ def make_sim_gateway(
 ) -> RobotGateway:
     from astiop.transports.simulator.backend import SimBackend
 
-    sim = sim or Simulator(seed=settings.sim.seed, v_max=settings.robot.max_linear_speed)
+    sim = sim or Simulator(
+        seed=settings.sim.seed,
+        v_max=settings.robot.max_linear_speed,
+        battery_soc=settings.sim.battery,
+    )
     backend = SimBackend(sim, store, realtime=realtime, speed=settings.sim.speed)
     return RobotGateway(
         backend, make_safety(settings, store), store=store, who=who, restore_latch=restore_latch

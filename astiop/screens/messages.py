@@ -25,6 +25,14 @@ class RobotStateSampled(Message, bubble=False):
         return isinstance(message, RobotStateSampled) and not self.events and self.stats is None
 
 
+class AlertsFired(Message, bubble=False):
+    """Alerts this console's watches wrote first (rows of the store's alerts)."""
+
+    def __init__(self, alerts: list[dict]):
+        super().__init__()
+        self.alerts = alerts
+
+
 class TurnFinished(Message, bubble=False):
     def __init__(self, result: TurnResult, model: str):
         super().__init__()

@@ -26,6 +26,7 @@ from astiop.store.schema import (
     SCHEMA_VERSION,
     check_database_file,
 )
+from astiop.store.watches import WatchTables
 from astiop.store.zones import ZoneTables
 from astiop.warehouse import Rect, default_map
 
@@ -50,6 +51,7 @@ class Store(
     ApprovalTables,
     MissionTables,
     LeaseTables,
+    WatchTables,
 ):
     """One connection per thread, all to the same file."""
 

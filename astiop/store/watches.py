@@ -1,0 +1,141 @@
+"""Watches and alerts. An alert is one event written once, whichever process saw it first: its
+key is the event's name (robot/kind, or robot/watch:ID) and the episode that name is on; an
+episode ends (the condition cleared) by one conditional update, so two processes that both see
+the end move it on once."""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+from astiop.store.connection import Connection, row_id
+
+WATCH_COLUMNS = (
+    "robot", "role", "field", "op", "threshold", "unit", "duration_s", "repeat", "reaction", "said",
+)  # fmt: skip
+
+
+class WatchTables(Connection):
+    # -- watches -------------------------------------------------------------------------
+    def add_watch(self, **values: Any) -> int:
+        cols = [c for c in WATCH_COLUMNS if c in values]
+        marks = ", ".join("?" for _ in cols)
+        with self._tx():
+            cur = self.db.conn.execute(
+                f"INSERT INTO watches ({', '.join(cols)}, created_at) VALUES ({marks}, ?)",
+                [values[c] for c in cols] + [time.time()],
+            )
+            return row_id(cur.lastrowid)
+
+    def list_watches(self, robot: str | None = None, armed_only: bool = False) -> list[dict]:
+        where, args = [], []
+        if robot is not None:
+            where.append("robot = ?")
+            args.append(robot)
+        if armed_only:
+            where.append("armed = 1")
+        clause = f" WHERE {' AND '.join(where)}" if where else ""
+        return list(self.db.query(f"SELECT * FROM watches{clause} ORDER BY id", args))
+
+    def watch(self, watch_id: int) -> dict | None:
+        rows = list(self.db.query("SELECT * FROM watches WHERE id = ?", [watch_id]))
+        return rows[0] if rows else None
+
+    def remove_watch(self, watch_id: int) -> bool:
+        with self._tx():
+            cur = self.db.conn.execute("DELETE FROM watches WHERE id = ?", [watch_id])
+            return cur.rowcount == 1
+
+    # -- alerts --------------------------------------------------------------------------
+    def _episode(self, name: str) -> int:
+        self.db.conn.execute(
+            "INSERT OR IGNORE INTO alert_episodes (name, episode) VALUES (?, 0)", [name]
+        )
+        return self.db.conn.execute(
+            "SELECT episode FROM alert_episodes WHERE name = ?", [name]
+        ).fetchone()[0]
+
+    def fire_alert(
+        self,
+        name: str,
+        *,
+        robot: str,
+        kind: str,
+        message: str,
+        reading: str | None = None,
+        reading_age_s: float | None = None,
+        watch_id: int | None = None,
+        disarm: bool = False,
+        paired_with: str | None = None,
+    ) -> int | None:
+        """The new alert's id, or None when this event was written already (by any process).
+        `disarm`: a once-only watch is disarmed with its alert; `paired_with`: the event that
+        this one ends (contact regained ends contact lost), written only after it and keyed by
+        its episode."""
+        with self._tx():
+            keyed_by = paired_with or name
+            episode = self._episode(keyed_by)
+            if paired_with is not None:
+                opened = self.db.conn.execute(
+                    "SELECT 1 FROM alerts WHERE event_key = ?", [f"{paired_with}#{episode}"]
+                ).fetchone()
+                if opened is None:
+                    return None
+            cur = self.db.conn.execute(
+                "INSERT OR IGNORE INTO alerts (robot, kind, message, reading, reading_age_s, "
+                "fired_at, watch_id, event_key) VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
+                [
+                    robot, kind, message, reading, reading_age_s, time.time(), watch_id,
+                    f"{name}#{episode}",
+                ],
+            )  # fmt: skip
+            if cur.rowcount != 1:
+                return None
+            if disarm and watch_id is not None:
+                self.db.conn.execute("UPDATE watches SET armed = 0 WHERE id = ?", [watch_id])
+            return row_id(cur.lastrowid)
+
+    def end_episode(self, name: str) -> None:
+        """The condition `name` watches has cleared: its next event is a new one (once, however
+        many processes say so)."""
+        fired = self.db.conn.execute(  # a read first: most ends follow no alert, and a
+            "SELECT 1 FROM alert_episodes e JOIN alerts a "  # write would wait for the lock
+            "ON a.event_key = e.name || '#' || e.episode WHERE e.name = ?",
+            [name],
+        ).fetchone()
+        if fired is None:
+            return
+        with self._tx():
+            self.db.conn.execute(
+                "UPDATE alert_episodes SET episode = episode + 1 WHERE name = ? AND EXISTS "
+                "(SELECT 1 FROM alerts WHERE event_key = alert_episodes.name || '#' || "
+                "alert_episodes.episode)",
+                [name],
+            )
+
+    def list_alerts(
+        self, robot: str | None = None, after_id: int = 0, limit: int = 200
+    ) -> list[dict]:
+        """Alerts after `after_id`, oldest first (the last `limit` of them)."""
+        clause, args = "WHERE id > ?", [str(after_id)]
+        if robot is not None:
+            clause += " AND robot = ?"
+            args.append(robot)
+        rows = self.db.query(
+            f"SELECT * FROM (SELECT * FROM alerts {clause} ORDER BY id DESC LIMIT ?) ORDER BY id",
+            [*args, limit],
+        )
+        return list(rows)
+
+    def alert(self, alert_id: int) -> dict | None:
+        rows = list(self.db.query("SELECT * FROM alerts WHERE id = ?", [alert_id]))
+        return rows[0] if rows else None
+
+    def acknowledge_alert(self, alert_id: int, who: str) -> bool:
+        with self._tx():
+            cur = self.db.conn.execute(
+                "UPDATE alerts SET acknowledged_by = ?, acknowledged_at = ? "
+                "WHERE id = ? AND acknowledged_at IS NULL",
+                [who, time.time(), alert_id],
+            )
+            return cur.rowcount == 1

@@ -1,0 +1,180 @@
+"""Watches and built-in alerts, evaluated against robot states on a real SQLite store."""
+
+from __future__ import annotations
+
+import pytest
+
+from astiop.agent.models.specs import open_endpoint
+from astiop.agent.turn import Agent
+from astiop.robot.gateway import RobotGateway
+from astiop.robot.safety import SafetyPolicy
+from astiop.sim.simulator import Simulator
+from astiop.store import Store
+from astiop.transports.simulator.backend import SimBackend
+from astiop.transports.state import Battery, RobotState, Status
+from astiop.watches.evaluator import Evaluator
+from astiop.watches.model import Watch, WatchError, validate
+from astiop.watches.words import watch_from_words
+
+
+def _state(battery=None, *, fault="", lost_s=None, e_stopped=False, t=0.0) -> RobotState:
+    bat = None if battery is None else Battery(battery / 100, 24.0, -1.0, False)
+    status = Status("idle", "auto", "", fault, 0.0, False, False)
+    return RobotState(t, battery=bat, status=status, e_stopped=e_stopped, lost_s=lost_s)
+
+
+def _add(store, watch: Watch) -> int:
+    return store.add_watch(**validate(watch).row())
+
+
+def kinds(alerts):
+    return [a["kind"] for a in alerts]
+
+
+def test_a_battery_watch_fires_once_when_the_battery_crosses_its_threshold(store):
+    wid = _add(store, Watch("battery", "<", 30))
+    ev = Evaluator(store, builtins=False)
+    assert ev.step(_state(35), now=0) == []
+    fired = ev.step(_state(29.5), now=1)
+    assert kinds(fired) == ["watch"] and fired[0]["watch_id"] == wid
+    assert fired[0]["reading"] == "29.50 %" and "below 30 %" in fired[0]["message"]
+    assert ev.step(_state(29), now=2) == []
+    assert ev.step(_state(40), now=3) == [] and ev.step(_state(20), now=4) == []  # once: done
+    assert store.watch(wid)["armed"] == 0
+    assert len(store.list_alerts()) == 1
+
+
+def test_an_every_time_watch_fires_each_time_the_condition_comes_back(store):
+    _add(store, Watch("battery", "<", 30, repeat="every"))
+    ev = Evaluator(store, builtins=False)
+    readings = [35, 29, 28, 29.5, 30.5, 31.5, 29, 35, 25]  # 30.5 is inside the 1 % margin
+    fired = [len(ev.step(_state(b), now=i)) for i, b in enumerate(readings)]
+    assert fired == [0, 1, 0, 0, 0, 0, 1, 0, 1]
+
+
+def test_a_watch_held_for_a_duration_fires_only_once_it_has_held_that_long(store):
+    _add(store, Watch("battery", "<", 30, duration_s=5))
+    ev = Evaluator(store, builtins=False)
+    assert ev.step(_state(29), now=0) == [] and ev.step(_state(29), now=4) == []
+    assert ev.step(_state(31.5), now=4.5) == []  # cleared: the time starts again
+    assert ev.step(_state(29), now=5) == [] and ev.step(_state(29), now=9.9) == []
+    assert kinds(ev.step(_state(29), now=10)) == ["watch"]
+
+
+def test_built_in_alerts_battery_low_fault_contact_and_estop(store):
+    store.latch_estop("operator ana")
+    ev = Evaluator(store, battery_low=20)
+    assert ev.step(_state(50), now=0) == []
+    assert kinds(ev.step(_state(19), now=1)) == ["battery_low"]
+    assert kinds(ev.step(_state(19, fault="left motor overcurrent"), now=2)) == ["fault"]
+    assert kinds(ev.step(_state(19, lost_s=3.0), now=3)) == ["contact_lost"]
+    assert kinds(ev.step(_state(19), now=4)) == ["contact_regained"]
+    estop = ev.step(_state(19, e_stopped=True), now=5)
+    assert kinds(estop) == ["estop"] and estop[0]["message"] == "E-STOP engaged by operator ana"
+    assert ev.step(_state(19, e_stopped=True), now=6) == []
+
+
+def test_two_evaluators_on_one_database_write_one_alert_per_event(tmp_path):
+    a, b = Store(tmp_path / "w.db"), Store(tmp_path / "w.db")
+    _add(a, Watch("battery", "<", 30, repeat="every"))
+    first, second = Evaluator(a), Evaluator(b)
+    for now, level in enumerate([40, 25, 40, 25]):
+        first.step(_state(level), now=now)
+        second.step(_state(level), now=now)
+    assert kinds(a.list_alerts()) == ["watch", "watch"]  # two events, each written once
+    a.close()
+    b.close()
+
+
+def test_the_operators_words_become_a_typed_watch_or_a_one_line_reason():
+    w = watch_from_words("tell me when the battery is below 20 %")
+    assert (w.field, w.op, w.threshold, w.repeat) == ("battery", "<", 20, "once")
+    w = watch_from_words("alert me if the battery drops under 30 percent")
+    assert (w.field, w.threshold) == ("battery", 30)
+    w = watch_from_words("warn me if anything comes within 50 cm for 2 s")
+    assert (w.field, w.op, w.threshold, w.duration_s) == ("obstacle_distance", "<", 0.5, 2)
+    for not_a_watch in (
+        "what is the battery level?",
+        "tell me the battery",
+        "go to shipping",
+        "let me know when astibot_2 reaches shipping",
+    ):
+        assert watch_from_words(not_a_watch) is None, not_a_watch
+    with pytest.raises(WatchError, match="in %, not 'm'"):
+        watch_from_words("tell me when the battery is below 20 m")
+    with pytest.raises(WatchError, match="between 0 and 100"):
+        validate(watch_from_words("tell me when the battery is below 120 %"))
+
+
+class _RobotWithout:
+    """The roles of a robot that has no battery topic."""
+
+    def has(self, role: str) -> bool:
+        return role != "battery"
+
+
+def test_a_watch_on_a_reading_the_robot_lacks_is_refused():
+    with pytest.raises(WatchError, match="no battery"):
+        validate(watch_from_words("tell me when the battery is below 20 %"), _RobotWithout())
+
+
+async def test_the_agent_keeps_a_watch_said_in_plain_language_and_says_it_in_one_sentence(store):
+    gateway = RobotGateway(SimBackend(Simulator(seed=0), store), SafetyPolicy())
+    agent = Agent(gateway, open_endpoint("rules"), store, session="test")
+    result = await agent.turn("Tell me when the battery is below 20 %")
+    assert result.answer == "Watch 1: I will tell you when the battery is below 20 % (once)."
+    assert result.commands == []  # nothing was read or sent
+    (row,) = store.list_watches()
+    assert (row["field"], row["op"], row["threshold"], row["armed"]) == ("battery", "<", 20, 1)
+    result = await agent.turn("alert me if the battery drops under 30 volts")
+    assert result.answer.startswith("Not watched: the battery is measured in %, not 'volts'")
+    assert len(store.list_watches()) == 1  # nothing stored
+    result = await agent.turn("what is the battery level?")  # a question, as before
+    assert "%" in result.answer and result.commands and len(store.list_watches()) == 1
+
+
+WATCHES = {  # said -> (field, op, threshold, held s, once or every)
+    "tell me when the battery is below 20 %": ("battery", "<", 20, 0, "once"),
+    "Tell me when the battery is below 20%.": ("battery", "<", 20, 0, "once"),
+    "alert me if the battery drops under 30 percent": ("battery", "<", 30, 0, "once"),
+    "let me know when the battery level falls below 15": ("battery", "<", 15, 0, "once"),
+    "please notify me if the battery goes under 25 % for 10 s": ("battery", "<", 25, 10, "once"),
+    "can you tell me when the battery is above 95 %": ("battery", ">", 95, 0, "once"),
+    "warn me whenever the battery is less than 40 per cent": ("battery", "<", 40, 0, "every"),
+    "tell me every time the battery is under 20% for 1 minute": ("battery", "<", 20, 60, "every"),
+    "warn me if anything comes within 0.5 m": ("obstacle_distance", "<", 0.5, 0, "once"),
+    "warn me if an obstacle is within 50 cm for 2 seconds": (
+        "obstacle_distance",
+        "<",
+        0.5,
+        2,
+        "once",
+    ),
+    "alert me if someone gets closer than 1 metre": ("obstacle_distance", "<", 1, 0, "once"),
+    "tell me whenever the speed goes above 0.3 m/s": ("speed", ">", 0.3, 0, "every"),
+    "let me know if the robot moves faster than 0.5 m/s": ("speed", ">", 0.5, 0, "once"),
+    "tell me if the speed is below 0.05 m/s for 30 s": ("speed", "<", 0.05, 30, "once"),
+}
+NOT_WATCHES = (
+    "what is the battery level?",
+    "tell me the battery",
+    "Can you tell me if it's charging?",
+    "Visit zone B and tell me if anything is blocking.",
+    "let me know when astibot_2 reaches shipping",
+    "tell me when the conveyor is loaded",
+    "go to shipping",
+    "is anything within 0.5 m?",
+    "how fast is the robot going?",
+)
+
+
+@pytest.mark.parametrize("said", sorted(WATCHES))
+def test_what_is_said_as_a_watch_becomes_that_watch(said):
+    w = validate(watch_from_words(said))
+    got = (w.field, w.op, w.threshold, w.duration_s, w.repeat)
+    assert got == WATCHES[said]
+
+
+@pytest.mark.parametrize("said", NOT_WATCHES)
+def test_requests_that_are_no_watch_are_planned_as_before(said):
+    assert watch_from_words(said) is None
