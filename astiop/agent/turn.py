@@ -108,8 +108,7 @@ class Agent(InterpretingMixin):
         return self.endpoint.spec.raw
 
     def switch(self, endpoint: LLMEndpoint | None = None, mode: str | None = None) -> None:
-        """Another model or reply mode for the turns to come; the conversation goes on (its
-        history is kept)."""
+        """Another model or reply mode for the turns to come (the conversation goes on)."""
         endpoint = endpoint or self.endpoint
         mode = mode or self.mode
         _check_mode(endpoint, mode)
@@ -118,8 +117,7 @@ class Agent(InterpretingMixin):
         self.mode = "rules" if endpoint.is_rules else mode
 
     def places(self) -> dict[str, tuple[float, float]]:
-        """The named locations and their x, y: what a request may name. Read once per turn
-        (planning, the gate and the goal's target all ask)."""
+        """The named locations' x, y, read once per turn (planning, gate and goal all ask)."""
         if self._places is not None:
             return self._places
         if self._turn_places is None:
