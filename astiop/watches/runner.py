@@ -15,9 +15,15 @@ log = logging.getLogger("astiop.watches")
 AGE_ROLES = sorted({r for f in FIELDS.values() for r in f.roles} | {"status"})
 
 
-def reading_ages(gateway: RobotGateway, t: float) -> dict[str, float]:
-    """How old each role's latest message is, on the robot's clock (its `RobotState.t`)."""
-    topics = {role: gateway.profile.name(role) for role in AGE_ROLES}
+ALWAYS_READ = ("battery", "status")  # the built-in alerts' roles: always watched anyway
+
+
+def reading_ages(gateway: RobotGateway, t: float, evaluator: Evaluator) -> dict[str, float]:
+    """How old each role's latest message is, on the robot's clock (its `RobotState.t`): the
+    roles the armed watches and the built-in alerts read, and no other (asking a live robot
+    for a topic's time subscribes to it: an idle console does not watch its 50 Hz /odom)."""
+    wanted = set(ALWAYS_READ) | {w.role for w in evaluator.watches}
+    topics = {role: gateway.profile.name(role) for role in AGE_ROLES if role in wanted}
     times = gateway.message_times([n for n in topics.values() if n])
     return {role: max(0.0, t - times[name]) for role, name in topics.items() if name in times}
 
@@ -44,7 +50,9 @@ class WatchRunner:
         while not self.halt.wait(self.period):
             try:
                 state = self.gateway.state()
-                alerts = self.evaluator.step(state, reading_ages(self.gateway, state.t))
+                alerts = self.evaluator.step(
+                    state, reading_ages(self.gateway, state.t, self.evaluator)
+                )
                 failing = False
             except Exception as exc:  # noqa: BLE001 - say it once, keep watching
                 if not failing:
@@ -66,7 +74,7 @@ class Watching:
 
     def step(self, state) -> list[dict]:
         try:
-            alerts = self.evaluator.step(state, reading_ages(self.gateway, state.t))
+            alerts = self.evaluator.step(state, reading_ages(self.gateway, state.t, self.evaluator))
         except Exception as exc:  # noqa: BLE001 - the console goes on showing the robot
             if not self._failing:
                 log.info("watches not evaluated: %s", exc)
