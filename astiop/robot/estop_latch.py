@@ -106,7 +106,7 @@ class EstopLatch(_Host):
         still holds it."""
         graph = self.station_latch
         newer = graph.press if graph is not None else None
-        if pressed is not None and newer is not None and newer > pressed:
+        if pressed is not None and newer is not None and newer.at > pressed.at:
             return [f"pressed again since, by {newer.words}: not released"]
         act = Act.here(self.who)
         with self._latch_lock:
