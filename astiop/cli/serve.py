@@ -115,7 +115,6 @@ def _button_stops(st: CliState, env: dict[str, str]):
     from astiop.robot.factory import make_robot_gateway, ros2_transport
     from astiop.transports.base import BackendError
 
-    os.environ.update(env)  # the shared simulator's domain: before rclpy starts here
     settings = st.settings
     if env:  # the shared simulator: the tabs reach it over rclpy
         settings = settings.model_copy(
@@ -124,6 +123,8 @@ def _button_stops(st: CliState, env: dict[str, str]):
         )  # fmt: skip
     if settings.robot.backend != "ros2":
         return None, None
+    saved = {name: os.environ.get(name) for name in env}
+    os.environ.update(env)  # the shared simulator's domain, read as rclpy starts here
     try:
         if ros2_transport(settings)[0] != "rclpy":
             return None, None
@@ -131,6 +132,12 @@ def _button_stops(st: CliState, env: dict[str, str]):
     except BackendError as exc:
         typer.echo(f"astiop serve: the E-STOP button runs astiop estop ({exc})", err=True)
         return None, None
+    finally:  # this process's environment as it was (a caller in the same process goes on)
+        for name, value in saved.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
     gateway.warm_estop()
 
     def stop(who: str) -> list[str]:
@@ -232,14 +239,13 @@ def serve(
         base += ["--robot", "ros2", "--ros2-transport", "rclpy"]  # the last --robot wins
         robot = f"simulator (shared by every tab; astiop sim node on ROS_DOMAIN_ID={shared[1]})"
         env = {**_loopback(), "ROS_DOMAIN_ID": str(shared[1])}
-    stop_robot, button = _button_stops(st, env)
+    buttons: list = []  # the button's gateway, made once the port is open
     config = ServeConfig(
         host=host,
         port=port,
         token=token,
         console_argv=base,
         estop_argv=[*base, "estop"],
-        stop_robot=stop_robot,
         db=Path(st.db_path),
         robot=robot,
         console_env=env,
@@ -253,6 +259,10 @@ def serve(
         access += ", clients named by " + ", ".join(map(str, config.trusted_proxies))
 
     def ready(url: str) -> None:
+        # the button's own way to the robot, once this server is sure to serve (its rclpy
+        # process on the robot's domain: nothing else here speaks ROS 2)
+        config.stop_robot, button = _button_stops(st, env)
+        buttons.append(button)
         if host in ("0.0.0.0", "::"):
             url += " (every address of this machine)"
         typer.echo(f"astiop serve: {url} ({access}; robot: {config.robot}); Ctrl-C stops", err=True)
@@ -264,7 +274,8 @@ def serve(
     except OSError as exc:
         fail(f"cannot listen on {host}:{port}: {exc.strerror or exc}")
     finally:
-        if button is not None:
-            button.close()
+        for button in buttons:
+            if button is not None:
+                button.close()
         if node is not None:
             _end_node(node)
