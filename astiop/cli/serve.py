@@ -51,8 +51,9 @@ NODE_START_S = 60.0
 
 
 # The shared simulator's own domain: never the robot's graph (a real base may listen on this
-# machine's domain). The highest of Linux's safe domain ids, the first found with no robot on it.
-SIM_DOMAINS = range(101, 88, -1)
+# machine's domain). Among Linux's safe domain ids (0-101), the first of 99 down to 89 with no
+# robot on it (the top two are left to `astiop sim node --domains` fleets).
+SIM_DOMAINS = range(99, 88, -1)
 
 
 def _shared_simulator(st: CliState, mode: str) -> tuple[subprocess.Popen, int] | None:
