@@ -287,14 +287,6 @@ def store_softly(st):
         return None, str(exc)
 
 
-def _driven_here(store, ns: str) -> bool:
-    """Whether this database drove the robot under `ns` (one not found now may be hung)."""
-    try:
-        return store is not None and ns.rstrip("/") in store.namespaces_driven()
-    except Exception:  # noqa: BLE001 - a database in trouble: the press is held all the same
-        return True
-
-
 def _record_press(store, ns: str, at: float) -> str:
     """The press latched in the database after the robot was told; what went wrong ("")."""
     try:
@@ -318,8 +310,6 @@ def _press(st, ns: str) -> None:
         )
     except BackendError as exc:
         store, why = store_softly(st)
-        if str(exc).startswith("no robot named") and not _driven_here(store, ns):
-            fail(str(exc))  # a name no robot of the fleet has: nothing latched for it
         said = _record_press(store, ns, at) if store is not None else why
         held = "E-STOP not latched anywhere" if said else "E-STOP latched in the database"
         fail(f"{held}, and the robot was not reached: {exc}", code=1)
