@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 
 import typer
 
-from astiop.cli.common import fail, interactive, print_json, state, take_control
+from astiop.cli.common import Ending, fail, interactive, print_json, state, take_control
 
 if TYPE_CHECKING:
     from astiop.ros2.validation import Checked
@@ -326,6 +326,9 @@ def _press(st, ns: str) -> None:
     released = pressed is not None and pressed.press is not None and not pressed.engaged
     on_graph = pressed is not None and pressed.on_graph
     gateway.close()
+    # all said and sent: no interpreter teardown (rclpy's, DDS's threads) between the stop and
+    # the shell that waits for it
+    Ending.at_once = True
     for failure in failures:
         typer.echo(f"astiop: {failure}", err=True)
     if released and pressed is not None and pressed.release is not None:
