@@ -12,6 +12,7 @@ from pathlib import Path
 
 MCP_TOKEN = "ASTIOP_MCP_TOKEN"
 SERVE_TOKEN = "ASTIOP_SERVE_TOKEN"
+METRICS_TOKEN = "ASTIOP_METRICS_TOKEN"
 MIN_CHARS = 16
 MAX_CHARS = 1024
 MAX_FILE_BYTES = 4096
@@ -19,8 +20,8 @@ MAX_FILE_BYTES = 4096
 TOKEN_RE = re.compile(rf"^[\x21-\x7e]{{{MIN_CHARS},{MAX_CHARS}}}$")
 
 
-def where(variable: str) -> str:
-    return f"--token-file F (mode 600) or {variable}"
+def where(variable: str, flag: str = "--token-file") -> str:
+    return f"{flag} F (mode 600) or {variable}"
 
 
 class TokenError(Exception):
@@ -40,10 +41,10 @@ def check(token: str, source: str) -> str:
     return token
 
 
-def read_token_file(path: Path) -> str:
+def read_token_file(path: Path, flag: str = "--token-file") -> str:
     """The token in `path`: its one line, without the newline. Refused, as ssh refuses an
     unprotected private key, when others may read or write the file."""
-    source = f"--token-file {path}"
+    source = f"{flag} {path}"
     try:
         fd = os.open(path, os.O_RDONLY | os.O_NOCTTY | os.O_NONBLOCK)
     except OSError as exc:
@@ -76,10 +77,12 @@ def read_token_file(path: Path) -> str:
     return check(token, source)
 
 
-def token_from(token_file: Path | None, env: Mapping[str, str], variable: str) -> str | None:
+def token_from(
+    token_file: Path | None, env: Mapping[str, str], variable: str, flag: str = "--token-file"
+) -> str | None:
     """The token to require: the file's if one is given, else the variable's; None if neither."""
     if token_file is not None:
-        return read_token_file(token_file)
+        return read_token_file(token_file, flag)
     if variable in env:
         return check(env[variable], variable)
     return None

@@ -177,8 +177,8 @@ class Settings(BaseSettings):
 
 
 # Variables astiop reads that are not settings: where the settings file is, and a secret that
-# must never be shown with the settings (`astiop mcp --http`'s bearer token).
-NOT_SETTINGS = {"ASTIOP_CONFIG", "ASTIOP_MCP_TOKEN"}
+# must never be shown with the settings (the servers' bearer tokens).
+NOT_SETTINGS = {"ASTIOP_CONFIG", "ASTIOP_MCP_TOKEN", "ASTIOP_SERVE_TOKEN", "ASTIOP_METRICS_TOKEN"}
 
 # Short names for the variables an operator sets most; any key is ASTIOP_SECTION__KEY.
 _ENV_SHORTCUTS = {

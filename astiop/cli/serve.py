@@ -12,6 +12,7 @@ from pathlib import Path
 
 import typer
 
+from astiop.cli import metrics_option
 from astiop.cli.common import CliState, fail, state
 from astiop.cli.mcp import loopback
 
@@ -208,6 +209,8 @@ def serve(
         "--warm/--no-warm",
         help="Keep one console process started ahead (its imports done, idle) for the next tab.",
     ),
+    metrics: str | None = metrics_option.ADDRESS,
+    metrics_token_file: Path | None = metrics_option.TOKEN_FILE,
 ) -> None:
     """Serve the console to a web browser: every screen, key and dialog, one console process per
     tab on these settings, database and robot, with an E-STOP button on every page."""
@@ -228,6 +231,13 @@ def serve(
     st = state(ctx)
     st.settings  # a bad settings file fails here, not in every tab  # noqa: B018
     st.store  # the database opens (and is made) once, before any tab  # noqa: B018
+    buttons: list = []  # the button's gateway, made once the port is open
+    from astiop.metrics import figures_of
+
+    exporter = metrics_option.start_metrics(
+        st, metrics, metrics_token_file,
+        lambda: [figures_of(b, st.robot_name or "") for b in buttons if b is not None],
+    )  # fmt: skip
 
     from astiop.web.access import proxy_networks
     from astiop.web.server import ServeConfig, serve_until_stopped
@@ -240,7 +250,6 @@ def serve(
         base += ["--robot", "ros2", "--ros2-transport", "rclpy"]  # the last --robot wins
         robot = f"simulator (shared by every tab; astiop sim node on ROS_DOMAIN_ID={shared[1]})"
         env = {**_loopback(), "ROS_DOMAIN_ID": str(shared[1])}
-    buttons: list = []  # the button's gateway, made once the port is open
     config = ServeConfig(
         host=host,
         port=port,
@@ -263,6 +272,8 @@ def serve(
         # the button's own way to the robot, once this server is sure to serve (its rclpy
         # process on the robot's domain: nothing else here speaks ROS 2)
         config.stop_robot, button = _button_stops(st, env)
+        if button is not None and exporter is not None:
+            button.start()  # its readings too, for the metrics (else it only stops the robot)
         buttons.append(button)
         if host in ("0.0.0.0", "::"):
             url += " (every address of this machine)"
@@ -275,6 +286,8 @@ def serve(
     except OSError as exc:
         fail(f"cannot listen on {host}:{port}: {exc.strerror or exc}")
     finally:
+        if exporter is not None:
+            exporter.close()
         for button in buttons:
             if button is not None:
                 button.close()

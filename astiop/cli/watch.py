@@ -6,9 +6,11 @@ from __future__ import annotations
 import json
 import signal
 import time
+from pathlib import Path
 
 import typer
 
+from astiop.cli import metrics_option
 from astiop.cli.common import CliState, fail, print_json, state
 
 app = typer.Typer(
@@ -153,9 +155,15 @@ def _say(a: dict, as_json: bool) -> None:
 
 
 @app.command("run")
-def run(ctx: typer.Context, as_json: bool = typer.Option(False, "--json")) -> None:
+def run(
+    ctx: typer.Context,
+    as_json: bool = typer.Option(False, "--json"),
+    metrics: str | None = metrics_option.ADDRESS,
+    metrics_token_file: Path | None = metrics_option.TOKEN_FILE,
+) -> None:
     """Evaluate the watches and the built-in alerts on the robot, headless, until SIGINT or
     SIGTERM; each new alert is written once to the database and printed (--json: a line each)."""
+    from astiop.metrics import figures_of
     from astiop.robot.factory import make_robot_gateway
     from astiop.transports.base import BackendError
     from astiop.watches.evaluator import Evaluator
@@ -163,11 +171,16 @@ def run(ctx: typer.Context, as_json: bool = typer.Option(False, "--json")) -> No
 
     st = state(ctx)
     settings = st.settings
+    gateways: list = []  # the robot, once reached: what a scrape reads
+    exporter = metrics_option.start_metrics(
+        st, metrics, metrics_token_file, lambda: [figures_of(g, _robot(st)) for g in gateways]
+    )
     try:
         gateway = make_robot_gateway(settings, st.store, realtime=True, who="astiop watch run")
         gateway.start()
     except BackendError as exc:
         fail(str(exc))
+    gateways.append(gateway)
     ev = Evaluator(
         st.store,
         _robot(st),
@@ -187,6 +200,8 @@ def run(ctx: typer.Context, as_json: bool = typer.Option(False, "--json")) -> No
     try:
         runner.run()
     finally:
+        if exporter is not None:
+            exporter.close()
         gateway.close()
 
 

@@ -26,6 +26,7 @@ from astiop.store.schema import (
     SCHEMA_VERSION,
     check_database_file,
 )
+from astiop.store.tallies import TallyTables
 from astiop.store.watches import WatchTables
 from astiop.store.zones import ZoneTables
 from astiop.warehouse import Rect, default_map
@@ -52,6 +53,7 @@ class Store(
     MissionTables,
     LeaseTables,
     WatchTables,
+    TallyTables,
 ):
     """One connection per thread, all to the same file."""
 
