@@ -7,7 +7,7 @@ import math
 
 from textual.widgets import DataTable
 
-from astiop.cli.console import replayed_fleet
+from astiop.cli.replay import replayed_fleet
 from astiop.config import load_settings
 from astiop.recording import SessionRecorder, summary
 from astiop.recording.reader import Recording, fleet_of

@@ -8,20 +8,22 @@ import typer
 
 from astiop import __version__
 from astiop.cli import (
-    agent,
     bench,
+    chat,
     config_cmd,
-    console,
     doctor,
     emulate,
+    estop,
+    exec_command,
     export,
     fleet,
     locations,
     mcp,
     mission,
+    models,
     record,
+    replay,
     robot,
-    robot_profile,
     ros2,
     serve,
     sim,
@@ -44,17 +46,17 @@ app.add_typer(bench.app, name="bench")
 app.add_typer(export.app, name="export")
 app.add_typer(ros2.app, name="ros2")
 app.add_typer(mission.app, name="mission")
-app.add_typer(robot_profile.app, name="robot")
+app.add_typer(robot.app, name="robot")
 app.add_typer(fleet.app, name="fleet")
 app.add_typer(watch.app, name="watch")
-app.command("exec")(robot.exec_command)
-app.command("estop")(robot.estop)
-app.command("chat")(agent.chat)
-app.command("models")(agent.models)
+app.command("exec")(exec_command.exec_command)
+app.command("estop")(estop.estop)
+app.command("chat")(chat.chat)
+app.command("models")(models.models)
 app.command("emulate-ros2")(emulate.emulate_ros2)
 app.command("doctor")(doctor.doctor)
 app.command("record")(record.record)
-app.command("replay")(console.replay)
+app.command("replay")(replay.replay)
 app.command("mcp")(mcp.mcp)
 app.command("serve")(serve.serve)
 app.command("alerts")(watch.alerts)

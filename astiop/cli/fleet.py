@@ -52,7 +52,7 @@ def read_rows(st, robots: list) -> list:
     from astiop.robot.fleet_watch import FleetRow
 
     settings = st.fleet_settings
-    from astiop.cli.robot import store_softly
+    from astiop.cli.estop import store_softly
 
     store, _ = store_softly(st)  # its E-STOP latch: a latched robot is shown as held
     found = each(robots, lambda r: _read(settings, r, store))
@@ -162,7 +162,7 @@ def estop_all(st) -> None:
         unstopped.append(name)
         typer.echo(f"{name}: NOT FOUND on the graph now (driven from here before)", err=True)
     if unstopped and settings.robot.backend == "ros2":
-        from astiop.cli.robot import keep_on_the_graph
+        from astiop.cli.estop import keep_on_the_graph
 
         for name in unstopped:  # each tried again, by a keeper, until it is stopped
             keep_on_the_graph(st, at, name)
@@ -176,7 +176,7 @@ def estop_all(st) -> None:
 
 def _record_all(st, at: float) -> str:
     """The press latched for every robot on this database; what went wrong ("")."""
-    from astiop.cli.robot import store_softly
+    from astiop.cli.estop import store_softly
 
     store, why = store_softly(st)
     if store is None:
@@ -191,7 +191,7 @@ def _record_all(st, at: float) -> str:
 def _driven_here_not_found(st, robots: list) -> list[str]:
     """Robots of a discovered fleet this database drove (a motion command under its namespace)
     that are not on the graph now: a hung process is not discovered by a new one."""
-    from astiop.cli.robot import store_softly
+    from astiop.cli.estop import store_softly
 
     if st.fleet_settings.fleet.discover != "auto":
         return []  # a listed fleet's robots are all tried, found or not

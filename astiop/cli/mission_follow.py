@@ -1,4 +1,4 @@
-"""Following a mission this process drives to its end, for `astiop chat` (cli/agent.py) and
+"""Following a mission this process drives to its end, for `astiop chat` (cli/chat.py) and
 `astiop mission resume` (cli/mission.py)."""
 
 from __future__ import annotations

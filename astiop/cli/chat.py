@@ -1,4 +1,4 @@
-"""`astiop chat` (one agent turn) and `astiop models` (which endpoints answer)."""
+"""`astiop chat`: one request through the agent, headless, as the console's Chat does."""
 
 from __future__ import annotations
 
@@ -221,23 +221,3 @@ def chat(
     Ending.at_once = settings.robot.backend != "ros2"
     if result.error:
         raise typer.Exit(1)
-
-
-def models(ctx: typer.Context, as_json: bool = typer.Option(False, "--json")) -> None:
-    """List the configured model endpoints, whether each answers, and what it serves."""
-    from astiop.agent.models.probe import probe
-
-    settings = state(ctx).settings
-    specs = list(dict.fromkeys([settings.llm.model, "rules", "embedded", *settings.llm.endpoints]))
-
-    async def run_all():
-        return [r.as_json() for r in await asyncio.gather(*(probe(s) for s in specs))]
-
-    rows = asyncio.run(run_all())
-    if as_json:
-        print_json(rows)
-        return
-    for row in rows:
-        mark = "ok  " if row["answers"] else "DOWN"
-        serves = ", ".join(row["serves"][:5])
-        typer.echo(f"{mark} {row['spec']:<40} {serves}  {row['detail']}".rstrip())
