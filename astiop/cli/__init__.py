@@ -68,9 +68,9 @@ def run(argv: list[str] | None = None) -> None:
     args = _with_record_file(list(sys.argv[1:] if argv is None else argv))
     ARGS[:] = args
     if _stops_the_robot(args):  # every other astiop process stops as soon as this is written
-        from astiop import latch
+        from astiop import estop_sql
 
-        latch.latch_early(args)
+        estop_sql.latch_early(args)
     from astiop.agent.models import model_spawn
 
     if _serves_a_local_model(args):  # the model's process starts before our imports

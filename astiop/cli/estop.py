@@ -201,11 +201,11 @@ def _record_press(store, ns: str, at: float) -> str:
 def _press(st, ns: str) -> None:
     """`astiop estop`: the robot told first, then the robot's graph, then the database; a
     database that cannot be written never delays nor prevents the stop."""
-    from astiop import latch
+    from astiop import estop_sql
     from astiop.robot.factory import make_robot_gateway
     from astiop.transports.base import BackendError
 
-    at = latch.pressed_at()  # every step of this press is this one press
+    at = estop_sql.pressed_at()  # every step of this press is this one press
     try:
         gateway = make_robot_gateway(
             st.settings, None, who="estop", discover=False, restore_latch=False

@@ -116,12 +116,12 @@ def estop_all(st) -> None:
     its goals cancelled), then the E-STOP latched for every process on this database. A robot it
     could not stop (a hung node, a lost link), or one driven from here that is not on the graph
     now, is named as one that may still be moving, and a keeper stops it when it is heard."""
-    from astiop import latch
+    from astiop import estop_sql
     from astiop.robot.factory import make_robot_gateway
     from astiop.robot.fleet import FOUND_ONCE_S, robot_settings
 
     settings = st.fleet_settings
-    at = latch.pressed_at()
+    at = estop_sql.pressed_at()
     results: dict[str, object] = {}
     threads: list[threading.Thread] = []
 

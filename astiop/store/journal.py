@@ -8,7 +8,7 @@ import time
 from collections.abc import Collection
 from typing import Any
 
-from astiop import latch
+from astiop import estop_sql
 from astiop.store.connection import Connection, row_id
 
 
@@ -188,11 +188,11 @@ class JournalTables(Connection):
         if a release was made after it (nothing latched)."""
         at = time.time() if at is None else at
         with self._tx():
-            return self.db.conn.execute(latch.LATCH, [who, at, at]).rowcount == 1
+            return self.db.conn.execute(estop_sql.LATCH, [who, at, at]).rowcount == 1
 
     def release_estop(self, who: str, at: float | None = None) -> None:
         with self._tx():
-            self.db.conn.execute(latch.RELEASE, [who, time.time() if at is None else at])
+            self.db.conn.execute(estop_sql.RELEASE, [who, time.time() if at is None else at])
 
     def interaction_marks(self) -> tuple[int, list[int]]:
         """The newest turn's id and the ids of the turns still running, read together."""

@@ -10,7 +10,7 @@ import sys
 import threading
 from pathlib import Path
 
-from astiop import latch
+from astiop import estop_sql
 from astiop.config import load_settings
 from astiop.robot.factory import make_sim_gateway
 from astiop.sim.simulator import Simulator
@@ -24,14 +24,14 @@ def test_the_early_latch_reads_the_database_the_settings_read(tmp_path, monkeypa
     config = tmp_path / "config.toml"
     config.write_text(f'db = "{tmp_path / "from-file.db"}"\n')
     env = {"ASTIOP_CONFIG": str(config)}
-    assert latch.db_path(["--db", "a.db", "estop"], env) == Path("a.db")
-    assert latch.db_path(["--db=b.db", "estop"], env) == Path("b.db")
-    assert latch.db_path(["estop"], {**env, "astiop_db": "c.db"}) == Path("c.db")  # any case
-    assert latch.db_path(["estop"], env) == tmp_path / "from-file.db"
+    assert estop_sql.db_path(["--db", "a.db", "estop"], env) == Path("a.db")
+    assert estop_sql.db_path(["--db=b.db", "estop"], env) == Path("b.db")
+    assert estop_sql.db_path(["estop"], {**env, "astiop_db": "c.db"}) == Path("c.db")  # any case
+    assert estop_sql.db_path(["estop"], env) == tmp_path / "from-file.db"
     for args, want in [(["--db", "a.db"], "a.db"), ([], str(tmp_path / "from-file.db"))]:
         settings = load_settings({"db": args[1]} if args else {}, env={}, path=config)
         assert str(settings.db) == want
-    assert latch.db_path(["estop"], {"ASTIOP_CONFIG": str(tmp_path / "none.toml")}).name == (
+    assert estop_sql.db_path(["estop"], {"ASTIOP_CONFIG": str(tmp_path / "none.toml")}).name == (
         "astiop.db"
     )
 
@@ -40,8 +40,8 @@ def test_the_early_latch_latches_with_nothing_heavy_imported(tmp_path):
     db = tmp_path / "e.db"
     Store(db).close()
     code = (
-        "import json, sys; from astiop import latch; "
-        f"ok = latch.latch_early(['--db', {str(db)!r}, 'estop']); "
+        "import json, sys; from astiop import estop_sql; "
+        f"ok = estop_sql.latch_early(['--db', {str(db)!r}, 'estop']); "
         "print(json.dumps([ok, sorted(m for m in sys.modules "
         "if m.startswith(('astiop.store', 'astiop.robot', 'sqlite_utils', 'numpy')))]))"
     )
@@ -54,10 +54,10 @@ def test_the_early_latch_latches_with_nothing_heavy_imported(tmp_path):
 
 
 def test_the_early_latch_never_gets_in_the_way(tmp_path):
-    assert not latch.latch_early(["--db", str(tmp_path / "none.db"), "estop"])  # no file yet
-    assert not latch.latch_early(["--db", str(tmp_path), "estop"])  # a folder
+    assert not estop_sql.latch_early(["--db", str(tmp_path / "none.db"), "estop"])  # no file yet
+    assert not estop_sql.latch_early(["--db", str(tmp_path), "estop"])  # a folder
     (tmp_path / "junk.db").write_text("not sqlite")
-    assert not latch.latch_early(["--db", str(tmp_path / "junk.db"), "estop"])
+    assert not estop_sql.latch_early(["--db", str(tmp_path / "junk.db"), "estop"])
 
 
 def test_a_process_that_followed_an_estop_follows_its_release_unasked(tmp_path):
