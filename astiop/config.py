@@ -67,8 +67,8 @@ class FleetRobot(_Section):
     """One robot of a fleet: its name (what --robot-name takes) and where it is reached."""
 
     name: str = Field(pattern=r"^[A-Za-z0-9_-]{1,64}$")
-    namespace: str = Field("", description="its ROS 2 namespace, e.g. /astibot_2")
-    profile: str = Field("", description="its profile (robot.profile when empty)")
+    namespace: str = Field(default="", description="its ROS 2 namespace, e.g. /astibot_2")
+    profile: str = Field(default="", description="its profile (robot.profile when empty)")
 
 
 class FleetSettings(_Section):

@@ -2,33 +2,27 @@
 
 from __future__ import annotations
 
-from typing import Protocol
+from collections.abc import Callable
 
 from astiop.store import Store, StoreError
 from astiop.transports.base import Execution
 
 
-class Journaled(Protocol):
-    """What a `CommandJournal` needs of its gateway."""
-
-    store: Store | None
-
-    def _say_store_error(self, message: str) -> None: ...
-
-
 class CommandJournal:
     """One command's row in the store: written as sent before the robot is told, completed
-    after; a command that never went out is written once, with why."""
+    after; a command that never went out is written once, with why. `say_store_error`: where
+    a row the store could not keep is said (the gateway says each reason once)."""
 
     UNFINISHED = "sent to the robot; astiop ended before it finished"
 
-    def __init__(self, gateway: Journaled, source: str):
-        self.gateway = gateway
+    def __init__(self, store: Store | None, say_store_error: Callable[[str], None], source: str):
+        self.store = store
+        self.say_store_error = say_store_error
         self.source = source
         self.row: int | None = None
 
     def sent(self, ex: Execution) -> None:
-        store = self.gateway.store
+        store = self.store
         if store is None:
             return
         try:
@@ -38,7 +32,7 @@ class CommandJournal:
             self._failed(ex, exc)
 
     def finish(self, ex: Execution) -> None:
-        store = self.gateway.store
+        store = self.store
         if store is None:
             return
         try:
@@ -53,4 +47,4 @@ class CommandJournal:
         note = f"not in astiop's record of commands: {exc}"
         if note not in ex.notes:
             ex.notes.append(note)
-        self.gateway._say_store_error(note)
+        self.say_store_error(note)

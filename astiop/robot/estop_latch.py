@@ -7,8 +7,10 @@ import contextlib
 import logging
 import threading
 import time
-from typing import TYPE_CHECKING, Any, Protocol
+from collections.abc import Callable
+from typing import Any
 
+from astiop.robot.latch_watch import LatchWatcher
 from astiop.robot.safety import always_allowed
 from astiop.robot.station_latch import Act, StationLatch
 from astiop.ros2.validation import Checked
@@ -22,27 +24,58 @@ HELD_FOR_ALL = (
 ESTOP_REASON = "the E-STOP is engaged: no motion command runs until the operator releases it"
 
 
-class LatchHost(Protocol):
-    """What `EstopLatch` needs of the gateway it is mixed into."""
+class EstopLatch:
+    """One robot's E-STOP for the gateway that holds it: the robot told first, then the robot's
+    graph (every station), then the store (every process on this database). It is handed the
+    robot's backend, the store (None: the graph's word and this process's memory alone), who
+    presses, the latch's key (a fleet's robot: its namespace) and where a store error is said."""
 
-    backend: RobotBackend
-    store: Store | None
-    who: str
-    latch_key: str
-    station_latch: StationLatch | None
-    _latch_seen: bool
-    _latch_lock: threading.Lock
+    def __init__(
+        self,
+        backend: RobotBackend,
+        store: Store | None,
+        *,
+        who: str,
+        latch_key: str = "",
+        say_store_error: Callable[[str], None],
+    ):
+        self.backend = backend
+        self.store = store
+        self.who = who
+        self.latch_key = latch_key  # a namespaced robot latches its own E-STOP (a fleet's)
+        self._say_store_error = say_store_error
+        self.station_latch: StationLatch | None = None  # the latch on the robot's graph
+        self._lock = threading.Lock()
+        self._seen = False
+        self._seen = self.latched
+        self._watcher: LatchWatcher | None = None
 
-    def _say_store_error(self, message: str) -> None: ...
+    def restore(self) -> None:
+        """A restart keeps the E-STOP until it is released: the robot is stopped again."""
+        if self._seen and not self.backend.e_stopped:
+            self.backend.estop()
 
+    def watch_store(self) -> None:
+        """Another process's E-STOP ends what this one has in flight, with no one asking."""
+        if self.store is not None:
+            self._watcher = LatchWatcher(
+                self.store, self.backend.inflight, self.follow_latch
+            ).start()
 
-if TYPE_CHECKING:
-    _Host = LatchHost
-else:
-    _Host = object
+    def follow_stations(self, namespace: str) -> None:
+        """Follow the E-STOP that every station says on the robot's graph, and say this one's
+        (robot/station_latch.py), where the transport can reach the graph."""
+        backend = self.backend
+        self.station_latch = StationLatch(
+            lambda heard: backend.estop_channel(namespace, heard), self.follow_latch
+        ).start()
 
+    def close(self) -> None:
+        if self._watcher is not None:
+            self._watcher.close()
+        if self.station_latch is not None:
+            self.station_latch.close()
 
-class EstopLatch(_Host):
     @property
     def latched(self) -> bool:
         """The latch: the robot's graph's (every station's), the store's (every robot's, or this
@@ -54,7 +87,7 @@ class EstopLatch(_Host):
             return self._store_latch() is not None
         except Exception as exc:  # noqa: BLE001 - a damaged or vanished file: memory decides
             self._say_store_error(f"the E-STOP latch could not be read: {exc}")
-            return self._latch_seen
+            return self._seen
 
     def _store_latch(self) -> dict[str, Any] | None:
         store = self.store
@@ -73,8 +106,8 @@ class EstopLatch(_Host):
         the same press, and never undo a release made after it)."""
         act = Act.here(who or self.who, at)
         failures = self.backend.estop()  # the robot first: nothing may delay it
-        with self._latch_lock:  # the sampler's follow_latch must not undo it
-            self._latch_seen = True
+        with self._lock:  # the sampler's follow_latch must not undo it
+            self._seen = True
             if self.station_latch is not None:
                 self.station_latch.pressed(act)
             if self.store is not None:
@@ -109,14 +142,14 @@ class EstopLatch(_Host):
         if pressed is not None and newer is not None and newer.at > pressed.at:
             return [f"pressed again since, by {newer.words}: not released"]
         act = Act.here(self.who)
-        with self._latch_lock:
+        with self._lock:
             if self.store is not None:
                 self._release_store(act)
                 if self.latch_key and self.store.estop_latch() is not None:
                     return [HELD_FOR_ALL]
             if graph is not None:
                 graph.released(act)
-            self._latch_seen = False
+            self._seen = False
         return self.backend.release_estop()
 
     def pressed_by(self) -> Act | None:
@@ -131,11 +164,11 @@ class EstopLatch(_Host):
         """Whether the E-STOP is latched; when another process (a second console, `astiop
         estop`, another station on the robot's graph) latched or released it since the last
         look, this process's robot follows, and so does this database."""
-        with self._latch_lock:  # read and acted on together: an estop() meanwhile waits
+        with self._lock:  # read and acted on together: an estop() meanwhile waits
             self._adopt_graph()
             latched = self.latched
-            if latched != self._latch_seen:
-                self._latch_seen = latched
+            if latched != self._seen:
+                self._seen = latched
                 if latched and not self.backend.e_stopped:
                     self.backend.estop()
                 elif not latched and self.backend.e_stopped:
@@ -209,7 +242,7 @@ class EstopLatch(_Host):
             for failure in ended:
                 log.error(failure)
 
-    def _held_by_estop(self, checked: Checked) -> bool:
+    def held_by_estop(self, checked: Checked) -> bool:
         """Latched (this robot, or the fleet's robot the command is sent to), and not a command
         the E-STOP always lets through (/stop)."""
         if always_allowed(checked):
@@ -219,7 +252,9 @@ class EstopLatch(_Host):
         if self.e_stopped:
             return True
         name = checked.command.name if checked.command else None
-        return bool(name) and any(_under(name, ns) for ns in self._latched_robots())
+        if not name:
+            return False
+        return any(_under(name, ns) for ns in self._latched_robots())
 
     def _latched_robots(self) -> list[str]:
         """The namespaces of every robot whose own E-STOP is latched (none without a store)."""

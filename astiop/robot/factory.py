@@ -4,12 +4,17 @@ from __future__ import annotations
 
 from astiop.config import Settings
 from astiop.robot.gateway import RobotGateway
+from astiop.robot.lease import Lease
 from astiop.robot.safety import SafetyPolicy
+from astiop.ros2.profile_types import Profile, ProfileSpec
 from astiop.sim.simulator import Simulator
 from astiop.store import Store
+from astiop.transports.base import RobotBackend
 
 
-def make_safety(settings: Settings, store: Store | None, profile=None) -> SafetyPolicy:
+def make_safety(
+    settings: Settings, store: Store | None, profile: Profile | None = None
+) -> SafetyPolicy:
     """The settings' limits, lowered to the robot's own where its profile knows them (a
     TurtleBot3 Burger: 0.22 m/s, not the ASTIbot's 0.8). The geofence is the profile's, else
     the robot's map's once the gateway has it (`RobotGateway.use_map`)."""
@@ -72,7 +77,7 @@ def ros2_transport(settings: Settings) -> tuple[str, str]:
     return ("cli", missing) if missing else ("rclpy", "")
 
 
-def profile_spec(settings: Settings):
+def profile_spec(settings: Settings) -> ProfileSpec:
     """What the settings fix of the robot's profile (robot.profile, robot.namespace);
     BackendError in one line for a profile that cannot be used."""
     from astiop.ros2.profile_file import ProfileError, read_spec
@@ -98,6 +103,7 @@ def make_robot_gateway(
     if settings.robot.backend == "ros2":
         transport, why = ros2_transport(settings)
         fixed = profile_spec(settings)
+        backend: RobotBackend
         if transport == "rclpy":
             from astiop.transports.rclpy.backend import RclpyBackend
 
@@ -135,7 +141,7 @@ def make_robot_gateway(
     )
 
 
-def _named_robot_found(settings: Settings, backend) -> None:
+def _named_robot_found(settings: Settings, backend: RobotBackend) -> None:
     """A fleet found on the graph (--fleet auto): the robot --robot-name names must be on it,
     or nothing is sent, latched or stored for it (BackendError). Heard of until discovery is
     over: a robot's participant may come seconds after another's."""
@@ -163,12 +169,12 @@ def _named_robot_found(settings: Settings, backend) -> None:
         )
 
 
-def robot_lease(ns: str, store: Store, who: str, backend):
+def robot_lease(ns: str, store: Store, who: str, backend: RobotBackend) -> Lease:
     """The lease of the ROS 2 robot under namespace `ns` on this process's domain, announced on
     the robot's graph where the transport can."""
     import os
 
-    from astiop.robot.lease import Lease, lease_key
+    from astiop.robot.lease import lease_key
 
     key = lease_key(ns, os.environ.get("ROS_DOMAIN_ID", "0"))
     name = ns.strip("/") or "the robot"

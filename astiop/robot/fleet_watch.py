@@ -18,6 +18,8 @@ LOW_BATTERY = 0.2
 FIRST_ROW_S = 0.1  # a robot's row read this often until its battery and pose came in
 FIRST_FOR_S = 5.0  # (a robot with no battery topic is not read that often for long)
 FIND_S = 1.0  # how often robots that join later are looked for on the graph
+# the robots found since the last look: (name, namespace, how its gateway is opened)
+FindMore = Callable[[], list[tuple[str, str, Callable[[], RobotGateway]]]]
 
 
 @dataclass(frozen=True)
@@ -148,8 +150,7 @@ class FleetWatch:
         self._threads: list[threading.Thread] = []
         # robots that join later: polled every FIND_S while the watch runs, each one found
         # (name, namespace, open) added to the watch; `stop_finding()` at the close
-        self.find_more: Callable[[], list[tuple[str, str, Callable[[], RobotGateway]]]] | None
-        self.find_more = None
+        self.find_more: FindMore | None = None
         self.stop_finding: Callable[[], None] = lambda: None
 
     def adopt(self, name: str, gateway: RobotGateway) -> None:
@@ -164,7 +165,7 @@ class FleetWatch:
         for name, ns, open_ in list(self.robots):
             self._start_watching(name, ns, open_)
         if self.find_more is not None:
-            self._spawn(self._find, "fleet-find")
+            self._spawn(self._find, "fleet-find", self.find_more)
         return self
 
     def _spawn(self, target: Callable[..., None], name: str, *args: object) -> None:
@@ -186,11 +187,11 @@ class FleetWatch:
         self.on_rows(self.rows())
         return True
 
-    def _find(self) -> None:
+    def _find(self, find_more: FindMore) -> None:
         started = time.monotonic()  # a fleet still being discovered is looked at more often
         while not self._halt.wait(0.25 if time.monotonic() - started < 5.0 else FIND_S):
             try:
-                for name, ns, open_ in self.find_more():
+                for name, ns, open_ in find_more():
                     self.add(name, ns, open_)
             except Exception:  # noqa: BLE001 - a graph not read this time: next time
                 continue

@@ -10,16 +10,20 @@ from __future__ import annotations
 import logging
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from typing import Any
 
 from astiop.robot.command_journal import CommandJournal
 from astiop.robot.estop_latch import ESTOP_REASON, EstopLatch
 from astiop.robot.graph_reading import GraphReading
-from astiop.robot.latch_watch import LatchWatcher
+from astiop.robot.lease import Lease
+from astiop.robot.provenance import date_reading, name_role, provenance
 from astiop.robot.safety import Review, SafetyPolicy
-from astiop.robot.station_latch import StationLatch
+from astiop.robot.station_latch import Act, StationLatch
+from astiop.ros2.catalog import Catalog
+from astiop.ros2.command import Ros2Command
 from astiop.ros2.fleet_names import robot_under
+from astiop.ros2.profile_types import Profile
 from astiop.ros2.render import STAMPED
 from astiop.ros2.validation import Checked, validate
 from astiop.ros2.verbs import VERBS
@@ -31,10 +35,9 @@ from astiop.transports.state import RobotEvent, RobotState, TopicStat
 
 Confirm = Callable[[Checked], bool]
 log = logging.getLogger("astiop.robot")
-MAX_STAMP_AGE_S = 86400.0  # a stamp older than a day is on another clock, not a day-old reading
 
 
-class RobotGateway(EstopLatch, GraphReading):
+class RobotGateway:
     def __init__(
         self,
         backend: RobotBackend,
@@ -59,24 +62,21 @@ class RobotGateway(EstopLatch, GraphReading):
         self._journaled = 0  # the last event kept in the store
         self._store_errors: set[str] = set()
         self._journal_lock = threading.Lock()
-        self._latch_lock = threading.Lock()
         self.latch_key = latch_key  # a namespaced robot latches its own E-STOP (a fleet's)
-        self.station_latch: StationLatch | None = None  # the latch on the robot's graph
-        self._latch_seen = False
-        self._latch_seen = self.latched
-        self.lease = None  # robot/lease.py: set where the robot is shared (ROS 2)
+        self.estop_latch = EstopLatch(
+            backend, store, who=who, latch_key=latch_key, say_store_error=self._say_store_error
+        )
+        self.graph_reading = GraphReading(backend, self.safety, store, timeout_s)
+        self.lease: Lease | None = None  # set where the robot is shared (ROS 2)
         # a fleet's robot reached through a whole-domain gateway by its names: its lease, made
         # by this (robot/factory.py) the first time a motion is sent to it
-        self.lease_of: Callable[[str], Any] | None = None
-        self._leases: dict[str, Any] = {}
+        self.lease_of: Callable[[str], Lease] | None = None
+        self._leases: dict[str, Lease] = {}
         self._leases_lock = threading.Lock()
         self.use_map()
-        if restore_latch and self._latch_seen and not backend.e_stopped:
-            backend.estop()  # a restart keeps the E-STOP until it is released
-        # another process's E-STOP ends what this one has in flight, with no one asking
-        self._watcher = (
-            LatchWatcher(store, backend.inflight, self.follow_latch).start() if store else None
-        )
+        if restore_latch:
+            self.estop_latch.restore()
+        self.estop_latch.watch_store()
 
     @property
     def kind(self) -> str:
@@ -93,12 +93,7 @@ class RobotGateway(EstopLatch, GraphReading):
         self.backend.start()
 
     def follow_stations(self, namespace: str) -> None:
-        """Follow the E-STOP that every station says on the robot's graph, and say this one's
-        (robot/station_latch.py), where the transport can reach the graph."""
-        backend = self.backend
-        self.station_latch = StationLatch(
-            lambda heard: backend.estop_channel(namespace, heard), self.follow_latch
-        ).start()
+        self.estop_latch.follow_stations(namespace)
 
     def take_control(self, force: bool = False) -> str | None:
         """Take the lease of a shared robot (robot/lease.py); why it could not be (None: this
@@ -123,10 +118,7 @@ class RobotGateway(EstopLatch, GraphReading):
         for lease in [self.lease, *self._leases.values()]:
             if lease is not None:
                 lease.release()
-        if self._watcher is not None:
-            self._watcher.close()
-        if self.station_latch is not None:
-            self.station_latch.close()
+        self.estop_latch.close()
         self.backend.close()
 
     def state(self) -> RobotState:
@@ -156,11 +148,11 @@ class RobotGateway(EstopLatch, GraphReading):
                     self._say_store_error(failed)
         return events
 
-    def messages(self, names) -> dict[str, dict]:
+    def messages(self, names: Iterable[str]) -> dict[str, dict]:
         """The latest message per topic, as the robot sent it (for recording)."""
         return self.backend.messages(names)
 
-    def message_times(self, names) -> dict[str, float]:
+    def message_times(self, names: Iterable[str]) -> dict[str, float]:
         return self.backend.message_times(names)
 
     def topic_stats(self) -> list[TopicStat]:
@@ -188,7 +180,8 @@ class RobotGateway(EstopLatch, GraphReading):
         if not checked.valid and (
             checked.reason.startswith("there is no") or " has no parameter " in checked.reason
         ):
-            checked = self.checked_once_heard(text, checked)  # it may have appeared since
+            # it may have appeared since
+            checked = self.graph_reading.checked_once_heard(text, checked)
         if self.safety.geofence is None and checked.valid and checked.kind == "actuate":
             self.use_map()  # the robot's /map may have come in since
             if self.safety.geofence is None:  # a one-shot command: its map read now
@@ -207,14 +200,14 @@ class RobotGateway(EstopLatch, GraphReading):
         """Run one command. Nothing reaches the backend unless it is valid, safe and confirmed.
         With a `source` (exec, teleop), a valid command is recorded in the store, whether it
         ran or safety, the E-STOP or the operator held it; text that is not a command is not."""
-        journal = CommandJournal(self, source) if source else None
+        journal = CommandJournal(self.store, self._say_store_error, source) if source else None
         result = self._run(text, confirm, timeout, review, journal)
         if journal is not None and result.valid:
             journal.finish(result)
         return result
 
     def record(self, ex: Execution, source: str) -> None:
-        CommandJournal(self, source).finish(ex)
+        CommandJournal(self.store, self._say_store_error, source).finish(ex)
 
     def _say_store_error(self, message: str) -> None:
         """A record the store could not keep: said once per reason (the robot was driven all the
@@ -244,6 +237,8 @@ class RobotGateway(EstopLatch, GraphReading):
         if not review.allowed:
             result.reason = review.reason
             return result
+        cmd = checked.command
+        assert cmd is not None  # allowed: valid, so parsed
         if why := self._lease_refusal(checked):
             result.reason = why  # another operator controls this robot
             return result
@@ -254,7 +249,7 @@ class RobotGateway(EstopLatch, GraphReading):
             if not confirm(checked):
                 result.reason = "not confirmed by the operator"
                 return result
-        if checked.kind == "actuate" and self._held_by_estop(checked):
+        if checked.kind == "actuate" and self.estop_latch.held_by_estop(checked):
             result.reason = ESTOP_REASON  # pressed while the operator was deciding
             return result
         if journal is not None:
@@ -262,57 +257,17 @@ class RobotGateway(EstopLatch, GraphReading):
         try:
             result.output, result.values = self.backend.execute(checked, timeout or self.timeout_s)
             result.executed = True
-            result.provenance = self._provenance(checked)
-            self._name_role(checked.command.name, result)
-            if VERBS[checked.command.key].means == TAKE:  # one message: its age is known
-                self._date_reading(checked.command.name, result)
+            result.provenance = provenance(cmd, checked.kind, self.catalog)
+            name_role(cmd.name, result, self.profile)
+            if VERBS[cmd.key].means == TAKE:  # one message: its age is known
+                date_reading(cmd.name, result, self.catalog, self.backend.robot_time())
         except BackendError as exc:
             result.executed = True
             result.error = str(exc)
             result.output = f"error: {exc}\n"
-        self._adopt_speed_limits(checked, result)
+        self._adopt_speed_limits(cmd, checked.message, result)
         result.duration_s = time.perf_counter() - t0
         return result
-
-    def _provenance(self, checked: Checked) -> str:
-        cmd = checked.command
-        if VERBS[cmd.key].measures:
-            return "measured"
-        if cmd.verb == "service" and cmd.sub == "call":
-            spec = self.catalog.services.get(cmd.name)
-            return "accepted" if spec is not None and spec.starts_job else "reported"
-        return "commanded" if checked.kind == "actuate" else "reported"
-
-    def _name_role(self, name: str | None, result: Execution) -> None:
-        """The role the command's name plays on the robot, and a battery's units: what it read
-        is then said as a battery, a pose, whatever the robot calls it."""
-        profile = self.profile
-        result.role = next((r for r, m in profile.matches.items() if name and m.name == name), "")
-        if result.role == "battery":
-            result.units = profile.units.battery_percentage
-        data = result.values.get("data") if isinstance(result.values, dict) else None
-        if result.role == "camera" and isinstance(data, list | tuple | bytes | str):
-            # an image is read as what it is, not as its pixels (megabytes kept in the store)
-            kept = {k: v for k, v in result.values.items() if k != "data"}
-            result.values = {**kept, "data_bytes": len(data)}
-
-    def _date_reading(self, topic: str, result: Execution) -> None:
-        """A reading's period and its age by its header stamp, when the robot's clock is known
-        here and agrees with the stamp (a stamp on another clock, e.g. sim time, says nothing)."""
-        spec = self.catalog.topics.get(topic)
-        if spec is not None and spec.rate_hz > 0:
-            result.period_s = 1.0 / spec.rate_hz
-        header = result.values.get("header") if isinstance(result.values, dict) else None
-        stamp = header.get("stamp") if isinstance(header, dict) else None
-        now = self.backend.robot_time()
-        if now is None or not isinstance(stamp, dict):
-            return
-        try:
-            age = now - (int(stamp["sec"]) + int(stamp["nanosec"]) * 1e-9)
-        except (KeyError, TypeError, ValueError):
-            return
-        if -1.0 <= age <= MAX_STAMP_AGE_S:
-            result.age_s = max(age, 0.0)
 
     def cancel_goals(self) -> None:
         """Cancel the goals this process sent and that run (a mission's cancel on a Nav2 robot,
@@ -345,12 +300,13 @@ class RobotGateway(EstopLatch, GraphReading):
         if why := self._lease_refusal(review.checked):
             result.reason = why
             return result
-        if self._held_by_estop(review.checked):
+        if self.estop_latch.held_by_estop(review.checked):
             result.reason = ESTOP_REASON
             return result
         result.notes = list(review.checked.notes)
+        message = review.checked.message
+        assert message is not None  # allowed: its values were checked
         try:
-            message = review.checked.message
             self.backend.drive(message["twist"] if type_ == STAMPED else message)
             result.executed = True
             result.values = review.checked.message
@@ -374,13 +330,69 @@ class RobotGateway(EstopLatch, GraphReading):
                 lease = self._leases[other]
         return lease.refusal(checked) if lease is not None else None
 
-    def _adopt_speed_limits(self, checked: Checked, result: Execution) -> None:
+    def _adopt_speed_limits(
+        self, cmd: Ros2Command, message: dict[str, Any] | None, result: Execution
+    ) -> None:
         """A `param set` of the robot's own speed limit that went through becomes safety's
         clamp too (the robot's limit is the one it enforces; safety must not allow more)."""
-        cmd = checked.command
-        if result.error or cmd.key != ("param", "set"):
+        if result.error or cmd.key != ("param", "set") or message is None:
             return
         if cmd.args["param"] == "max_linear_speed":
-            self.safety.max_linear = checked.message["value"]
+            self.safety.max_linear = message["value"]
         elif cmd.args["param"] == "max_angular_speed":
-            self.safety.max_angular = checked.message["value"]
+            self.safety.max_angular = message["value"]
+
+    # -- the E-STOP (robot/estop_latch.py) ---------------------------------------------------
+    @property
+    def station_latch(self) -> StationLatch | None:
+        return self.estop_latch.station_latch
+
+    @property
+    def latched(self) -> bool:
+        return self.estop_latch.latched
+
+    @property
+    def e_stopped(self) -> bool:
+        return self.estop_latch.e_stopped
+
+    def estop(self, at: float | None = None, who: str | None = None) -> list[str]:
+        return self.estop_latch.estop(at, who)
+
+    def release_estop(self, pressed: Act | None = None) -> list[str]:
+        return self.estop_latch.release_estop(pressed)
+
+    def pressed_by(self) -> Act | None:
+        return self.estop_latch.pressed_by()
+
+    def follow_latch(self) -> bool:
+        return self.estop_latch.follow_latch()
+
+    def warm_estop(self) -> None:
+        self.estop_latch.warm_estop()
+
+    def zero_now(self) -> None:
+        self.estop_latch.zero_now()
+
+    def settle_estop(self, timeout_s: float) -> list[str]:
+        return self.estop_latch.settle_estop(timeout_s)
+
+    # -- the robot's graph (robot/graph_reading.py) ------------------------------------------
+    @property
+    def catalog(self) -> Catalog:
+        return self.graph_reading.catalog
+
+    @property
+    def profile(self) -> Profile:
+        return self.graph_reading.profile
+
+    def use_map(self) -> None:
+        self.graph_reading.use_map()
+
+    def settled_profile(self, timeout_s: float) -> Profile:
+        return self.graph_reading.settled_profile(timeout_s)
+
+    def confirm_missing(self) -> Profile:
+        return self.graph_reading.confirm_missing()
+
+    def serves(self, name: str, timeout_s: float) -> bool:
+        return self.graph_reading.serves(name, timeout_s)

@@ -4,7 +4,6 @@ said to be missing (a new process discovers a robot in rounds)."""
 from __future__ import annotations
 
 import time
-from typing import TYPE_CHECKING, Protocol
 
 from astiop.robot.safety import SafetyPolicy
 from astiop.ros2.catalog import Catalog
@@ -17,22 +16,19 @@ from astiop.transports.base import RobotBackend
 SETTLED_S = 2.0  # a robot graph unchanged this long has been read whole
 
 
-class GraphHost(Protocol):
-    """What `GraphReading` needs of the gateway it is mixed into."""
+class GraphReading:
+    """The robot's graph as the gateway reads it: handed the robot's backend, the safety policy
+    whose geofence the robot's map sets, the store whose places are that map's (None: none)
+    and how long a read may wait."""
 
-    backend: RobotBackend
-    safety: SafetyPolicy
-    store: Store | None
-    timeout_s: float
+    def __init__(
+        self, backend: RobotBackend, safety: SafetyPolicy, store: Store | None, timeout_s: float
+    ):
+        self.backend = backend
+        self.safety = safety
+        self.store = store
+        self.timeout_s = timeout_s
 
-
-if TYPE_CHECKING:
-    _Host = GraphHost
-else:
-    _Host = object
-
-
-class GraphReading(_Host):
     @property
     def catalog(self) -> Catalog:
         return self.backend.catalog

@@ -83,6 +83,7 @@ class SafetyPolicy:
         if not checked.valid or checked.kind != "actuate":
             return Review(checked.valid, checked.reason, checked, False)
         cmd = checked.command
+        assert cmd is not None  # valid, so parsed
         name = cmd.name or ""
         base = name.rsplit("/", 1)[-1]
         if always_allowed(checked):
@@ -176,9 +177,11 @@ class SafetyPolicy:
             into = zone_at(zones, *ahead, "keepout")
             if into is not None and not into.contains(x, y):
                 return twist, notes, f"teleop refused: that way the robot enters the {into.words}"
-        slow = [z for z in (zone_at(zones, x, y, "speed"), zone_at(zones, *ahead, "speed")) if z]
-        if slow and speed > (limit := min(z.speed for z in slow)):
-            zone = min(slow, key=lambda z: z.speed)
+        around = (zone_at(zones, x, y, "speed"), zone_at(zones, *ahead, "speed"))
+        # a speed zone always has its limit (zones.check_zone)
+        slow = [(z.speed, z) for z in around if z is not None and z.speed is not None]
+        if slow and speed > (limit := min(zone_speed for zone_speed, _ in slow)):
+            zone = min(slow, key=lambda pair: pair[0])[1]
             s = limit / speed
             lin = {**twist["linear"], "x": vx * s, "y": vy * s}
             twist = {**twist, "linear": lin}
