@@ -182,3 +182,29 @@ def test_the_questions_suite_scores_rules_with_nothing_answered_else(tmp_path):
     comps = json.loads(out.stdout)["results"][0]["components"]
     assert comps["questions_other"] == 0, comps
     assert comps["questions_right"] + comps["questions_declined"] == len(suite.cases)
+
+
+@pytest.mark.parametrize(
+    ("text", "kind", "what"),
+    [
+        ("tell me some jokes", "outside", ""),
+        ("can you write poems?", "outside", ""),
+        ("what are you capable of?", "capabilities", ""),
+        ("I'd like to know what you're able to do", "capabilities", ""),
+        ("how long a trip is it to shipping?", "places", "distance"),
+        ("what is the farthest distance the lidar reaches?", "field", "scan.range_max"),
+        ("what's the minimum distance the laser can measure?", "field", "scan.range_min"),
+        ("is the battery running hot?", "field", "battery.temperature"),
+        ("how much longer till the pack is charged up?", "field", "battery.time_to_full"),
+        ("what has it got up to in the past 2 hours?", "journal", ""),
+        ("give me a recap of what was done today", "journal", ""),
+    ],
+)
+def test_more_ways_of_asking_find_the_same_subject(text, kind, what):
+    found = subjects_of(text, classify(text, list(PLACES)), list(PLACES))
+    assert found is not None and [(s.kind, s.what) for s in found] == [(kind, what)], found
+
+
+async def test_one_subject_asked_twice_is_answered_once(store):
+    _, r = await ask("is the battery getting hot? what is its temperature?", store)
+    assert r.answer.count("temperature is 25.00 °C") == 1, r.answer

@@ -21,6 +21,7 @@ from astiop.robot.safety import Review, SafetyPolicy
 from astiop.robot.station_latch import StationLatch
 from astiop.ros2.fleet_names import robot_under
 from astiop.ros2.render import STAMPED
+from astiop.ros2.roles import ROLE_BY_NAME
 from astiop.ros2.validation import Checked, validate
 from astiop.ros2.verbs import VERBS
 from astiop.ros2.verbs.base import TAKE
@@ -290,11 +291,13 @@ class RobotGateway(EstopLatch, GraphReading):
         result.role = next((r for r, m in profile.matches.items() if name and m.name == name), "")
         if result.role == "battery":
             result.units = profile.units.battery_percentage
-        data = result.values.get("data") if isinstance(result.values, dict) else None
-        if result.role == "camera" and isinstance(data, list | tuple | bytes | str):
-            # an image is read as what it is, not as its pixels (megabytes kept in the store)
-            kept = {k: v for k, v in result.values.items() if k != "data"}
-            result.values = {**kept, "data_bytes": len(data)}
+        role = ROLE_BY_NAME.get(result.role)
+        for name in role.sized if role is not None else ():
+            # read as its size, not its content (an image's megabytes of pixels in the store)
+            data = result.values.get(name) if isinstance(result.values, dict) else None
+            if isinstance(data, list | tuple | bytes | str):
+                kept = {k: v for k, v in result.values.items() if k != name}
+                result.values = {**kept, f"{name}_bytes": len(data)}
 
     def _date_reading(self, topic: str, result: Execution) -> None:
         """A reading's period and its age by its header stamp, when the robot's clock is known
