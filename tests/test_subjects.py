@@ -198,6 +198,11 @@ def test_the_questions_suite_scores_rules_with_nothing_answered_else(tmp_path):
         ("how much longer till the pack is charged up?", "field", "battery.time_to_full"),
         ("what has it got up to in the past 2 hours?", "journal", ""),
         ("give me a recap of what was done today", "journal", ""),
+        ("what is the gap between the robot and shipping?", "places", "distance"),
+        ("up to what range can the laser see?", "field", "scan.range_max"),
+        ("amuse me", "outside", ""),
+        ("what kinds of questions do you answer?", "capabilities", ""),
+        ("how quickly can it drive flat out?", "parameter", "max linear speed"),
     ],
 )
 def test_more_ways_of_asking_find_the_same_subject(text, kind, what):
@@ -208,3 +213,8 @@ def test_more_ways_of_asking_find_the_same_subject(text, kind, what):
 async def test_one_subject_asked_twice_is_answered_once(store):
     _, r = await ask("is the battery getting hot? what is its temperature?", store)
     assert r.answer.count("temperature is 25.00 °C") == 1, r.answer
+
+
+async def test_a_nodes_parameters_are_listed_when_none_is_named(store):
+    _, r = await ask("which parameters has the lidar driver got?", store)
+    assert r.answer.startswith("[rules] /lidar_driver has ") and "range_max" in r.answer, r.answer

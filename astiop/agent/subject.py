@@ -53,12 +53,14 @@ _OUTSIDE = _rx(
     r"\b(?:weather|rain(?:ing)?|snow(?:ing)?|forecast|jokes?|funny|poems?|songs?|sing|news|"
     r"stocks?|football|soccer|score of|recipes?|cook|meaning of life|capital of|president|"
     r"who won|movies?|films?|story|stories|riddles?|sunny|cloudy|windy|stormy|translate|horoscope|lottery|your favou?rite|how old are you|are you (?:human|"
-    r"alive|conscious)|time is it|what day is|today's date|date today)\b"
+    r"alive|conscious)|time is it|what day is|today's date|date today|laugh|amuse|entertain|"
+    r"cheer me up|bored)\b"
 )
 _CAPABILITIES = _rx(
     r"\bwhat (?:can|could) (?:you|i|astiop|this console) (?:do|ask|help)|\bwhat are you "
     r"(?:able|capable)|\b(?:you're|you are) (?:able|capable)\b|\bcapable of\b|"
     r"\byour (?:capabilities|abilities|features|skills)\b|\bhow can you help\b|"
+    r"\bwhat (?:sorts?|kinds?|types?) of (?:things|questions|stuff|commands|requests)\b|"
     r"\bwhat (?:do|can) you (?:know|understand|support)\b|\bwhat \w+ (?:do|can) you (?:support|"
     r"offer|handle|do)\b|\bwhat (?:questions|commands) can\b|"
     r"^help\b|\bwhat is astiop\b|\bwho are you\b"
@@ -91,7 +93,8 @@ _WHY_STILL = _rx(
 )
 _DISTANCE = _rx(
     r"\bfar\b|\bdistance\b|\bhow (?:many|much) (?:metres|meters|m)\b|\bfar from\b|"
-    r"\bhow long (?:a|of a|is the) (?:drive|trip|walk|ride|way|journey|route)\b"
+    r"\bhow long (?:a|of a|is the) (?:drive|trip|walk|ride|way|journey|route)\b|"
+    r"\b(?:gap|separation)\b|\bhow many (?:metres|meters)\b"
 )
 _NEAREST = _rx(
     r"\b(?:nearest|closest)\b.*\b(?:places?|stations?|locations?|spots?|stops?)\b|"
@@ -107,7 +110,8 @@ _REACHABLE = _rx(
 )
 _TOP_SPEED = _rx(
     r"\btop speed\b|\bmax(?:imum)? (?:linear |forward |driving )?(?:speed|velocity)\b|"
-    r"\bspeed limit\b|\bfastest\b|\bhow fast can (?:it|the robot|you) (?:go|drive|move|travel)\b"
+    r"\bspeed limit\b|\bfastest\b|\bfull speed\b|\bflat out\b|"
+    r"\bhow (?:fast|quick(?:ly)?) can (?:it|the robot|you) (?:go|drive|move|travel)\b"
 )
 _TURN_SPEED = _rx(
     r"\bmax(?:imum)? (?:angular|turn(?:ing)?|rotation(?:al)?|yaw) (?:speed|rate|velocity)\b|"
@@ -239,7 +243,9 @@ def _places(text: str, places: list[str]) -> Subject | None:
         if len(named) >= 2:
             return Subject("places", "between", named[0], named[1])
         return Subject("places", "distance", named[0])
-    other_thing = re.search(r"\b(?:obstacle|wall|object|person|thing)", text, re.I)
+    other_thing = re.search(r"\b(?:obstacle|wall|object|person|thing)", text, re.I) or re.search(
+        rf"\b(?:{_ROLE_WORDS['scan']})", text, re.I
+    )  # "up to what distance can the lidar see": the lidar's range, not a place's
     if _DISTANCE.search(text) and re.search(r"\b(?:from|to)\s+\w", text, re.I) and not other_thing:
         return Subject("places", "distance", None)  # a place the robot does not know
     if _REACHABLE.search(text):
@@ -305,6 +311,7 @@ def _param_words(text: str) -> str:
         "what", "whats", "is", "the", "robot", "robots", "s", "its", "it", "of", "a", "value",
         "parameter", "parameters", "param", "params", "setting", "settings", "set", "to",
         "configured", "configuration", "current", "currently", "tell", "me", "show", "how",
-        "does", "do", "which", "are", "for", "on", "in", "this", "your", "you", "use",
+        "does", "do", "which", "are", "for", "on", "in", "this", "your", "you", "use", "have",
+        "has", "any", "all", "list", "give", "there", "names", "every", "each",
     }  # fmt: skip
     return " ".join(w for w in words if w not in stop)

@@ -165,7 +165,9 @@ ROLES: tuple[Role, ...] = (
                 "range_max",
                 r"max(?:imum)? range|how far (?:can|does) (?:the )?(?:lidar|laser|scanner|it) "
                 r"(?:see|reach|detect|sense|measure)|\brange of\b|lidar(?:'s)? range|\brange\b|"
-                r"(?:furthest|farthest|longest|max(?:imum)?) distance",
+                r"(?:furthest|farthest|longest|max(?:imum)?) distance|"
+                r"(?:up to )?what (?:distance|range)\b.{0,30}\b"
+                r"(?:see|reach|detect|sense|measure|pick)",
             ),
             (
                 "range_min",
