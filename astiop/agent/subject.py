@@ -54,7 +54,7 @@ _OUTSIDE = _rx(
     r"stocks?|football|soccer|score of|recipes?|cook|meaning of life|capital of|president|"
     r"who won|movies?|films?|story|stories|riddles?|sunny|cloudy|windy|stormy|translate|horoscope|lottery|your favou?rite|how old are you|are you (?:human|"
     r"alive|conscious)|time is it|what day is|today's date|date today|laugh|amuse|entertain|"
-    r"cheer me up|bored)\b"
+    r"cheer me up|bored|umbrella|sunscreen|traffic)\b"
 )
 _CAPABILITIES = _rx(
     r"\bwhat (?:can|could) (?:you|i|astiop|this console) (?:do|ask|help)|\bwhat are you "

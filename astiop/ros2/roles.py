@@ -69,7 +69,11 @@ ROLES: tuple[Role, ...] = (
         fields=(
             ("x", r"\bx[- ]?(?:coordinate|position|value)\b"),
             ("y", r"\by[- ]?(?:coordinate|position|value)\b"),
-            ("heading", r"facing|heading|direction|orientation|\byaw\b|pointing|which way"),
+            (
+                "heading",
+                r"facing|heading|direction|orientation|\byaw\b|pointing|which way|compass|"
+                r"(?:robot's|its|your) bearing|bearing of (?:the robot|it)",
+            ),
         ),
     ),
     Role(
