@@ -182,3 +182,42 @@ def test_the_questions_suite_scores_rules_with_nothing_answered_else(tmp_path):
     comps = json.loads(out.stdout)["results"][0]["components"]
     assert comps["questions_other"] == 0, comps
     assert comps["questions_right"] + comps["questions_declined"] == len(suite.cases)
+
+
+@pytest.mark.parametrize(
+    ("text", "kind", "what"),
+    [
+        ("tell me some jokes", "outside", ""),
+        ("can you write poems?", "outside", ""),
+        ("what are you capable of?", "capabilities", ""),
+        ("I'd like to know what you're able to do", "capabilities", ""),
+        ("how long a trip is it to shipping?", "places", "distance"),
+        ("what is the farthest distance the lidar reaches?", "field", "scan.range_max"),
+        ("what's the minimum distance the laser can measure?", "field", "scan.range_min"),
+        ("is the battery running hot?", "field", "battery.temperature"),
+        ("how much longer till the pack is charged up?", "field", "battery.time_to_full"),
+        ("what has it got up to in the past 2 hours?", "journal", ""),
+        ("give me a recap of what was done today", "journal", ""),
+        ("what is the gap between the robot and shipping?", "places", "distance"),
+        ("up to what range can the laser see?", "field", "scan.range_max"),
+        ("amuse me", "outside", ""),
+        ("will I need an umbrella tonight?", "outside", ""),
+        ("what is its compass heading?", "field", "pose.heading"),
+        ("report the robot's bearing", "field", "pose.heading"),
+        ("what kinds of questions do you answer?", "capabilities", ""),
+        ("how quickly can it drive flat out?", "parameter", "max linear speed"),
+    ],
+)
+def test_more_ways_of_asking_find_the_same_subject(text, kind, what):
+    found = subjects_of(text, classify(text, list(PLACES)), list(PLACES))
+    assert found is not None and [(s.kind, s.what) for s in found] == [(kind, what)], found
+
+
+async def test_one_subject_asked_twice_is_answered_once(store):
+    _, r = await ask("is the battery getting hot? what is its temperature?", store)
+    assert r.answer.count("temperature is 25.00 °C") == 1, r.answer
+
+
+async def test_a_nodes_parameters_are_listed_when_none_is_named(store):
+    _, r = await ask("which parameters has the lidar driver got?", store)
+    assert r.answer.startswith("[rules] /lidar_driver has ") and "range_max" in r.answer, r.answer

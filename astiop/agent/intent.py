@@ -10,6 +10,8 @@ import math
 import re
 from dataclasses import dataclass, replace
 
+from astiop.ros2.roles import ROLES
+
 # the Trigger service that does each of these kinds (the rules, the tools and the gate use it)
 SERVICE_FOR = {
     "stop": "/stop",
@@ -112,32 +114,8 @@ _READ_VERB = re.compile(
     re.I,
 )
 
-# read topics: (pattern, topic), first match wins
-READS = [
-    (r"camera|image|picture|photo|video|webcam", "/camera/image_raw"),
-    (r"conveyor|load sensor|lamp|belt|carrying|loaded|cargo|payload", "/conveyor/status"),
-    (
-        r"battery|charge|charged|charging|juice|power|voltage|percent|energy",
-        "/battery_status",
-    ),
-    (
-        r"obstacle|blocking|blocked|in the way|(?:the|its|robot's) way|around (?:the robot|it|you)|"
-        r"nearby|near it|near the robot|close by|clear|free|obstruct|in front|objects?|detect",
-        "/obstacles",
-    ),
-    (r"lidar|laser|scan|range finder", "/scan"),
-    (r"diagnos|health|error|fault|warning|motor|problem", "/diagnostics"),
-    (r"how fast|speed|velocity|moving|odometry|odom", "/odom"),
-    (
-        r"where|position|location|pose|coordinates|heading|locate|find the robot|x and y|"
-        r"part of the floor",
-        "/robot_pose",
-    ),
-    (
-        r"status|state|doing|busy|idle|docked|navigating|mode|goal|stop|up to|working on|task",
-        "/robot_status",
-    ),
-]
+# read topics: (pattern, topic), first match wins: each role's words, by rank (astiop.ros2.roles)
+READS = [(r.words, r.key) for r in sorted((r for r in ROLES if r.words), key=lambda r: r.rank)]
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ import re
 from astiop.agent import intent
 from astiop.agent.gate import Action, _permits
 from astiop.agent.intent import Intent
-from astiop.missions.steps import Condition, Step
+from astiop.missions.steps import READS, Condition, Step
 
 _COUNTS = {"once": 1, "twice": 2, "thrice": 3, "two": 2, "three": 3, "four": 4, "five": 5}
 _TIMES = re.compile(
@@ -39,7 +39,7 @@ _OBSTACLE_IF = re.compile(
 )
 _FIRST = re.compile(r"\s+(?:first|now|next|afterwards|at the end|again)\b", re.I)
 _UNKNOWN_PLACE = re.compile(r"\b(?:to|at|visit)\s+(?:the\s+)?([a-z][a-z0-9 _-]{1,40})$", re.I)
-_READ_WHAT = {"/battery_status": "battery", "/obstacles": "obstacles"}
+_READ_WHAT = {topic: what for what, topic in READS.items()}  # a read step's: battery, obstacles
 STEP_CAP = 40  # the most steps a mission holds; a request of more is refused, saying so
 COUNT_DIGITS = 12  # a repeat count longer than this is not read (int() of 10**5 digits is slow)
 

@@ -8,37 +8,14 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from astiop.ros2.roles import KEY_ROLES, READ_ROLES
 from astiop.transports.base import Execution
 from astiop.transports.state import battery_fraction, yaw_of
 
-# the reader's key for a reading -> its role (ros2/profile.py)
-KEY_ROLES = {
-    "/battery_status": "battery",
-    "/robot_pose": "pose",
-    "/robot_status": "status",
-    "/obstacles": "obstacles",
-    "/scan": "scan",
-    "/diagnostics": "diagnostics",
-    "/conveyor/status": "conveyor",
-    "/odom": "odometry",
-    "/plan": "plan",
-    "/camera/image_raw": "camera",
-}
-# what a role is called in an answer
-WHAT = {
-    "battery": "battery state",
-    "pose": "pose",
-    "status": "status report",
-    "obstacles": "obstacle detection or laser scan",
-    "scan": "laser scan",
-    "diagnostics": "diagnostics",
-    "conveyor": "conveyor status",
-    "odometry": "odometry",
-    "plan": "path",
-    "camera": "camera image",
-}
-# the same question answered by another sensor of the robot: obstacles seen in its scan
-STANDS_IN = {"obstacles": "scan"}
+# each from the role's one definition (astiop.ros2.roles): the reader's key for a reading -> its
+# role; what an answer calls a role; the role whose reading answers for another the robot lacks
+WHAT = {r.name: r.label for r in READ_ROLES}
+STANDS_IN = {r.name: r.stands_in for r in READ_ROLES if r.stands_in}
 
 
 def name_for(key: str, profile: Any) -> str | None:

@@ -15,6 +15,7 @@ import re
 from dataclasses import dataclass
 
 from astiop.agent.intent import Intent, resolve_place
+from astiop.ros2.roles import ROLES
 
 KINDS = (
     "field",  # what: "role.field" (battery.temperature, pose.heading, scan.range_max)
@@ -49,14 +50,17 @@ def _rx(pattern: str) -> re.Pattern[str]:
 
 
 _OUTSIDE = _rx(
-    r"\b(?:weather|rain(?:ing)?|snow(?:ing)?|forecast|joke|funny|poem|song|sing|news|stock|"
-    r"football|soccer|score of|recipe|cook|meaning of life|capital of|president|who won|"
-    r"movie|film|story|stories|sunny|cloudy|windy|stormy|translate|horoscope|lottery|your favou?rite|how old are you|are you (?:human|"
-    r"alive|conscious)|time is it|what day is|today's date|date today)\b"
+    r"\b(?:weather|rain(?:ing)?|snow(?:ing)?|forecast|jokes?|funny|poems?|songs?|sing|news|"
+    r"stocks?|football|soccer|score of|recipes?|cook|meaning of life|capital of|president|"
+    r"who won|movies?|films?|story|stories|riddles?|sunny|cloudy|windy|stormy|translate|horoscope|lottery|your favou?rite|how old are you|are you (?:human|"
+    r"alive|conscious)|time is it|what day is|today's date|date today|laugh|amuse|entertain|"
+    r"cheer me up|bored|umbrella|sunscreen|traffic)\b"
 )
 _CAPABILITIES = _rx(
     r"\bwhat (?:can|could) (?:you|i|astiop|this console) (?:do|ask|help)|\bwhat are you "
-    r"(?:able|capable)|\byour (?:capabilities|abilities|features|skills)\b|\bhow can you help\b|"
+    r"(?:able|capable)|\b(?:you're|you are) (?:able|capable)\b|\bcapable of\b|"
+    r"\byour (?:capabilities|abilities|features|skills)\b|\bhow can you help\b|"
+    r"\bwhat (?:sorts?|kinds?|types?) of (?:things|questions|stuff|commands|requests)\b|"
     r"\bwhat (?:do|can) you (?:know|understand|support)\b|\bwhat \w+ (?:do|can) you (?:support|"
     r"offer|handle|do)\b|\bwhat (?:questions|commands) can\b|"
     r"^help\b|\bwhat is astiop\b|\bwho are you\b"
@@ -66,6 +70,8 @@ _JOURNAL = _rx(
     r"|\b(?:history|journal|log|logbook|recent(?:ly)?|so far today|earlier|past|last)\b.*"
     r"\b(?:requests?|commands?|events?|activity|actions?|done|did|happen(?:ed)?)\b"
     r"|\bwhat happened\b|\bwhat has happened\b"
+    r"|\b(?:get|got|been) up to\b.*\b(?:last|past|today|earlier)\b"
+    r"|\b(?:summar(?:ise|ize|y)|recap|rundown)\b.*\b(?:did|done|last|past|today|earlier)\b"
     r"|\b(?:what|anything)\b.*\b(?:been done|was done|happened|did)\b.*\b(?:last|past|today)\b"
 )
 _HOURS = _rx(r"\b(?:last|past)\s+(\d+(?:\.\d+)?|an?|one|two|three|few)?\s*(minute|hour|day)s?\b")
@@ -85,7 +91,11 @@ _WHY_STILL = _rx(
     r"waiting|parked|halted|frozen|sitting)\b|\bwhat(?:'s| is) (?:stopping|keeping|holding)\b"
     r"|\bwhy (?:is|does|did) (?:it|the robot)\b.*\b(?:stop|wait)"
 )
-_DISTANCE = _rx(r"\bfar\b|\bdistance\b|\bhow (?:many|much) (?:metres|meters|m)\b|\bfar from\b")
+_DISTANCE = _rx(
+    r"\bfar\b|\bdistance\b|\bhow (?:many|much) (?:metres|meters|m)\b|\bfar from\b|"
+    r"\bhow long (?:a|of a|is the) (?:drive|trip|walk|ride|way|journey|route)\b|"
+    r"\b(?:gap|separation)\b|\bhow many (?:metres|meters)\b"
+)
 _NEAREST = _rx(
     r"\b(?:nearest|closest)\b.*\b(?:places?|stations?|locations?|spots?|stops?)\b|"
     r"\b(?:places?|stations?|locations?|spots?)\b.*\b(?:nearest|closest)\b"
@@ -100,7 +110,8 @@ _REACHABLE = _rx(
 )
 _TOP_SPEED = _rx(
     r"\btop speed\b|\bmax(?:imum)? (?:linear |forward |driving )?(?:speed|velocity)\b|"
-    r"\bspeed limit\b|\bfastest\b|\bhow fast can (?:it|the robot|you) (?:go|drive|move|travel)\b"
+    r"\bspeed limit\b|\bfastest\b|\bfull speed\b|\bflat out\b|"
+    r"\bhow (?:fast|quick(?:ly)?) can (?:it|the robot|you) (?:go|drive|move|travel)\b"
 )
 _TURN_SPEED = _rx(
     r"\bmax(?:imum)? (?:angular|turn(?:ing)?|rotation(?:al)?|yaw) (?:speed|rate|velocity)\b|"
@@ -112,45 +123,12 @@ _PARAMETER = _rx(
     r"wheel (?:radius|size|diameter)|capacity_ah)\b"
 )
 
-# a role's fields an operator asks about: (role, field) -> words
+# a role's fields an operator asks about, and the words that name the role itself: each role's
+# own (astiop.ros2.roles), the more specific roles' first (by rank), a role's in its order
 FIELDS: dict[tuple[str, str], str] = {
-    ("battery", "time_to_full"): r"(?:how long|time|when)\b.*\b(?:full(?:y charged)?|charged up|"
-    r"topped up|finish(?:es|ed)? charging|done charging)\b",
-    ("battery", "time_to_empty"): r"(?:how long|time|when)\b.*\b(?:empty|run(?:s)? out|"
-    r"battery last|die|dies|go(?:es)? flat|be flat|run(?:s)? dry)\b",
-    ("battery", "temperature"): r"temp(?:erature)?s?\b|\bhow (?:hot|warm)\b|\boverheat",
-    ("battery", "voltage"): r"volt(?:age|s)?\b",
-    ("battery", "current"): r"current\b(?!\s+(?:battery|charge|position|pose|location|state|"
-    r"status|speed|goal|task|level|percentage|heading|mode|path|plan|route|map|job|mission|time|"
-    r"coordinates?|orientation|place|station|area|zone|reading|value|temperature|voltage|x|y)\b)"
-    r"|amps?\b(?![- ]?hours?)|amperage",
-    ("battery", "charge_ah"): r"(?:charge|left|remaining|stored)\b.{0,25}(?:amp[- ]?hours?|"
-    r"\bah\b)|(?:amp[- ]?hours?|\bah\b).{0,25}(?:left|remaining|stored)",
-    ("battery", "capacity"): r"capacity|amp[- ]?hours?|\bah\b|how big is the battery",
-    ("battery", "health"): r"(?:battery|pack)(?:'s)? (?:health|condition)|health of the battery",
-    ("battery", "technology"): r"chemistry|technology|kind of battery|type of battery|"
-    r"battery type|what battery|which battery|lithium|lead",
-    ("status", "e_stopped"): r"e-?stop(?:ped)?|emergency[- ]stop(?:ped)?",
-    ("pose", "x"): r"\bx[- ]?(?:coordinate|position|value)\b",
-    ("pose", "y"): r"\by[- ]?(?:coordinate|position|value)\b",
-    ("odometry", "angular"): r"angular (?:velocity|speed)|turn(?:ing)? rate|yaw rate|"
-    r"(?:is it|is the robot) (?:rotating|spinning|turning)",
-    ("scan", "frame"): r"\b(?:tf )?frame\b",
-    ("pose", "heading"): r"facing|heading|direction|orientation|\byaw\b|pointing|which way",
-    ("scan", "range_max"): r"max(?:imum)? range|how far (?:can|does) (?:the )?(?:lidar|laser|"
-    r"scanner|it) (?:see|reach|detect|sense|measure)|\brange of\b|lidar(?:'s)? range|\brange\b",
-    ("scan", "range_min"): r"min(?:imum)? range|closest (?:it|the lidar) can",
-    ("scan", "beams"): r"beams|rays|how many (?:points|readings|measurements)|resolution",
-    ("scan", "rate"): r"scan rate|frequency|how often|\bhz\b|refresh",
-    ("scan", "fov"): r"field of view|\bfov\b|angle|how wide|degrees? (?:does|can)",
-    # last: "which way does it face on the dock" asks the heading
-    ("status", "docked"): r"\bdocked\b|\bon (?:the|its) (?:dock|charger)\b|\bplugged in\b",
+    (r.name, field): words for r in sorted(ROLES, key=lambda r: r.rank) for field, words in r.fields
 }
-_ROLE_WORDS = {
-    "battery": r"batter(?:y|ies)|pack|cells?|charg",
-    "pose": r"robot|it\b|you\b|astibot",
-    "scan": r"lidar|laser|scan(?:ner)?|range ?finder|rangefinder",
-}
+_ROLE_WORDS = {r.name: r.named_by for r in ROLES if r.named_by}
 _OTHER_THINGS = (
     r"motors?|wheels?|cpu|computer|processor|lidar|laser|camera|ambient|room|air|warehouse|"
     r"floor|gearbox|drive|controller|board"
@@ -169,7 +147,7 @@ def subjects_of(
     found = [subject_of(i, places) for i in intents]
     if any(s is None or (s.kind == "unknown" and not unknown) for s in found):
         return None
-    return [s for s in found if s is not None]
+    return list(dict.fromkeys(s for s in found if s is not None))  # one answer to one subject
 
 
 def subject_of(intent: Intent, places: list[str]) -> Subject | None:
@@ -265,7 +243,9 @@ def _places(text: str, places: list[str]) -> Subject | None:
         if len(named) >= 2:
             return Subject("places", "between", named[0], named[1])
         return Subject("places", "distance", named[0])
-    other_thing = re.search(r"\b(?:obstacle|wall|object|person|thing)", text, re.I)
+    other_thing = re.search(r"\b(?:obstacle|wall|object|person|thing)", text, re.I) or re.search(
+        rf"\b(?:{_ROLE_WORDS['scan']})", text, re.I
+    )  # "up to what distance can the lidar see": the lidar's range, not a place's
     if _DISTANCE.search(text) and re.search(r"\b(?:from|to)\s+\w", text, re.I) and not other_thing:
         return Subject("places", "distance", None)  # a place the robot does not know
     if _REACHABLE.search(text):
@@ -331,6 +311,7 @@ def _param_words(text: str) -> str:
         "what", "whats", "is", "the", "robot", "robots", "s", "its", "it", "of", "a", "value",
         "parameter", "parameters", "param", "params", "setting", "settings", "set", "to",
         "configured", "configuration", "current", "currently", "tell", "me", "show", "how",
-        "does", "do", "which", "are", "for", "on", "in", "this", "your", "you", "use",
+        "does", "do", "which", "are", "for", "on", "in", "this", "your", "you", "use", "have",
+        "has", "any", "all", "list", "give", "there", "names", "every", "each",
     }  # fmt: skip
     return " ".join(w for w in words if w not in stop)

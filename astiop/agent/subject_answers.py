@@ -14,6 +14,7 @@ from typing import Any
 from astiop.agent import place_answers
 from astiop.agent.roles import battery_percent, pose_of
 from astiop.agent.subject import Subject
+from astiop.ros2.roles import READ_ROLES
 from astiop.transports.base import Execution
 
 CAPABILITIES = (
@@ -76,8 +77,8 @@ def answer(subject: Subject, reads: Reads, places: dict, store: Any) -> str:
     if kind == "unknown":
         return UNKNOWN
     if kind == "capabilities":
-        roles = [r for r in ("pose", "battery", "status", "scan", "odometry", "diagnostics",
-                             "conveyor", "obstacles") if reads.gateway.profile.has(r)]  # fmt: skip
+        profile = reads.gateway.profile  # every readable role the robot has (ros2/roles.py)
+        roles = [r.name for r in READ_ROLES if r.readable and profile.has(r.name)]
         return CAPABILITIES.format(roles=", ".join(roles) or "none found yet")
     if kind == "journal":
         return journal(subject.hours, store)
@@ -169,6 +170,12 @@ def parameter(words: str, reads: Reads) -> str:
     if not isinstance(listing, dict):
         return "I could not list the robot's parameters: the read failed."
     found = find_parameters(words, listing)
+    named = [n for n in sorted(listing) if _tokens(n) & _tokens(words.replace(" ", "_"))]
+    if not found and (named or not words):  # a node's parameters, or every node's: listed
+        return (
+            "; ".join(f"{n} has {', '.join(listing[n] or []) or 'none'}" for n in named or listing)
+            + "."
+        )
     if not found:
         nodes = ", ".join(sorted(listing)) or "none"
         return (

@@ -9,10 +9,12 @@ astiop commanded, or what a service accepted (a goal accepted has not arrived).
 from __future__ import annotations
 
 import math
+import string
 from typing import Any
 
 from astiop.agent.roles import battery_percent, no_return, pose_of, role_of
 from astiop.ros2 import grammar
+from astiop.ros2.roles import ROLE_BY_NAME
 from astiop.transports.base import Execution
 
 # action_msgs/srv/CancelGoal.srv's return codes
@@ -45,6 +47,22 @@ def stale_age(ex: Execution) -> float | None:
 
 def _deg(rad: float) -> float:
     return math.degrees(rad)
+
+
+def _templated(role: str, v: dict) -> str | None:
+    """The role's own summary (astiop.ros2.roles): the first of its templates its values fill,
+    a field read as its size said as its bytes."""
+    definition = ROLE_BY_NAME.get(role)
+    if definition is None or not definition.summary:
+        return None
+    v = {**v, **{f"{f}_bytes": len(v[f] or []) for f in definition.sized if f in v}}
+    for template in definition.summary:
+        names = [name for _, name, _, _ in string.Formatter().parse(template) if name]
+        if all(name in v for name in names):
+            return template.format(
+                **{n: "(not said)" if v[n] in ("", None) else v[n] for n in names}
+            )
+    return None
 
 
 def _summary(ex: Execution, v: Any) -> str | None:
@@ -80,12 +98,8 @@ def _summary(ex: Execution, v: Any) -> str | None:
         r, i = min(hits)
         bearing = _deg(v["angle_min"] + i * v["angle_increment"])
         return f"scan of {len(v['ranges'])} beams: nearest return {r:.2f} m at {bearing:.0f} deg"
-    if role == "camera" and ("width" in v or "format" in v):  # its size, never its pixels
-        size = v.get("data_bytes", len(v.get("data") or []))
-        if "width" in v:
-            encoding = v.get("encoding") or "no encoding"
-            return f"camera image {v['width']} x {v['height']} px, {encoding}, {size} bytes"
-        return f"camera image, compressed {v.get('format') or '(format not said)'}, {size} bytes"
+    if (templated := _templated(role, v)) is not None:
+        return templated
     if role == "diagnostics" and "status" in v:
         levels = {0: "OK", 1: "WARN", 2: "ERROR", 3: "STALE"}
         return "; ".join(

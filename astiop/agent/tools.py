@@ -16,6 +16,7 @@ from astiop.agent.roles import KEY_ROLES
 from astiop.agent.rules import command_for
 from astiop.ros2.catalog import RELEASE, Catalog
 from astiop.ros2.render import GOTO_TYPE, goto_command, nav_goal_command
+from astiop.ros2.roles import ROLES
 
 READABLE_EXCLUDED = {"/cmd_vel", "/tf", "/tf_static", "/plan"}
 # The operator's own: never in the model's prompt or tools (releasing a held robot is a person's
@@ -37,33 +38,11 @@ class ToolError(ValueError):
     pass
 
 
-# Short names that echo operators' words: a small model picks by likeness to the request.
-TOPIC_TOOLS = {
-    "/battery_status": "battery",
-    "/robot_pose": "where",
-    "/robot_status": "status",
-    "/obstacles": "obstacles",
-    "/scan": "lidar",
-    "/diagnostics": "diagnostics",
-    "/conveyor/status": "conveyor",
-    "/odom": "speed",
-    "/plan": "path",
-    "/camera/image_raw": "camera",
-}
-# the same short names by role, whatever the robot calls the topic (ros2/profile.py)
-ROLE_TOOLS = {
-    "battery": "battery",
-    "pose": "where",
-    "status": "status",
-    "obstacles": "obstacles",
-    "scan": "lidar",
-    "diagnostics": "diagnostics",
-    "conveyor": "conveyor",
-    "odometry": "speed",
-    "plan": "path",
-    "camera": "camera",
-}
-UNREADABLE_ROLES = ("velocity_command", "map", "plan")  # commands, or too big to read out
+# Short names that echo operators' words (a small model picks by likeness to the request), by the
+# ASTIbot's topic and by role whatever the robot calls it: each role's `tool` (astiop.ros2.roles)
+TOPIC_TOOLS = {r.key: r.tool for r in ROLES if r.tool}
+ROLE_TOOLS = {r.name: r.tool for r in ROLES if r.tool}
+UNREADABLE_ROLES = tuple(r.name for r in ROLES if not r.readable)  # commands, or too big
 SERVICE_TOOLS = {
     "/stop": "stop",
     "/dock": "dock",

@@ -7,6 +7,7 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 from astiop.ros2.render import nav_goal_command
+from astiop.ros2.roles import ROLE_BY_NAME
 
 GOTO = "ros2 service call /goto_position astiop_msgs/srv/GotoPosition"
 TRIGGER = "std_srvs/srv/Trigger"
@@ -18,7 +19,7 @@ SERVICES = {
 }
 KINDS = frozenset({"goto", "wait", "read", *SERVICES})
 # what a step may read, and the topic it reads it from
-READS = {"battery": "/battery_status", "obstacles": "/obstacles"}
+READS = {what: ROLE_BY_NAME[what].key for what in ("battery", "obstacles")}  # the ASTIbot's
 STOP = f"ros2 service call /stop {TRIGGER}"
 
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 from astiop.ros2.catalog import Catalog
 from astiop.ros2.command import Ros2Command
 from astiop.ros2.profile_types import Profile
+from astiop.ros2.roles import ROLE_BY_NAME
 from astiop.ros2.verbs import VERBS
 from astiop.transports.base import Execution
 
@@ -27,11 +28,13 @@ def name_role(name: str | None, result: Execution, profile: Profile) -> None:
     result.role = next((r for r, m in profile.matches.items() if name and m.name == name), "")
     if result.role == "battery":
         result.units = profile.units.battery_percentage
-    data = result.values.get("data") if isinstance(result.values, dict) else None
-    if result.role == "camera" and isinstance(data, list | tuple | bytes | str):
-        # an image is read as what it is, not as its pixels (megabytes kept in the store)
-        kept = {k: v for k, v in result.values.items() if k != "data"}
-        result.values = {**kept, "data_bytes": len(data)}
+    role = ROLE_BY_NAME.get(result.role)
+    for field in role.sized if role is not None else ():
+        # read as its size, not its content (an image's megabytes of pixels in the store)
+        data = result.values.get(field) if isinstance(result.values, dict) else None
+        if isinstance(data, list | tuple | bytes | str):
+            kept = {k: v for k, v in result.values.items() if k != field}
+            result.values = {**kept, f"{field}_bytes": len(data)}
 
 
 def date_reading(topic: str | None, result: Execution, catalog: Catalog, now: float | None) -> None:

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from astiop.ros2.profile import AMCL_POSE, TF
+from astiop.ros2.roles import ROLES, TF_ROLES
 from astiop.ros2.transforms import ODOM, base_pose, map_pose, tree, yaw_of
 from astiop.sim.kinematics import ASTIBOT, inverse_kinematics
 
@@ -194,18 +195,8 @@ def _f(value: Any, default: float = math.nan) -> float:
     return v
 
 
-ASTIBOT_NAMES = {
-    "pose": "/robot_pose",
-    "odometry": "/odom",
-    "battery": "/battery_status",
-    "status": "/robot_status",
-    "scan": "/scan",
-    "obstacles": "/obstacles",
-    "plan": "/plan",
-    "conveyor": "/conveyor/status",
-    "transforms": "",  # the ASTIbot's pose is its /robot_pose
-    "static_transforms": "",
-}
+# the state's roles, by the ASTIbot's names (its pose is its /robot_pose, not the transforms)
+ASTIBOT_NAMES = {r.name: "" if r.name in TF_ROLES else r.key for r in ROLES if r.state}
 
 
 def role_names(profile: Any) -> dict[str, str]:
