@@ -7,8 +7,8 @@ import httpx
 import pytest
 
 from astiop.agent.answer_grammar import _alternatives, answer_grammar, quantities
-from astiop.agent.figures import quantities_in
 from astiop.agent.models.embedded import EmbeddedServer, smollm2_path
+from astiop.agent.stated_numbers import quantities_in
 
 BATTERY = "ros2 topic echo --once /battery_status sensor_msgs/msg/BatteryState\n  battery 85.0 %, 27.12 V, 4.40 A, charging"
 OBSTACLE = "ros2 topic echo --once /obstacles astiop_msgs/msg/ObstacleArray\n  1 obstacle(s) detected: pallet at 2.4 m, bearing 2 deg"

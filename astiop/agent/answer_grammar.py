@@ -15,8 +15,8 @@ import re
 from collections.abc import Iterable
 from functools import cache
 
-from astiop.agent.figures import written_figures
 from astiop.agent.grounding import OBSTACLE_KINDS, STATE_CLAIMS
+from astiop.agent.stated_numbers import written_figures
 from astiop.resources import prompts_path
 
 _WORD = re.compile(r"[A-Za-z][A-Za-z_'-]*")

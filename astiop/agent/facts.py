@@ -9,8 +9,8 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
-from astiop.agent.figures import NUMBER, quantities_in
 from astiop.agent.roles import role_of
+from astiop.agent.stated_numbers import NUMBER, quantities_in
 from astiop.agent.summaries import STATUS_WORDS, commanded_twist, directions, summarize
 from astiop.transports.base import Execution
 

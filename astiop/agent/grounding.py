@@ -15,12 +15,12 @@ import re
 from collections.abc import Iterable
 
 from astiop.agent.facts import GOAL, Facts
-from astiop.agent.figures import (
+from astiop.agent.roles import battery_percent, pose_of, role_of
+from astiop.agent.stated_numbers import (
     NUMBER,
     decimals,
     figures,
 )
-from astiop.agent.roles import battery_percent, pose_of, role_of
 from astiop.agent.summaries import (
     stale_age,
     summarize,
