@@ -35,6 +35,7 @@ def _zero_burst(name: str, type_: str) -> list[str]:
 
 
 def _given(argv: list[str]) -> Callable[[], list[str]]:
+    """An argv known now, as `CliEstop._background` takes one (each its own, in a loop)."""
     return lambda: argv
 
 
