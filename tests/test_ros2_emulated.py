@@ -116,7 +116,8 @@ def test_goal_returns_at_acceptance_and_stop_cancels_it(robot):
         assert until(lambda: idle(gateway))
         r = gateway.run(GOAL, confirm=YES)
         assert r.values["accepted"]
-        assert any(p.poll() is None for p in gateway.backend._goal_procs)  # returned at acceptance
+        procs = gateway.backend._commands.goal_procs
+        assert any(p.poll() is None for p in procs)  # returned at acceptance
         assert until(lambda: gateway.state().status.state == "navigating")
         gateway.run("ros2 service call /stop std_srvs/srv/Trigger")
         assert gateway.wait_until_idle(15) == "canceled"

@@ -82,7 +82,7 @@ def test_state_messages_are_taken_by_the_poller_each_at_its_receive_time(robot_g
     backend = robot_gateway.backend
     assert until(lambda: backend.messages(["/odom"]), 10), "/odom is watched once wanted"
     time.sleep(1.5)
-    watches = backend._watches
+    watches = backend._watching.watches
     assert {"/robot_pose", "/odom", "/robot_status"} <= watches.keys()
     # the executor never wakes for them (Humble's wait-set executor waits only on these)
     assert not any(backend.proc.executor.can_execute(w._sub) for w in watches.values())

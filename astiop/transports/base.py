@@ -6,13 +6,15 @@ import contextlib
 import time
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Iterable
+from contextlib import AbstractContextManager
 from dataclasses import asdict, dataclass, field
 from typing import Any, Union
 
 from astiop.ros2.catalog import Catalog
+from astiop.ros2.grammar import Ros2Command
 from astiop.ros2.validation import Checked, always_allowed
-from astiop.transports.errors import BackendError  # noqa: F401 - its home for every caller
-from astiop.transports.inflight import InFlight
+from astiop.transports.errors import BackendError
+from astiop.transports.inflight import InFlight, Job
 from astiop.transports.state import OccupancyGrid, RobotEvent, RobotState, TopicStat
 from astiop.warehouse import WarehouseMap
 
@@ -69,6 +71,44 @@ class Execution:
         return data
 
 
+def command_of(checked: Checked) -> Ros2Command:
+    """The command a transport runs: only a valid one reaches it, and a valid one has it."""
+    if checked.command is None:
+        raise BackendError(f"not a command: {checked.reason or checked.text}")
+    return checked.command
+
+
+def name_of(checked: Checked) -> str:
+    """The topic, service, action or node the command names; BackendError if it names none."""
+    name = command_of(checked).name
+    if not name:
+        raise BackendError(f"{checked.text}: names no topic, service or action")
+    return name
+
+
+def interface_of(checked: Checked) -> str:
+    """The interface type validation resolved for the command (a message, service or action)."""
+    if checked.type is None:
+        raise BackendError(f"{checked.text}: no interface type was resolved for it")
+    return checked.type
+
+
+def message_of(checked: Checked) -> dict[str, Any]:
+    """The checked values the command sends (its message, request or goal)."""
+    if checked.message is None:
+        raise BackendError(f"{checked.text}: it has no values to send")
+    return checked.message
+
+
+def actuating(inflight: InFlight, checked: Checked) -> AbstractContextManager[Job | None]:
+    """The job an actuating command runs as in `inflight` (refused while the E-STOP holds, ended
+    by it); None for a read and for the stop itself, which must run while the E-STOP holds."""
+    if checked.kind != "actuate" or always_allowed(checked):
+        return contextlib.nullcontext(None)
+    cmd = command_of(checked)
+    return inflight.running(cmd.display(), cmd.name or "")
+
+
 class RobotBackend(ABC):
     """The base of every backend: what the gateway and the app read, with the defaults of a live
     robot whose graph does not change. Each backend overrides what it has."""
@@ -84,12 +124,10 @@ class RobotBackend(ABC):
     params_wanted: bool = True  # the nodes' parameters read with the graph (finding a fleet: no)
     inflight: InFlight  # what this process has running that moves the robot
 
-    def actuating(self, checked: Checked):
+    def actuating(self, checked: Checked) -> AbstractContextManager[Job | None]:
         """The job an actuating command runs as (the E-STOP ends it); None for a read and for
         the stop itself, which must run while the E-STOP holds."""
-        if checked.kind != "actuate" or always_allowed(checked):
-            return contextlib.nullcontext(None)
-        return self.inflight.running(checked.command.display(), checked.command.name)
+        return actuating(self.inflight, checked)
 
     def zero_now(self) -> None:
         """A zero velocity at once where sending one is cheap (the E-STOP follows it)."""
@@ -145,65 +183,90 @@ class RobotBackend(ABC):
         theirs; the simulator's goal yields to a zero velocity): nothing by default."""
         return None
 
+    # -- the contract every backend keeps -----------------------------------------------------
+    # Each failure that comes from the robot or the transport is raised as BackendError (with a
+    # one-line reason) or, for the E-STOP's steps, returned as text: never another exception.
+
     @property
     @abstractmethod
-    def e_stopped(self) -> bool: ...
+    def e_stopped(self) -> bool:
+        """Returns: whether the E-STOP holds in this process (nothing that moves starts)."""
 
     @abstractmethod
-    def start(self) -> None: ...
+    def start(self) -> None:
+        """Begin watching the robot (threads, subscriptions, streams); once, after __init__.
+
+        Raises: BackendError if the robot cannot be reached at all."""
 
     @abstractmethod
-    def close(self) -> None: ...
+    def close(self) -> None:
+        """Stop every watch and cancel the goals this process sent; never raises."""
 
     @abstractmethod
     def estop(self) -> list[str]:
-        """Stop the robot now; returns the failures of each step (empty: all went out)."""
-        ...
+        """Hold first (nothing starts), end everything in flight, then stop the robot; no step
+        waits for another, nothing raises.
+
+        Returns: the failures of the steps taken so far (empty: all went out); a later one
+        comes as an event (`settle_estop`)."""
 
     @abstractmethod
     def release_estop(self, *, robot: bool = True) -> list[str]:
-        """Let the robot move again; the failures (a robot that latches its own stop and did
-        not answer its release). `robot=False`: this process only (another process released
-        the latch and the robot)."""
-        ...
+        """Let the robot move again. Args: `robot=False`: this process only (another process
+        released the latch and the robot).
+
+        Returns: the failures (a robot that latches its own stop and did not answer its
+        release); never raises."""
 
     @abstractmethod
-    def execute(self, checked: Checked, timeout: float) -> tuple[str, object]: ...
+    def execute(self, checked: Checked, timeout: float) -> tuple[str, Any]:
+        """Run one validated command. Args: `checked` (valid: validation/gateway made it),
+        `timeout` in s for the robot's answer.
+
+        Returns: (the text ros2 prints for it, the values astiop reads from it).
+        Raises: BackendError: refused while the E-STOP holds (an actuation), ended by it, or
+        failed on the robot (not served, timed out, refused)."""
 
     @abstractmethod
     def drive(self, twist: dict) -> None:
-        """Teleop: hold this (already clamped) velocity for a short lapse time."""
-        ...
+        """Teleop: hold this (already clamped) velocity for a short lapse time.
+
+        Raises: BackendError: the E-STOP holds, or the robot has no velocity command."""
 
     @abstractmethod
     def state(self) -> RobotState:
-        """The latest state; never blocks on the robot."""
-        ...
+        """Returns: the latest state; never blocks on the robot, never raises."""
 
     @abstractmethod
     def messages(self, names: Iterable[str]) -> dict[str, dict]:
-        """The latest message on each of these topics that has one, as the robot sent it."""
-        ...
+        """Returns: the latest message on each of these topics that has one, as the robot sent
+        it (a topic with none is left out)."""
 
     @abstractmethod
     def message_times(self, names: Iterable[str]) -> dict[str, float]:
-        """When each of those latest messages came, on the robot's clock (`RobotState.t`):
-        published (simulator), received (robot), logged (replay)."""
-        ...
+        """Returns: when each of those latest messages came, on the robot's clock
+        (`RobotState.t`): published (simulator), received (robot), logged (replay)."""
 
     @abstractmethod
-    def events_since(self, seq: int) -> list[RobotEvent]: ...
+    def events_since(self, seq: int) -> list[RobotEvent]:
+        """Returns: the events numbered after `seq`, oldest first (a bounded history)."""
 
     @abstractmethod
-    def topic_stats(self) -> list[TopicStat]: ...
+    def topic_stats(self) -> list[TopicStat]:
+        """Returns: each watched topic's expected and measured rate and its last message's
+        age."""
 
     @abstractmethod
     def wait_until_idle(self, timeout_s: float) -> str | None:
-        """Block until the robot has no active goal; returns how the goal ended, if known."""
-        ...
+        """Block, at most `timeout_s`, until the robot has no active goal.
+
+        Returns: how the goal ended ("succeeded", "canceled", ...), None if not known or
+        still running."""
 
     @abstractmethod
-    def map_geometry(self) -> MapGeometry: ...
+    def map_geometry(self) -> MapGeometry:
+        """Returns: the map as known now (never read here): the warehouse, the robot's /map,
+        or None."""
 
     def read_map(self, timeout_s: float) -> MapGeometry:
         """The robot's map, read now if it has not been (a one-shot command never started the

@@ -83,13 +83,30 @@ def describe_graph(lists: GraphLists, fixed: ProfileSpec | None = None) -> Catal
             spec = replace(spec, type=typ)
         cat.topics[name] = spec if spec and spec.type == typ else TopicSpec(name, typ, 0, "?")
     for name, typ in lists["service"]:
-        spec = known.services.get(name)
+        service = known.services.get(name)
         # an unknown service is treated as actuating: it needs confirmation
         cat.services[name] = (
-            spec if spec and spec.type == typ else ServiceSpec(name, typ, "?", True)
+            service if service and service.type == typ else ServiceSpec(name, typ, "?", True)
         )
     for name, typ in lists["action"]:
-        spec = known.actions.get(name)
-        cat.actions[name] = spec if spec and spec.type == typ else ActionSpec(name, typ, "?")
+        action = known.actions.get(name)
+        cat.actions[name] = action if action and action.type == typ else ActionSpec(name, typ, "?")
     cat.profile = match_profile(cat, fixed)
     return cat
+
+
+class LiveGraph:
+    """The robot's graph as this process last read it, shared by a live backend and its helpers:
+    its lists, their catalog (both replaced at each read) and the robot's name for a role."""
+
+    def __init__(self, catalog: Catalog, fixed: ProfileSpec, lists: GraphLists | None = None):
+        self.catalog = catalog
+        self.fixed = fixed  # what the operator fixed: a profile file, a namespace
+        self.lists = lists if lists is not None else nothing_listed()
+        self.discovered = True  # False: not read yet (an E-STOP from a new process)
+
+    def name(self, role: str, default: str = "") -> str:
+        """The robot's name for `role` (its profile); before the graph is read, `default` under
+        the robot's namespace ("" for a role without a conventional name)."""
+        name = self.catalog.profile.name(role) if self.catalog.profile else None
+        return name or (self.fixed.namespace + default if default else "")

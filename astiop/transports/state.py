@@ -23,7 +23,8 @@ MAX_WHEEL_SPEED = ASTIBOT.max_wheel_speed  # rad/s at the wheel, the motor limit
 
 def wheel_speeds(vx: float, vy: float, wz: float) -> tuple[float, float, float, float]:
     """FL, FR, RL, RR from the body velocity (the ASTIbot's inverse kinematics)."""
-    return tuple(float(w) for w in inverse_kinematics(vx, vy, wz))
+    fl, fr, rl, rr = (float(w) for w in inverse_kinematics(vx, vy, wz))
+    return fl, fr, rl, rr
 
 
 @dataclass(frozen=True)

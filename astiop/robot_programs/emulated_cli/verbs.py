@@ -21,12 +21,12 @@ class OwnGraph:
         self._robot = robot
 
     def __getattr__(self, name: str):
-        return getattr(self._robot.backend, name)
+        return getattr(self._robot.backend.verbs, name)
 
     def graph(self, kind: str) -> list[tuple[str, str]]:
         r = self._robot
         table = {"topic": r.topics, "service": r.services, "action": r.actions}.get(kind)
-        return list(table().items()) if table is not None else r.backend.graph(kind)
+        return list(table().items()) if table is not None else r.backend.verbs.graph(kind)
 
 
 def run_verb(robot, call: Call, argv: list[str]) -> int:

@@ -6,27 +6,26 @@ from __future__ import annotations
 import math
 import threading
 import time
+from collections.abc import Iterable
 from typing import Any
 
 from astiop.ros2.catalog import Catalog
 from astiop.ros2.grammar import current_distro
 from astiop.ros2.message_objects import to_dict
 from astiop.ros2.profile import ProfileSpec
+from astiop.ros2.validation import Checked
 from astiop.transports import live_robot
 from astiop.transports.base import RobotBackend
-from astiop.transports.event_log import Contact, EstopWork, EventLog
-from astiop.transports.inflight import InFlight, Job
-from astiop.transports.live_catalog import GraphLists, describe_graph
+from astiop.transports.event_log import Contact, EventLog
+from astiop.transports.inflight import InFlight
+from astiop.transports.live_catalog import GraphLists, LiveGraph, describe_graph
 from astiop.transports.live_robot import MOVING, without_finished_plan
-from astiop.transports.rclpy.empty_calls import EmptyCalls
 from astiop.transports.rclpy.estop import RclpyEstop
 from astiop.transports.rclpy.graph import read_lists, read_params
-from astiop.transports.rclpy.lock_hold import LockHold
 from astiop.transports.rclpy.node import ros_process
 from astiop.transports.rclpy.state_watches import RclpyStateWatches
 from astiop.transports.rclpy.teleop import RclpyTeleop
 from astiop.transports.rclpy.verbs import RclpyVerbs
-from astiop.transports.rclpy.watch import TopicWatch, watch
 from astiop.transports.state import (
     OccupancyGrid,
     RobotEvent,
@@ -48,7 +47,7 @@ SILENT_S = 3.0  # a state topic's last message older than this is no longer the 
 MOVING_SPEED = 0.005  # m/s: /robot_status's speed above this is a robot that moves
 
 
-class RclpyBackend(RclpyEstop, RclpyTeleop, RclpyStateWatches, RclpyVerbs, RobotBackend):
+class RclpyBackend(RobotBackend):
     name = "ros2"
     refresh_every_s = 0.0  # the graph is this process's discovery cache: reading it is free
 
@@ -60,37 +59,36 @@ class RclpyBackend(RclpyEstop, RclpyTeleop, RclpyStateWatches, RclpyVerbs, Robot
         self.distro = current_distro()
         self.proc = ros_process()
         self.label = f"ros2 via rclpy, {self.distro}, domain {self.proc.domain_id}"
-        self._lock = threading.Lock()
         self._refresh_lock = threading.Lock()
-        self._watches: dict[str, TopicWatch] = {}
-        self._watch_lock = threading.Lock()  # watches made and dropped by one thread at a time
-        self._wanted: dict[str, float] = {}  # an on-demand topic -> wanted until (monotonic)
-        self._poke = threading.Event()  # the graph thread: subscribe what is wanted now
-        self._holding = threading.Event()  # teleop holds a velocity: the teleop loop runs
-        self._map_watch: TopicWatch | None = None
         self._map: OccupancyGrid | None = None
-        self._goals: list[Any] = []  # goal handles this process sent and that have not ended
-        self._last_outcome: str | None = None
         self.inflight = InFlight()
-        self._teleop_job: Job | None = None  # while teleop holds a velocity
         self._closed = threading.Event()
-        self._cmd_vel: tuple[Any, Any, str] | None = None  # publisher, class, type
-        self._hold: dict | None = None
-        self.light = False  # a fleet's robot watched for its row: no scan (watch_lightly)
-        self._hold_until = 0.0
         self.t0 = time.monotonic()
         self.events = EventLog(self.t0)
-        self._estop = EstopWork(self.events)
-        self._calls = EmptyCalls(self.proc, self.events, timeout_s)
-        self._lock_hold = LockHold(self.proc, lambda: self._name("estop_lock"), self.events)
         self._contact = Contact(self.events)
-        self._lists = self._discover(DISCOVERY_S if discover else 0.0)
+        lists = self._discover(DISCOVERY_S if discover else 0.0)
         self._params: list[tuple[str, str]] = []  # read by start(), or when a command needs them
         self._params_of: dict[str, list[tuple[str, str]]] = {}  # node -> its parameters
-        self.catalog: Catalog = describe_graph({**self._lists, "param": self._params}, self._fixed)
+        catalog = describe_graph({**lists, "param": self._params}, self._fixed)
+        self._live = LiveGraph(catalog, self._fixed, lists)
         self.refreshed_at = 0.0  # the parameters are not read yet
+        # its parts, each handed what it uses (rclpy/state_watches.py, teleop.py, estop.py,
+        # verbs.py)
+        self._watching = RclpyStateWatches(
+            self.proc, self._live, self._closed, self._on_message, self._on_map
+        )
+        self._teleop = RclpyTeleop(
+            self.proc, self._live, self.inflight, self.events, self._closed, self._watching.want
+        )
+        self._estop = RclpyEstop(
+            self.proc, self._live, self.inflight, self.events, timeout_s, self._teleop,
+            self._closed,
+        )  # fmt: skip
+        self._verbs = RclpyVerbs(
+            self.proc, self._live, self.inflight, self.events, self._watching, self._teleop
+        )
 
-    def _discover(self, settle_s: float) -> dict:
+    def _discover(self, settle_s: float) -> GraphLists:
         """Discovery is under way in a new process: read until the graph stops growing (Fast
         DDS announces a participant's endpoints in rounds, so a pause is not the end). A robot
         under a namespace (one of a fleet, each in its own process) is waited for until a name
@@ -101,7 +99,7 @@ class RclpyBackend(RclpyEstop, RclpyTeleop, RclpyStateWatches, RclpyVerbs, Robot
         deadline = t0 + settle_s
         longest = t0 + self.timeout_s if ns and settle_s > 0 else deadline
 
-        def its_own(lists: dict) -> bool:
+        def its_own(lists: GraphLists) -> bool:
             return not ns or any(n.startswith(ns + "/") for n, _ in lists["topic"])
 
         # a read this recent is shared: a fleet's robots, opened at once, read one graph
@@ -120,16 +118,21 @@ class RclpyBackend(RclpyEstop, RclpyTeleop, RclpyStateWatches, RclpyVerbs, Robot
         return lists
 
     # -- the live graph --------------------------------------------------------------------
+    @property
+    def catalog(self) -> Catalog:
+        return self._live.catalog
+
+    @catalog.setter
+    def catalog(self, catalog: Catalog) -> None:
+        self._live.catalog = catalog
+
     def _name(self, role: str, default: str = "") -> str:
-        """The robot's name for `role` (its profile); before the graph is read, `default` under
-        the robot's namespace ("" for a role without a conventional name)."""
-        name = self.catalog.profile.name(role) if self.catalog.profile else None
-        return name or (self._fixed.namespace + default if default else "")
+        return self._live.name(role, default)
 
     @property
     def robot_nodes(self) -> list[str]:
         """The nodes discovered on the robot's domain (not this process's own)."""
-        return [n for n, _ in self._lists["node"]]
+        return [n for n, _ in self._live.lists["node"]]
 
     def robot_present(self) -> bool | None:
         names = self.proc.node.get_node_names_and_namespaces()
@@ -184,31 +187,32 @@ class RclpyBackend(RclpyEstop, RclpyTeleop, RclpyStateWatches, RclpyVerbs, Robot
                 self._params_of[node] = [p for p in read if p[0].split(" ", 1)[0] == node]
         self._params_of = {n: ps for n, ps in self._params_of.items() if n in nodes}
         params = sorted(p for ps in self._params_of.values() for p in ps)
-        if lists != self._lists or params != self._params:  # else the catalog is as described
-            self._params, self._lists = params, lists
+        if lists != self._live.lists or params != self._params:  # else as described
+            self._params, self._live.lists = params, lists
             self.catalog = describe_graph({**lists, "param": params}, self._fixed)
         self.refreshed_at = time.monotonic()
-        self._watch_state_topics()
+        self._watching.watch_state_topics()
         return True
 
     def _graph_loop(self) -> None:
         """The graph read each second; a wanted topic subscribed as soon as it is wanted."""
         next_read = time.monotonic() + GRAPH_POLL_S
         while not self._closed.is_set():
-            self._poke.wait(max(0.0, next_read - time.monotonic()))
+            poke = self._watching.poke
+            poke.wait(max(0.0, next_read - time.monotonic()))
             if self._closed.is_set():
                 return
             try:
-                if self._poke.is_set():
-                    self._poke.clear()
-                    self._watch_state_topics()
+                if poke.is_set():
+                    poke.clear()
+                    self._watching.watch_state_topics()
                 if time.monotonic() >= next_read:
                     next_read = time.monotonic() + GRAPH_POLL_S
                     lists = read_lists(self.proc, max_age_s=GRAPH_POLL_S / 2)
-                    if lists != self._lists:
+                    if lists != self._live.lists:
                         with self._refresh_lock:
                             self._refresh(lists=lists)
-                    self._drop_unwanted()
+                    self._watching.drop_unwanted()
                     self._lost_for(time.monotonic())
             except Exception as exc:  # noqa: BLE001 - the loop must outlive one bad read
                 self.events.add("graph", "warning", f"reading the robot's graph failed: {exc}")
@@ -216,16 +220,16 @@ class RclpyBackend(RclpyEstop, RclpyTeleop, RclpyStateWatches, RclpyVerbs, Robot
     def _lost_for(self, now: float) -> float | None:
         """Seconds since the robot was last heard, when it is lost (said once, as is its
         return)."""
-        return self._contact.check([w.age(now) for w in self._watches.values()])
+        return self._contact.check([w.age(now) for w in self._watching.watches.values()])
 
     # -- lifecycle ---------------------------------------------------------------------------
     def start(self) -> None:
         if self._name("velocity_command"):
-            self._publisher()  # matched now, so the first key and the E-STOP do not wait for it
-        self._watch_state_topics()
+            self._teleop.publisher()  # matched now: the first key and the E-STOP do not wait
+        self._watching.watch_state_topics()
         threading.Thread(target=self._graph_loop, name="rclpy-graph", daemon=True).start()
         threading.Thread(target=self._first_refresh, name="rclpy-params", daemon=True).start()
-        threading.Thread(target=self._teleop_loop, name="rclpy-teleop", daemon=True).start()
+        threading.Thread(target=self._teleop.loop, name="rclpy-teleop", daemon=True).start()
 
     def _first_refresh(self) -> None:
         """The robot's parameters read in the background; a backend closed meanwhile (a short
@@ -238,34 +242,24 @@ class RclpyBackend(RclpyEstop, RclpyTeleop, RclpyStateWatches, RclpyVerbs, Robot
 
     def close(self) -> None:
         self._closed.set()
-        self._lock_hold.stop()
-        self._poke.set()
-        self._holding.set()
-        with self._watch_lock:  # none is being made meanwhile
-            for w in [*self._watches.values(), *([self._map_watch] if self._map_watch else [])]:
-                w.close()
-            self._watches, self._map_watch = {}, None
-        for handle in list(self._goals):
-            handle.cancel_goal_async()  # as ros2cli's send_goal does on the way out
-        if self._cmd_vel is not None:
-            self.proc.node.destroy_publisher(self._cmd_vel[0])
-            self._cmd_vel = None
+        self._estop.close()
+        self._watching.close()
+        self._verbs.cancel_goals()  # as ros2cli's send_goal does on the way out
+        self._teleop.close()
 
     # -- live state --------------------------------------------------------------------------
     def _on_message(self, name: str, msg: Any) -> None:
         if name == self._name("status"):
             self.events.status(msg.state, msg.fault)
             if msg.state in MOVING or getattr(msg, "speed", 0.0) > MOVING_SPEED:
-                self._want(
-                    self._name("odometry")
-                )  # its velocity is worth its cost while the robot moves
+                # its velocity is worth its cost while the robot moves
+                self._watching.want(self._name("odometry"))
 
-    def read_map(self, timeout_s: float):
+    def read_map(self, timeout_s: float) -> OccupancyGrid | None:
         name = self._name("map")
         spec = self.catalog.topics.get(name) if name else None
-        with self._watch_lock:
-            if spec is not None and self._map_watch is None and not self._closed.is_set():
-                self._map_watch = watch(self.proc, name, spec.type, self._on_map)
+        if spec is not None:
+            self._watching.watch_map(name, spec.type)
         deadline = time.monotonic() + timeout_s
         while self._map is None and spec is not None and time.monotonic() < deadline:
             time.sleep(0.05)  # latched: it comes with the subscription's first match
@@ -281,7 +275,7 @@ class RclpyBackend(RclpyEstop, RclpyTeleop, RclpyStateWatches, RclpyVerbs, Robot
         """The latest message of each state topic that is not stale: older than three of its
         topic's periods (at least SILENT_S), it is no longer the robot's state."""
         out = {}
-        for name, w in self._watches.items():
+        for name, w in self._watching.watches.items():
             spec = self.catalog.topics.get(name)
             period = 1.0 / spec.rate_hz if spec and spec.rate_hz else math.inf
             if w.age(now) <= max(3 * period, SILENT_S):
@@ -298,7 +292,7 @@ class RclpyBackend(RclpyEstop, RclpyTeleop, RclpyStateWatches, RclpyVerbs, Robot
         messages = self._fresh(now)
         profile = self.catalog.profile
         goals = goal_status_topic(profile)
-        if goals in self._watches and goals not in messages:
+        if goals in self._watching.watches and goals not in messages:
             messages[goals] = {"status_list": []}  # its server is up and has had no goal
         messages = without_finished_plan(messages, profile)
         seq = self.events.seq
@@ -307,21 +301,21 @@ class RclpyBackend(RclpyEstop, RclpyTeleop, RclpyStateWatches, RclpyVerbs, Robot
         )
         return state.with_lost(self._lost_for(now))
 
-    def messages(self, names) -> dict[str, dict[str, Any]]:
+    def messages(self, names: Iterable[str]) -> dict[str, dict[str, Any]]:
         out = {}
         for n in names:
-            self._want(n)  # a reader (a recording) keeps asking: it stays watched
-            w = self._watches.get(n)
+            self._watching.want(n)  # a reader (a recording) keeps asking: it stays watched
+            w = self._watching.watches.get(n)
             msg = w.latest() if w else None
             if msg is not None:
                 out[n] = msg
         return out
 
-    def message_times(self, names) -> dict[str, float]:
+    def message_times(self, names: Iterable[str]) -> dict[str, float]:
         out = {}
         for n in names:
-            self._want(n)
-            w = self._watches.get(n)
+            self._watching.want(n)
+            w = self._watching.watches.get(n)
             received = w.received() if w else None
             if received is not None:
                 out[n] = received - self.t0
@@ -331,22 +325,55 @@ class RclpyBackend(RclpyEstop, RclpyTeleop, RclpyStateWatches, RclpyVerbs, Robot
         return self.events.since(seq)
 
     def topic_stats(self) -> list[TopicStat]:
-        map_watch = {self._name("map", "/map"): self._map_watch} if self._map_watch else {}
-        watches = {**self._watches, **map_watch}
+        w = self._watching.map_watch
+        map_watch = {self._name("map", "/map"): w} if w else {}
+        watches = {**self._watching.watches, **map_watch}
         return live_topic_stats(self.catalog.topics, watches, time.monotonic())
 
-    def map_geometry(self):
+    def map_geometry(self) -> OccupancyGrid | None:
         return self._map
 
     def wait_until_idle(self, timeout_s: float) -> str | None:
         def state() -> str | None:
-            status = self._watches.get(self._name("status"))
+            status = self._watching.watches.get(self._name("status"))
             return (status.latest() or {}).get("state") if status else None
 
         return live_robot.wait_until_idle(
             timeout_s,
             lost=lambda: self._lost_for(time.monotonic()) is not None,
-            goals_running=lambda: bool(self._goals),
+            goals_running=lambda: bool(self._verbs.goals),
             state=state,
-            outcome=lambda: self._last_outcome,
+            outcome=lambda: self._verbs.last_outcome,
         )
+
+    # -- commands, teleop and the E-STOP (rclpy/verbs.py, teleop.py, estop.py) -------------
+    def execute(self, checked: Checked, timeout: float) -> tuple[str, Any]:
+        return self._verbs.execute(checked, timeout)
+
+    def cancel_goals(self) -> None:
+        self._verbs.cancel_goals()
+
+    def drive(self, twist: dict) -> None:
+        self._teleop.drive(twist)
+
+    def zero_now(self) -> None:
+        self._teleop.zero_now()
+
+    def watch_lightly(self, light: bool) -> None:
+        self._watching.watch_lightly(light)
+
+    @property
+    def e_stopped(self) -> bool:
+        return self.inflight.held
+
+    def estop(self) -> list[str]:
+        return self._estop.estop()
+
+    def warm_estop(self) -> None:
+        self._estop.warm()
+
+    def settle_estop(self, timeout_s: float) -> list[str]:
+        return self._estop.settle(timeout_s)
+
+    def release_estop(self, *, robot: bool = True) -> list[str]:
+        return self._estop.release(robot=robot)

@@ -104,7 +104,7 @@ class ControlTopic:
 
     def close(self) -> None:
         node = self.proc.node
-        for entity, destroy in ((self._sub, node.destroy_subscription),
-                                (self._pub, node.destroy_publisher)):  # fmt: skip
-            with contextlib.suppress(Exception):  # the process is ending
-                destroy(entity)
+        with contextlib.suppress(Exception):  # the process is ending
+            node.destroy_subscription(self._sub)
+        with contextlib.suppress(Exception):
+            node.destroy_publisher(self._pub)

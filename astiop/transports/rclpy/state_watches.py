@@ -5,9 +5,10 @@ from __future__ import annotations
 
 import threading
 import time
-from typing import TYPE_CHECKING, Any, Protocol
+from collections.abc import Callable
+from typing import Any
 
-from astiop.ros2.catalog import Catalog
+from astiop.transports.live_catalog import LiveGraph
 from astiop.transports.rclpy.node import RosProcess
 from astiop.transports.rclpy.watch import TopicWatch, watch, watch_transforms
 from astiop.transports.state import GOAL_STATUS, goal_status_topic
@@ -19,101 +20,117 @@ SCAN_TYPES = frozenset({"sensor_msgs/msg/LaserScan", "sensor_msgs/msg/PointCloud
 # asks for its messages; always where the robot lacks /robot_pose or /robot_status.
 WANTED_S = 2.0  # an on-demand topic stays watched this long after it was last wanted
 
-
-class RclpyStateWatchesHost(Protocol):
-    """What `RclpyStateWatches` needs of the backend it is mixed into."""
-
-    catalog: Catalog
-    proc: RosProcess
-    light: bool
-    _watches: dict[str, TopicWatch]
-    _watch_lock: threading.Lock
-    _wanted: dict[str, float]
-    _poke: threading.Event
-    _closed: threading.Event
-    _map_watch: TopicWatch | None
-
-    def _name(self, role: str, default: str = "") -> str: ...
-
-    def _on_message(self, name: str, msg: Any) -> None: ...
-
-    def _on_map(self, name: str, msg: Any) -> None: ...
+OnMessage = Callable[[str, Any], None]  # (topic, message object)
 
 
-if TYPE_CHECKING:
-    _Host = RclpyStateWatchesHost
-else:
-    _Host = object
+class RclpyStateWatches:
+    """The watches of the robot's state topics (`watches`, by name) and of its map. Made by
+    `watch_state_topics` (the graph thread's, and the first read's); `poke` is set when the
+    graph thread should make them now (a topic newly wanted)."""
 
+    def __init__(
+        self,
+        proc: RosProcess,
+        live: LiveGraph,
+        closed: threading.Event,
+        on_status: OnMessage,
+        on_map: OnMessage,
+    ):
+        self.proc = proc
+        self.live = live
+        self._closed = closed
+        self._on_status = on_status  # each /robot_status, as it comes (events)
+        self._on_map = on_map
+        self.watches: dict[str, TopicWatch] = {}  # replaced, never changed: read unlocked
+        self.map_watch: TopicWatch | None = None
+        self._lock = threading.Lock()  # watches made and dropped by one thread at a time
+        self._wanted: dict[str, float] = {}  # an on-demand topic -> wanted until (monotonic)
+        self.poke = threading.Event()  # the graph thread: subscribe what is wanted now
+        self.light = False  # a fleet's robot watched for its row: no scan (watch_lightly)
 
-class RclpyStateWatches(_Host):
-    def _watch_state_topics(self) -> None:
-        with self._watch_lock:
+    def watch_state_topics(self) -> None:
+        with self._lock:
             self._watch_state_topics_locked()
 
     def _watch_state_topics_locked(self) -> None:
         if self._closed.is_set():
             return  # a refresh that outlived close(): no watch the process would keep
-        map_name = self._name("map")
-        for name in self.catalog.state_topics() + ([map_name] if map_name else []):
-            spec = self.catalog.topics.get(name)
-            if spec is None or name in self._watches or (name == map_name and self._map_watch):
+        catalog, name_of = self.live.catalog, self.live.name
+        map_name = name_of("map")
+        for name in catalog.state_topics() + ([map_name] if map_name else []):
+            spec = catalog.topics.get(name)
+            if spec is None or name in self.watches or (name == map_name and self.map_watch):
                 continue
-            if name == self._name("odometry") and not self._is_wanted(name):
+            if name == name_of("odometry") and not self._is_wanted(name):
                 continue
             if self._light_skips(name, spec.type):
                 continue
             if not self.proc.node.get_publishers_info_by_topic(name):
                 continue  # subscribed when a publisher appears, with its QoS
             if name == map_name:
-                self._map_watch = watch(self.proc, name, spec.type, self._on_map)
+                self.map_watch = watch(self.proc, name, spec.type, self._on_map)
                 continue
-            on_message = self._on_message if name == self._name("status") else None  # events
-            if name in (self._name("transforms"), self._name("static_transforms")):
-                static = name == self._name("static_transforms")
+            on_message = self._on_status if name == name_of("status") else None  # events
+            w: TopicWatch | None
+            if name in (name_of("transforms"), name_of("static_transforms")):
+                static = name == name_of("static_transforms")
                 w = watch_transforms(self.proc, name, spec.type, static)
             else:
                 w = watch(self.proc, name, spec.type, on_message)
             if w is not None:  # a new dict: the sampler may be iterating the old one
-                self._watches = {**self._watches, name: w}
-        goals = goal_status_topic(self.catalog.profile)
+                self.watches = {**self.watches, name: w}
+        goals = goal_status_topic(catalog.profile)
         if (
             goals
-            and goals not in self._watches
+            and goals not in self.watches
             and self.proc.node.get_publishers_info_by_topic(goals)
         ):
             w = watch(self.proc, goals, GOAL_STATUS)
             if w is not None:
-                self._watches = {**self._watches, goals: w}
+                self.watches = {**self.watches, goals: w}
+
+    def watch_map(self, name: str, type_: str) -> None:
+        """The map watched from now (latched: it comes with the subscription's first match)."""
+        with self._lock:
+            if self.map_watch is None and not self._closed.is_set():
+                self.map_watch = watch(self.proc, name, type_, self._on_map)
 
     # -- topics watched on demand -------------------------------------------------------------
-    def _want(self, name: str) -> None:
+    def want(self, name: str) -> None:
         """Keep an on-demand topic watched for WANTED_S from now (the graph thread subscribes it:
         never the caller, who may be the executor's callback or a key press)."""
-        if name == self._name("odometry"):
+        if name == self.live.name("odometry"):
             self._wanted[name] = time.monotonic() + WANTED_S
-            if name not in self._watches:
-                self._poke.set()
+            if name not in self.watches:
+                self.poke.set()
 
     def _is_wanted(self, name: str) -> bool:
-        profile = self.catalog.profile
+        profile = self.live.catalog.profile
         if profile and (profile.name("pose") == name or not profile.has("status")):
             return True  # the robot's pose or speed has no other source
         return time.monotonic() < self._wanted.get(name, 0.0)
 
     def watch_lightly(self, light: bool) -> None:
         self.light = light
-        self._poke.set()  # subscribed, or dropped at the graph thread's next read
+        self.poke.set()  # subscribed, or dropped at the graph thread's next read
 
     def _light_skips(self, name: str, type_: str) -> bool:
         """A scan not subscribed for a fleet's robot watched for its row (unless wanted)."""
         return self.light and type_ in SCAN_TYPES and not self._is_wanted(name)
 
-    def _drop_unwanted(self) -> None:
-        with self._watch_lock:
-            scans = [n for n, w in self._watches.items() if self._light_skips(n, w.type)]
-            for name in [self._name("odometry"), *scans]:
-                w = self._watches.get(name)
+    def drop_unwanted(self) -> None:
+        with self._lock:
+            scans = [n for n, w in self.watches.items() if self._light_skips(n, w.type)]
+            for name in [self.live.name("odometry"), *scans]:
+                w = self.watches.get(name)
                 if w is not None and not self._is_wanted(name):
-                    self._watches = {n: v for n, v in self._watches.items() if n != name}
+                    self.watches = {n: v for n, v in self.watches.items() if n != name}
                     w.close()
+
+    def close(self) -> None:
+        """Every watch closed; the graph thread woken to see the process closed."""
+        self.poke.set()
+        with self._lock:  # none is being made meanwhile
+            for w in [*self.watches.values(), *([self.map_watch] if self.map_watch else [])]:
+                w.close()
+            self.watches, self.map_watch = {}, None

@@ -10,6 +10,7 @@ from collections.abc import Callable
 from typing import Any
 
 from rclpy.action import ActionClient
+from rclpy.action.client import ClientGoalHandle
 from rclpy.qos import qos_profile_sensor_data
 
 from astiop.ros2.message_objects import MessageTypeError, interface_class, to_dict, to_message
@@ -17,8 +18,18 @@ from astiop.ros2.printing import ros2cli_yaml
 from astiop.ros2.render import STAMPED
 from astiop.ros2.validation import Checked
 from astiop.ros2.verbs import VERBS
-from astiop.transports.base import BackendError
-from astiop.transports.inflight import ENDED, Job
+from astiop.ros2.verbs.transport import Sample
+from astiop.transports.base import (
+    BackendError,
+    actuating,
+    command_of,
+    interface_of,
+    message_of,
+    name_of,
+)
+from astiop.transports.event_log import EventLog
+from astiop.transports.inflight import ENDED, InFlight, Job
+from astiop.transports.live_catalog import LiveGraph
 from astiop.transports.rclpy.graph import (
     full_name,
     latched,
@@ -26,7 +37,9 @@ from astiop.transports.rclpy.graph import (
     node_sections,
     read_params,
 )
-from astiop.transports.rclpy.node import RosTimeout
+from astiop.transports.rclpy.node import RosProcess, RosTimeout
+from astiop.transports.rclpy.state_watches import RclpyStateWatches
+from astiop.transports.rclpy.teleop import RclpyTeleop
 
 # action_msgs/msg/GoalStatus -> send_goal.py's _goal_status_to_string
 STATUS = {
@@ -41,12 +54,32 @@ PARAM_FIELDS = {1: "bool_value", 2: "integer_value", 3: "double_value", 4: "stri
 
 
 class RclpyVerbs:
-    """Mixed into RclpyBackend: uses its proc, catalog, watches, goals and events."""
+    """The transport the verbs run on in this process: the graph as `live` last read it, the
+    state topics' `watching` for an echo, teleop's velocity publisher for /cmd_vel. It owns the
+    goals it sent, followed to their end, and how the last one ended."""
+
+    def __init__(
+        self,
+        proc: RosProcess,
+        live: LiveGraph,
+        inflight: InFlight,
+        events: EventLog,
+        watching: RclpyStateWatches,
+        teleop: RclpyTeleop,
+    ):
+        self.proc = proc
+        self.live = live
+        self.inflight = inflight
+        self.events = events
+        self.watching = watching
+        self.teleop = teleop
+        self.goals: list[ClientGoalHandle] = []  # goals this process sent that have not ended
+        self.last_outcome: str | None = None  # how the last goal ended ("succeeded", ...)
 
     def execute(self, checked: Checked, timeout: float) -> tuple[str, Any]:
         try:
-            with self.actuating(checked):  # refused while the E-STOP holds, ended by it
-                return VERBS[checked.command.key].run(self, checked, timeout)
+            with actuating(self.inflight, checked):  # refused while the E-STOP holds, ended by it
+                return VERBS[command_of(checked).key].run(self, checked, timeout)
         except RosTimeout as exc:
             raise BackendError(str(exc)) from None
         except MessageTypeError as exc:
@@ -54,7 +87,7 @@ class RclpyVerbs:
 
     # -- the graph ------------------------------------------------------------------------
     def graph(self, kind: str) -> list[tuple[str, str]]:
-        return self._lists[kind]
+        return self.live.lists[kind]
 
     def endpoint_counts(self, topic: str) -> tuple[int, int]:
         return self.proc.node.count_publishers(topic), self.proc.node.count_subscribers(topic)
@@ -71,7 +104,7 @@ class RclpyVerbs:
             )
         ]
 
-    def node_info(self, target: str) -> dict:
+    def node_info(self, target: str) -> dict[str, list[tuple[str, str]]]:
         return node_sections(self.proc.node, target)
 
     def interfaces(self) -> list[str]:
@@ -82,9 +115,9 @@ class RclpyVerbs:
 
     # -- topics -----------------------------------------------------------------------------
     def take(self, c: Checked, timeout: float) -> dict[str, Any]:
-        name = c.command.name
-        w = self._watches.get(name)
-        spec = self.catalog.topics.get(name)
+        name = name_of(c)
+        w = self.watching.watches.get(name)
+        spec = self.live.catalog.topics.get(name)
         if w is not None and spec is not None and spec.rate_hz > 0:
             # the robot's last publication, if it came within one period, is the message
             # `ros2 topic echo --once` would print next (one period newer at most)
@@ -94,7 +127,7 @@ class RclpyVerbs:
         elif w is not None:
             msg = w.next_message(timeout)
         else:
-            msg = self._one_message(name, c.type, timeout)
+            msg = self._one_message(name, interface_of(c), timeout)
         if msg is None:
             raise BackendError(f"no reading from {name} in {timeout:g} s")
         return to_dict(msg)
@@ -109,14 +142,17 @@ class RclpyVerbs:
             w.close()
 
     def samples(
-        self, topic: str, type_: str, enough: Callable[[list], bool], timeout: float
-    ) -> list[tuple[float, int]]:
+        self, topic: str, type_: str, enough: Callable[[list[Sample]], bool], timeout: float
+    ) -> list[Sample]:
         """Each message's arrival and its serialized size (taken raw, as ros2 topic bw does)."""
-        got: list[tuple[float, int]] = []
+        got: list[Sample] = []
+
+        def arrived(data: Any) -> None:  # bytes: raw=True (rclpy's annotation says a message)
+            got.append((time.monotonic(), len(data)))
+
         sub = self.proc.node.create_subscription(
-            interface_class(type_), topic, lambda data: got.append((time.monotonic(), len(data))),
-            qos_profile_sensor_data, raw=True,
-        )  # fmt: skip
+            interface_class(type_), topic, arrived, qos_profile_sensor_data, raw=True
+        )
         deadline = time.monotonic() + timeout
         try:
             while time.monotonic() < deadline and not enough(list(got)):
@@ -127,17 +163,16 @@ class RclpyVerbs:
 
     # -- actuation ---------------------------------------------------------------------------
     def publish(self, c: Checked, timeout: float) -> tuple[str, Any]:
-        cmd = c.command
-        name, times = cmd.name, 1 if "once" in cmd.flags else cmd.options.get("times", 1)
+        cmd, name = command_of(c), name_of(c)
+        times = 1 if "once" in cmd.flags else cmd.options.get("times", 1)
         rate = cmd.options.get("rate", 1.0)
-        message = c.message
+        message = message_of(c)
         if name == "/cmd_vel":
-            pub, cls, type_ = self._publisher()
+            pub, cls, type_ = self.teleop.publisher()
             twist = message["twist"] if type_ == STAMPED else message
-            with self._lock:
-                self._hold = None  # a command replaces what teleop held
+            self.teleop.replaced()
         else:
-            cls = interface_class(c.type)
+            cls = interface_class(interface_of(c))
             pub = self.proc.node.create_publisher(cls, name, matched_qos(self.proc, name))
         lines = []
         job = self.inflight.current(f"publish on {name}")
@@ -155,7 +190,9 @@ class RclpyVerbs:
                 if i and job.wait(1.0 / rate):
                     raise BackendError(f"{ENDED} after {i} of {times} messages")
                 msg = (
-                    self._stamped(cls, message) if name == "/cmd_vel" else to_message(cls, message)
+                    self.teleop.stamped(cls, message)
+                    if name == "/cmd_vel"
+                    else to_message(cls, message)
                 )
                 with job.sending():
                     pub.publish(msg)
@@ -169,8 +206,8 @@ class RclpyVerbs:
         return "\n".join(lines) + "\n", values
 
     def call(self, c: Checked, timeout: float) -> tuple[str, Any]:
-        name = c.command.name
-        srv = interface_class(c.type)
+        name = name_of(c)
+        srv: Any = interface_class(interface_of(c))  # generated: its Request is not typed
         request = to_message(srv.Request, c.message or {})
         client = self.proc.client(srv, name)
         lines = []
@@ -188,17 +225,18 @@ class RclpyVerbs:
 
     def send_goal(self, c: Checked, timeout: float) -> tuple[str, Any]:
         """Return at acceptance; the goal is followed to its end in the background."""
-        action = interface_class(c.type)
+        name = name_of(c)
+        action: Any = interface_class(interface_of(c))  # generated: its Goal is not typed
         goal = to_message(action.Goal, c.message or {})
-        client = ActionClient(self.proc.node, action, c.command.name)
+        client = ActionClient(self.proc.node, action, name)
         lines = ["Waiting for an action server to become available..."]
         if not client.wait_for_server(timeout_sec=timeout):
             client.destroy()
-            raise BackendError(f"no action server for {c.command.name} within {timeout:g} s")
+            raise BackendError(f"no action server for {name} within {timeout:g} s")
         lines.append(f"Sending goal:\n     {ros2cli_yaml(to_dict(goal))}")
         future = client.send_goal_async(goal)  # its feedback is not shown: it returns here
         try:
-            handle = self.proc.wait(future, timeout, f"{c.command.name} goal")
+            handle = self.proc.wait(future, timeout, f"{name} goal")
         except RosTimeout:
             client.destroy()
             raise
@@ -208,15 +246,13 @@ class RclpyVerbs:
             return "\n".join(lines) + "\n", {"accepted": False, "status": "REJECTED"}
         goal_id = bytes(handle.goal_id.uuid).hex()
         try:  # followed as a job of its own until it ends: the E-STOP cancels it
-            job = self.inflight.start(
-                f"goal {c.command.name}", handle.cancel_goal_async, c.command.name
-            )
+            job = self.inflight.start(f"goal {name}", handle.cancel_goal_async, name)
         except BackendError:
             handle.cancel_goal_async()  # the E-STOP came while it was being accepted
             raise BackendError(f"{ENDED}: the goal was accepted and canceled") from None
         lines.append(f"Goal accepted with ID: {goal_id}\n")
-        self._goals.append(handle)
-        self._last_outcome = None
+        self.goals.append(handle)
+        self.last_outcome = None
         handle.get_result_async().add_done_callback(
             lambda f: self._goal_ended(handle, client, f, job)
         )
@@ -224,27 +260,27 @@ class RclpyVerbs:
 
     def _goal_ended(self, handle: Any, client: Any, future: Any, job: Job) -> None:
         job.done()
-        if handle in self._goals:
-            self._goals.remove(handle)
+        if handle in self.goals:
+            self.goals.remove(handle)
         result = future.result()
         status = STATUS.get(result.status, "UNKNOWN") if result is not None else "UNKNOWN"
-        self._last_outcome = status.lower()
+        self.last_outcome = status.lower()
         why = getattr(result.result, "error_msg", "") if result is not None else ""
         severity = "info" if status == "SUCCEEDED" else "warning"
         self.events.add("goal", severity, f"goal finished: {status}" + (f" ({why})" if why else ""))
         client.destroy()
 
     def cancel_goals(self) -> None:
-        for handle in list(self._goals):
+        for handle in list(self.goals):
             handle.cancel_goal_async()
 
     # -- parameters ----------------------------------------------------------------------------
     def list_params(self, named: str | None, timeout: float) -> list[tuple[str, str, str]]:
         # asked of each node now, as ros2cli does (ros2param/verb/list.py)
-        served = {n for n, _ in self._lists["service"]}
-        nodes = [n for n, _ in self._lists["node"] if f"{n}/list_parameters" in served]
+        served = {n for n, _ in self.live.lists["service"]}
+        nodes = [n for n, _ in self.live.lists["node"] if f"{n}/list_parameters" in served]
         read = read_params(self.proc, [named] if named else nodes, timeout)
-        return [(*key.split(" ", 1), type_) for key, type_ in read]
+        return [(*_node_and_name(key), type_) for key, type_ in read]
 
     def get_param(self, node: str, param: str, timeout: float) -> Any:
         from rcl_interfaces.srv import GetParameters
@@ -281,3 +317,9 @@ class RclpyVerbs:
             if "is not served" in str(exc):
                 raise BackendError(f"{name.rsplit('/', 1)[0]}: node not found") from None
             raise
+
+
+def _node_and_name(key: str) -> tuple[str, str]:
+    """ "/node name", as graph.read_params keys a parameter."""
+    node, name = key.split(" ", 1)
+    return node, name

@@ -20,6 +20,7 @@ from collections.abc import Callable
 from typing import Any
 
 from rclpy.serialization import deserialize_message
+from rclpy.subscription import Subscription
 
 from astiop.ros2.message_objects import MessageTypeError, interface_class, to_dict
 from astiop.ros2.transforms import STALE_S, TransformTable
@@ -39,7 +40,7 @@ class TopicWatch:
         proc: RosProcess,
         name: str,
         type_: str,
-        on_message: Callable | None = None,
+        on_message: Callable[[str, Any], None] | None = None,
         polled: bool = False,
     ):
         self.name, self.type, self.polled = name, type_, polled
@@ -54,6 +55,7 @@ class TopicWatch:
         self._on_message = on_message
         self._proc = proc
         self._take_lock = threading.Lock()  # the poller or a reader
+        self._sub: Subscription | None
         if polled:
             qos = matched_qos(proc, name, POLLED_DEPTH)
             self._sub = proc.node.create_subscription(
@@ -155,7 +157,12 @@ class TopicWatch:
             self._proc.node.destroy_subscription(sub)
 
 
-def watch(proc: RosProcess, name: str, type_: str, on_message=None) -> TopicWatch | None:
+def watch(
+    proc: RosProcess,
+    name: str,
+    type_: str,
+    on_message: Callable[[str, Any], None] | None = None,
+) -> TopicWatch | None:
     """A polled watch on the topic, or None when its type is not importable here."""
     try:
         return TopicWatch(proc, name, type_, on_message, polled=True)
@@ -181,7 +188,9 @@ class TransformWatch(TopicWatch):
         return self.table.message(time.monotonic())
 
 
-def watch_transforms(proc: RosProcess, name: str, type_: str, static: bool):
+def watch_transforms(
+    proc: RosProcess, name: str, type_: str, static: bool
+) -> TransformWatch | None:
     try:
         return TransformWatch(proc, name, type_, static)
     except MessageTypeError:

@@ -144,8 +144,8 @@ class ReplayBackend(RobotBackend):
             )
             self._events.append(RobotEvent(1, recording.start_ns / 1e9, "replay", "warning", cut))
         ch = recording.channels.get("/astiop/events")
-        for i, t_ns in enumerate(ch.times if ch else ()):
-            ev = ch.message(i)
+        logged = [(t_ns, ch.message(i)) for i, t_ns in enumerate(ch.times)] if ch else []
+        for t_ns, ev in logged:
             self._events.append(
                 RobotEvent(
                     len(self._events) + 1,
@@ -161,8 +161,8 @@ class ReplayBackend(RobotBackend):
         """The recorded missions' progress (start, each step's end, end) among the events, in
         the order it happened."""
         ch = recording.channels.get("/astiop/mission")
-        for i, t_ns in enumerate(ch.times if ch else ()):
-            rec = ch.message(i)
+        logged = [(t_ns, ch.message(i)) for i, t_ns in enumerate(ch.times)] if ch else []
+        for t_ns, rec in logged:
             bad = rec.get("status") not in (None, "succeeded", "skipped", "replaced")
             seq = len(self._events) + 1
             text = str(rec.get("text", ""))

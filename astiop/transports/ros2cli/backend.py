@@ -9,22 +9,25 @@ from __future__ import annotations
 import shutil
 import threading
 import time
+from collections.abc import Callable
 from typing import Any
 
+from astiop.ros2.catalog import Catalog
 from astiop.ros2.grammar import current_distro
 from astiop.ros2.profile import ProfileSpec
 from astiop.ros2.transforms import STALE_S, TransformTable
+from astiop.ros2.validation import Checked
 from astiop.transports import live_robot
 from astiop.transports.base import BackendError, RobotBackend
-from astiop.transports.event_log import Contact, EstopWork, EventLog
+from astiop.transports.event_log import Contact, EventLog
 from astiop.transports.inflight import InFlight, Job
-from astiop.transports.live_catalog import nothing_listed
+from astiop.transports.live_catalog import LiveGraph, nothing_listed
 from astiop.transports.live_robot import without_finished_plan
 from astiop.transports.ros2cli import process as ros2_process
 from astiop.transports.ros2cli.commands import CliCommands
 from astiop.transports.ros2cli.estop import CliEstop
 from astiop.transports.ros2cli.graph import GraphReader
-from astiop.transports.ros2cli.motion import STDIN_DISTROS, ArmedStop, TeleopPublisher
+from astiop.transports.ros2cli.motion import STDIN_DISTROS, TeleopPublisher
 from astiop.transports.ros2cli.streams import TopicStream, parse_document
 from astiop.transports.state import (
     GOAL_STATUS,
@@ -44,7 +47,7 @@ DISCOVERY_YOUNG_S = 10.0  # a process this young may not have the whole robot in
 NO_GOAL_AFTER_S = 5.0  # a latched goal status echoed this long and none came: no goal yet
 
 
-class Ros2Backend(CliEstop, CliCommands, RobotBackend):
+class Ros2Backend(RobotBackend):
     name = "ros2"
 
     def __init__(
@@ -76,33 +79,54 @@ class Ros2Backend(CliEstop, CliCommands, RobotBackend):
         self._streams: dict[str, TopicStream] = {}
         self._goal_stream_at: float | None = None  # when the goal status echo started
         self._transforms: dict[str, TransformTable] = {}  # /tf, /tf_static: fed by one stream each
-        self._goal_procs: list[Any] = []
-        self._last_outcome: str | None = None
         self._map: OccupancyGrid | None = None
         self._teleop: TeleopPublisher | None = None
-        self._armed: ArmedStop | None = None
         self.t0 = time.monotonic()
         self.events = EventLog(self.t0)
-        self._estop = EstopWork(self.events)
-        self._contact = Contact(self.events, on_return=self._rearm)
         self._closed = threading.Event()
-        self._fixed = fixed or ProfileSpec()  # what the operator fixed: a file, a namespace
-        self._graph = GraphReader(self._run, timeout_s, self._fixed)
-        self.discovered = discover
-        self.catalog = self._graph.read() if discover else self._graph.describe(nothing_listed())
+        fixed = fixed or ProfileSpec()  # what the operator fixed: a file, a namespace
+        self._graph = GraphReader(self._run, timeout_s, fixed)
+        catalog = self._graph.read() if discover else self._graph.describe(nothing_listed())
+        self._live = LiveGraph(catalog, fixed)
+        self._live.discovered = discover
         self.refreshed_at = time.monotonic()
+        self._commands = CliCommands(self._run, path, self.inflight, self.events)
+        self._estop = CliEstop(self._run, self._live, self.inflight, self.events, timeout_s)
+        # the robot back: the E-STOP's armed publisher may have ended with it
+        self._contact = Contact(self.events, on_return=self._estop.rearm)
 
     # -- the live graph -----------------------------------------------------------------
-    def _name(self, role: str, default: str = "") -> str:
-        """The robot's name for `role` (its profile); before the graph is read, `default` under
-        the robot's namespace ("" for a role without a conventional name)."""
-        name = self.catalog.profile.name(role) if self.catalog.profile else None
-        return name or (self._fixed.namespace + default if default else "")
+    @property
+    def catalog(self) -> Catalog:
+        return self._live.catalog
 
-    def _run(self, argv: list[str], timeout: float, **kw) -> ros2_process.Run:
+    @catalog.setter
+    def catalog(self, catalog: Catalog) -> None:
+        self._live.catalog = catalog
+
+    @property
+    def discovered(self) -> bool:
+        """Whether the robot's graph was read (an E-STOP from a new process does not wait)."""
+        return self._live.discovered
+
+    def _name(self, role: str, default: str = "") -> str:
+        return self._live.name(role, default)
+
+    def _run(
+        self,
+        argv: list[str],
+        timeout: float,
+        *,
+        until: Callable[[str], bool] | None = None,
+        cancel: threading.Event | None = None,
+        cancellable: Callable[[str], bool] | None = None,
+    ) -> ros2_process.Run:
         """`ros2 ARGV`; inside an actuating command's job, the E-STOP kills it."""
         job = self.inflight.current_job()
-        return ros2_process.run(self.executable, argv, timeout, job=job, **kw)
+        return ros2_process.run(
+            self.executable, argv, timeout,
+            until=until, job=job, cancel=cancel, cancellable=cancellable,
+        )  # fmt: skip
 
     def discovering(self) -> bool:
         # a new process's first lists (the daemon's, or a fresh discovery) may be partial
@@ -115,7 +139,7 @@ class Ros2Backend(CliEstop, CliCommands, RobotBackend):
             self.catalog = self._graph.describe(self._graph.lists())
         except BackendError:
             return False
-        self.refreshed_at, self.discovered = time.monotonic(), True
+        self.refreshed_at, self._live.discovered = time.monotonic(), True
         return True
 
     def _refresh_loop(self) -> None:
@@ -129,10 +153,9 @@ class Ros2Backend(CliEstop, CliCommands, RobotBackend):
             self._teleop = TeleopPublisher(
                 self.executable, cmd_vel.name, cmd_vel.type, on_lapse=self._teleop_lapsed
             )
+            self._estop.teleop = self._teleop  # the E-STOP halts it
             if self.distro in STDIN_DISTROS:
-                self._armed = ArmedStop(self.executable, cmd_vel.name, cmd_vel.type)
-                if not self.inflight.held:
-                    self._armed.arm()
+                self._estop.arm(self.executable, cmd_vel.name, cmd_vel.type)
         if not self.stream:
             return
         # odometry only when it is the pose (50 Hz of YAML costs more than it tells)
@@ -163,10 +186,8 @@ class Ros2Backend(CliEstop, CliCommands, RobotBackend):
         self._streams.clear()
         if self._teleop is not None:
             self._teleop.close()
-        if self._armed is not None:
-            self._armed.disarm()
-        for proc in list(self._goal_procs):
-            ros2_process.stop(proc, 3.0)  # the client cancels its goal
+        self._estop.close()
+        self._commands.close()
 
     # -- live state -----------------------------------------------------------------------
     def _on_message(self, name: str, msg: dict[str, Any], received: float) -> None:
@@ -207,11 +228,6 @@ class Ros2Backend(CliEstop, CliCommands, RobotBackend):
         """Seconds since the robot was last heard, when it is lost (said once, as is its
         return)."""
         return self._contact.check([s.age(now) for s in self._streams.values()])
-
-    def _rearm(self) -> None:
-        """The robot is back: the E-STOP's armed publisher may have ended with it."""
-        if self._armed is not None and not self.inflight.held:
-            self._armed.arm()
 
     def messages(self, names) -> dict[str, dict[str, Any]]:
         with self._lock:
@@ -260,10 +276,30 @@ class Ros2Backend(CliEstop, CliCommands, RobotBackend):
         return live_robot.wait_until_idle(
             timeout_s,
             lost=lambda: self._lost_for(time.monotonic()) is not None,
-            goals_running=lambda: bool(self._goal_procs),
+            goals_running=lambda: bool(self._commands.goal_procs),
             state=state,
-            outcome=lambda: self._last_outcome,
+            outcome=lambda: self._commands.last_outcome,
         )
+
+    # -- commands and the E-STOP (ros2cli/commands.py, ros2cli/estop.py) ------------------
+    def execute(self, checked: Checked, timeout: float) -> tuple[str, Any]:
+        return self._commands.execute(checked, timeout)
+
+    def cancel_goals(self) -> None:
+        self._commands.cancel_goals()
+
+    @property
+    def e_stopped(self) -> bool:
+        return self.inflight.held
+
+    def estop(self) -> list[str]:
+        return self._estop.estop()
+
+    def settle_estop(self, timeout_s: float) -> list[str]:
+        return self._estop.settle(timeout_s)
+
+    def release_estop(self, *, robot: bool = True) -> list[str]:
+        return self._estop.release(robot=robot)
 
     # -- teleop ---------------------------------------------------------------------------
     def drive(self, twist: dict) -> None:

@@ -4,9 +4,10 @@ sample of a topic, a goal followed to its end), and the goals' clients stopped."
 from __future__ import annotations
 
 import re
+import subprocess
 import threading
-from contextlib import AbstractContextManager
-from typing import TYPE_CHECKING, Any, Protocol
+from collections.abc import Callable
+from typing import Any
 
 from astiop.ros2.interfaces import decode_bytes
 from astiop.ros2.printing import echo_text
@@ -14,10 +15,11 @@ from astiop.ros2.render import sent_argv
 from astiop.ros2.validation import Checked
 from astiop.ros2.verbs import VERBS
 from astiop.ros2.verbs.base import CALL, GOAL, SAMPLE, TAKE
-from astiop.transports.base import BackendError
+from astiop.transports.base import BackendError, actuating, command_of
 from astiop.transports.event_log import EventLog
-from astiop.transports.inflight import ENDED, InFlight, Job
+from astiop.transports.inflight import ENDED, InFlight
 from astiop.transports.ros2cli import process as ros2_process
+from astiop.transports.ros2cli.process import RunRos2
 from astiop.transports.ros2cli.replies import (
     FAILED_WITH_STATUS_0,
     parse_response,
@@ -26,30 +28,25 @@ from astiop.transports.ros2cli.replies import (
 )
 from astiop.transports.ros2cli.streams import parse_document
 
-
-class CliCommandsHost(Protocol):
-    """What `CliCommands` needs of the backend it is mixed into."""
-
-    executable: str
-    inflight: InFlight
-    events: EventLog
-    _goal_procs: list[Any]
-    _last_outcome: str | None
-
-    def actuating(self, checked: Checked) -> AbstractContextManager[Job | None]: ...
-
-    def _run(self, argv: list[str], timeout: float, **kw) -> ros2_process.Run: ...
+Means = Callable[[Checked, list[str], float], tuple[str, Any]]  # how a verb's work is done
 
 
-if TYPE_CHECKING:
-    _Host = CliCommandsHost
-else:
-    _Host = object
+class CliCommands:
+    """The checked commands run through `run` (`ros2 ARGV`); the goals' clients this process
+    started, followed to their end, and how the last goal ended."""
 
+    def __init__(self, run: RunRos2, executable: str, inflight: InFlight, events: EventLog):
+        self._run = run
+        self.executable = executable  # a goal's client is spawned here, not through `run`
+        self.inflight = inflight
+        self.events = events
+        self.goal_procs: list[subprocess.Popen[str]] = []  # the goals' clients still running
+        self.last_outcome: str | None = None  # how the last goal ended ("succeeded", ...)
 
-class CliCommands(_Host):
     def execute(self, checked: Checked, timeout: float) -> tuple[str, Any]:
-        with self.actuating(checked) as job:  # refused while the E-STOP holds, ended by it
+        with actuating(
+            self.inflight, checked
+        ) as job:  # refused while the E-STOP holds, ended by it
             try:
                 return self._execute(checked, timeout)
             except BackendError:
@@ -58,13 +55,14 @@ class CliCommands(_Host):
                 raise
 
     def _execute(self, checked: Checked, timeout: float) -> tuple[str, Any]:
-        verb = VERBS[checked.command.key]
-        means = {TAKE: self._echo, SAMPLE: self._sample, GOAL: self._send_goal}
+        verb = VERBS[command_of(checked).key]
+        means: dict[str, Means] = {TAKE: self._echo, SAMPLE: self._sample, GOAL: self._send_goal}
         return means.get(verb.means, self._once)(checked, sent_argv(checked), timeout)
 
     def _once(self, checked: Checked, argv: list[str], timeout: float) -> tuple[str, Any]:
         """A verb ros2 ends by itself: a query, a publish, a service call."""
-        cmd, verb = checked.command, VERBS[checked.command.key]
+        cmd = command_of(checked)
+        verb = VERBS[cmd.key]
         if verb.lasts is not None:  # never stop what validation allowed to run this long
             timeout += verb.lasts(cmd)
         run = self._run(argv, timeout)
@@ -85,7 +83,7 @@ class CliCommands(_Host):
             return run.out, values
         return run.out, None
 
-    def _echo(self, checked: Checked, argv: list[str], timeout: float):
+    def _echo(self, checked: Checked, argv: list[str], timeout: float) -> tuple[str, Any]:
         # the robot is asked for whole values; the operator's display options (-l, --no-arr,
         # --no-str) shape only the text, made here from those values by echo_text
         argv = without_display_options(argv)
@@ -93,55 +91,63 @@ class CliCommands(_Host):
             argv.append("--once")
         argv.append("--full-length")
         run = self._run(argv, timeout, until=lambda out: "\n---" in out)
+        cmd = command_of(checked)
         doc = parse_document(run.out.split("\n---", 1)[0].splitlines(keepends=True))
         if doc is None:
             if run.stopped:
-                raise BackendError(f"no reading from {checked.command.name} in {timeout:g} s")
-            raise BackendError(run.err.strip()[:300] or f"no reading from {checked.command.name}")
-        doc = decode_bytes(checked.type, doc)
-        return echo_text(doc, checked.command), doc
+                raise BackendError(f"no reading from {cmd.name} in {timeout:g} s")
+            raise BackendError(run.err.strip()[:300] or f"no reading from {cmd.name}")
+        if checked.type is not None:  # a checked echo has its topic's type
+            doc = decode_bytes(checked.type, doc)
+        return echo_text(doc, cmd), doc
 
-    def _sample(self, checked: Checked, argv: list[str], timeout: float):
+    def _sample(self, checked: Checked, argv: list[str], timeout: float) -> tuple[str, Any]:
         """A verb ros2 runs until stopped (hz, bw): read until the verb has enough of it."""
-        verb = VERBS[checked.command.key]
+        cmd = command_of(checked)
+        verb = VERBS[cmd.key]
+        if verb.read is None:
+            raise BackendError(f"ros2 {verb.name}: astiop does not read what it prints")
         run = self._run(argv, timeout, until=verb.enough)
         values = verb.read(run.out)
         if values is None:
-            raise verb.nothing_came(checked.command.name, timeout)
+            raise verb.nothing_came(cmd.name or "", timeout)
         return run.out, values
 
-    def _send_goal(self, checked: Checked, argv: list[str], timeout: float):
+    def _send_goal(self, checked: Checked, argv: list[str], timeout: float) -> tuple[str, Any]:
         """Return at acceptance; the client keeps running and is followed to the end."""
+        name = command_of(checked).name or ""
         result = ros2_process.Run(argv)  # filled by the follower thread
         # a job of its own for the goal's life: the E-STOP stops its client, which cancels it
-        goal = self.inflight.start(f"goal {checked.command.name}", name=checked.command.name)
+        goal = self.inflight.start(f"goal {name}", name=name)
         try:  # SIGINT, not a kill: its client cancels the goal on the robot
             proc = ros2_process.spawn_owned(self.executable, argv, goal, _stop_in_background)
         except BackendError:
             goal.done()
             raise
         accepted = threading.Event()
+        stdout = proc.stdout
+        assert stdout is not None  # spawn() pipes it
 
         def follow() -> None:
-            for line in proc.stdout:
+            for line in stdout:
                 result.stdout.append(line)
                 if "Goal accepted" in line or "Goal was rejected" in line:
                     accepted.set()
                 m = re.match(r"Goal finished with status: (\w+)", line)
                 if m:
-                    self._last_outcome = m[1].lower()
+                    self.last_outcome = m[1].lower()
                     self.events.add("goal", "info", f"goal finished: {m[1]}")
                 elif line.startswith("Goal canceled."):
-                    self._last_outcome = "canceled"
+                    self.last_outcome = "canceled"
                     self.events.add("goal", "warning", "goal canceled")
             proc.wait()
             goal.done()
             accepted.set()
-            if proc in self._goal_procs:
-                self._goal_procs.remove(proc)
+            if proc in self.goal_procs:
+                self.goal_procs.remove(proc)
 
-        self._goal_procs.append(proc)
-        self._last_outcome = None
+        self.goal_procs.append(proc)
+        self.last_outcome = None
         threading.Thread(target=follow, name="send_goal", daemon=True).start()
         if not accepted.wait(timeout):
             ros2_process.stop(proc, 3.0)
@@ -153,10 +159,16 @@ class CliCommands(_Host):
         return out, {"accepted": True, "goal_id": m[1], "status": "ACCEPTED"}
 
     def cancel_goals(self) -> None:
-        for proc in list(self._goal_procs):
+        """SIGINT each goal's client (it cancels its goal), without waiting for it to end."""
+        for proc in list(self.goal_procs):
             _stop_in_background(proc)
 
+    def close(self) -> None:
+        """Each goal's client stopped, waited for (it cancels its goal on the robot)."""
+        for proc in list(self.goal_procs):
+            ros2_process.stop(proc, 3.0)
 
-def _stop_in_background(proc) -> None:
+
+def _stop_in_background(proc: subprocess.Popen[str]) -> None:
     """SIGINT a goal's client (it cancels the goal), then harder, without waiting here."""
     threading.Thread(target=ros2_process.stop, args=(proc, 3.0), daemon=True).start()

@@ -77,6 +77,7 @@ class TeleopPublisher:
 
     def _drain(self, proc: subprocess.Popen) -> None:
         """Read what pub prints (a full pipe would block it) and note when it publishes."""
+        assert proc.stdout is not None  # spawn() pipes it
         for line in proc.stdout:
             if line.startswith("publisher: beginning loop"):
                 with self._lock:
@@ -128,7 +129,7 @@ class ArmedStop:
     def fire(self) -> subprocess.Popen | None:
         """Send the zero Twist now; None if no armed publisher was alive."""
         proc, self._proc = self._proc, None
-        if proc is None or proc.poll() is not None:
+        if proc is None or proc.poll() is not None or proc.stdin is None:
             return None
         try:
             proc.stdin.write(flow_yaml(self.zero) + "\n")

@@ -13,6 +13,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Protocol
 
 from astiop.transports.errors import BackendError
 from astiop.transports.inflight import Job
@@ -35,6 +36,21 @@ class Run:
     @property
     def err(self) -> str:
         return "".join(self.stderr)
+
+
+class RunRos2(Protocol):
+    """`ros2 ARGV` run as `run` runs it, the executable and the current job given (the
+    backend's `_run`): what the transport's helpers are handed."""
+
+    def __call__(
+        self,
+        argv: list[str],
+        timeout: float,
+        *,
+        until: Callable[[str], bool] | None = None,
+        cancel: threading.Event | None = None,
+        cancellable: Callable[[str], bool] | None = None,
+    ) -> Run: ...
 
 
 def spawn(executable: str, argv: list[str], *, stdin: bool = False) -> subprocess.Popen:

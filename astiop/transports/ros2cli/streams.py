@@ -7,6 +7,7 @@ never a process per sample; a stream that dies is restarted with back-off and sa
 from __future__ import annotations
 
 import re
+import subprocess
 import threading
 import time
 from collections import deque
@@ -65,7 +66,7 @@ class TopicStream:
         self.received: deque[float] = deque(maxlen=200)  # monotonic receive times
         self.restarts = 0
         self._stop = threading.Event()
-        self._proc = None
+        self._proc: subprocess.Popen[str] | None = None
         self._thread = threading.Thread(target=self._loop, name=f"echo{name}", daemon=True)
 
     def start(self) -> TopicStream:
@@ -85,15 +86,15 @@ class TopicStream:
             argv = ["topic", "echo", self.name, self.type, *self.extra]
             started = time.monotonic()
             try:
-                self._proc = ros2_process.spawn(self.executable, argv)
+                proc = self._proc = ros2_process.spawn(self.executable, argv)
             except Exception as exc:  # noqa: BLE001 - reported, then retried
                 self.on_event("stream", "error", f"cannot start echo of {self.name}: {exc}")
             else:
-                self._read(self._proc)
-                rc = self._proc.wait()
+                self._read(proc)
+                rc = proc.wait()
                 if self._stop.is_set():
                     return
-                err = (self._proc.stderr.read() or "").strip().splitlines()
+                err = (proc.stderr.read() if proc.stderr else "").strip().splitlines()
                 why = err[-1][:200] if err else f"exit status {rc}"
                 self.on_event("stream", "warning", f"echo of {self.name} stopped ({why})")
             if time.monotonic() - started > 30:
@@ -104,8 +105,9 @@ class TopicStream:
             if self._stop.wait(delay):
                 return
 
-    def _read(self, proc) -> None:
+    def _read(self, proc: subprocess.Popen[str]) -> None:
         lines: list[str] = []
+        assert proc.stdout is not None  # spawn() pipes it
         for line in proc.stdout:
             if line.rstrip("\n") == "---":
                 doc = parse_document(lines)

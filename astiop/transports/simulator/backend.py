@@ -9,17 +9,20 @@ from typing import Any
 
 from astiop.ros2.catalog import Catalog, astibot_catalog
 from astiop.ros2.interfaces import default_value
+from astiop.ros2.validation import Checked
+from astiop.ros2.verbs import VERBS
+from astiop.ros2.verbs.transport import Transport
 from astiop.sim import messages as sm
 from astiop.sim.runner import SimRunner
 from astiop.sim.simulator import GoalError, Simulator
-from astiop.store import Store
-from astiop.transports.base import BackendError, RobotBackend
+from astiop.store import LocationError, Store
+from astiop.transports.base import BackendError, RobotBackend, command_of
 from astiop.transports.inflight import InFlight
 from astiop.transports.simulator.verbs import SimVerbs
 from astiop.transports.state import RobotEvent, RobotState, TopicStat, from_messages
 
 
-class SimBackend(SimVerbs, RobotBackend):
+class SimBackend(RobotBackend):
     name = "sim"
 
     def __init__(
@@ -48,6 +51,7 @@ class SimBackend(SimVerbs, RobotBackend):
         self._samples: dict[str, deque] = {}
         self._plan_count = 0
         self._plan_last_t = -math.inf
+        self.verbs = SimVerbs(self)  # what the verbs run on (ros2/verbs/transport.py)
 
     # -- lifecycle, e-stop -----------------------------------------------------------
     def start(self) -> None:
@@ -71,6 +75,81 @@ class SimBackend(SimVerbs, RobotBackend):
         self.inflight.release()
         self.sim.release()  # the E-STOP and a latched /stop: the operator's release is both
         return []
+
+    # -- commands and services ------------------------------------------------------
+    def execute(
+        self, checked: Checked, timeout: float = 10.0, on: Transport | None = None
+    ) -> tuple[str, Any]:
+        """`on`: what the verb runs on, if not this simulator alone (a robot program's view)."""
+        cmd = command_of(checked)
+        if checked.kind == "actuate" and self.sim.e_stopped and cmd.name != "/stop":
+            raise BackendError("the E-STOP is engaged: nothing was sent")
+        try:
+            with self.actuating(checked):  # refused while the E-STOP holds, ended by it
+                return VERBS[cmd.key].run(on or self.verbs, checked, timeout)
+        except (GoalError, LocationError) as exc:
+            raise BackendError(str(exc)) from None
+        except BackendError:
+            raise
+        except Exception as exc:  # the simulator must never take the caller down
+            raise BackendError(f"the simulator failed: {type(exc).__name__}: {exc}") from None
+
+    def serve(self, name: str, req: dict) -> dict:
+        sim = self.sim
+        if name == "/list_locations":
+            locs = self.store.list_locations() if self.store else []
+            return {
+                "names": [loc.name for loc in locs],
+                "poses": [{"x": loc.x, "y": loc.y, "theta": loc.theta} for loc in locs],
+            }
+        try:
+            if name == "/goto_position":
+                if req["name"]:
+                    x, y, th, label = self._named_pose(req["name"])
+                else:
+                    x, y, th, label = req["x"], req["y"], req["theta"], ""
+                goal = sim.goto(x, y, th, label)
+                dist = goal.distance_remaining(*sim.pose[:2])
+                return {
+                    "success": True,
+                    "message": f"navigating to {goal.name}, {dist:.1f} m along the path",
+                }
+            if name == "/stop":
+                return {"success": True, "message": sim.stop()}
+            if name == "/release":
+                return {"success": True, "message": sim.release()}
+            if name == "/dock":
+                sim.dock()
+                return {"success": True, "message": "docking"}
+            if name == "/undock":
+                sim.undock()
+                return {"success": True, "message": "undocking"}
+            if name in ("/conveyor/load", "/conveyor/unload"):
+                return {
+                    "success": True,
+                    "message": sim.conveyor_transfer(1 if name.endswith("/load") else -1),
+                }
+            if name == "/save_location":
+                if self.store is None:
+                    return {"success": False, "message": "no location store is attached"}
+                x, y, th = sim.pose
+                loc = self.store.add_location(req["name"], x, y, th, req["description"])
+                return {
+                    "success": True,
+                    "message": f"saved {loc.name} at ({loc.x:.2f}, {loc.y:.2f})",
+                }
+        except (GoalError, LocationError) as exc:
+            return {"success": False, "message": str(exc)}
+        raise BackendError(f"the simulator does not serve {name}")
+
+    def _named_pose(self, name: str) -> tuple[float, float, float, str]:
+        if self.store is not None:
+            loc = self.store.require_location(name)
+            return loc.x, loc.y, loc.theta, loc.name
+        st = self.sim.map.station(name)
+        if st is None:
+            raise LocationError(f"no location named '{name}'")
+        return (*st.pose, st.name)
 
     # -- live state -------------------------------------------------------------------
     def robot_time(self) -> float:
@@ -210,7 +289,9 @@ class SimBackend(SimVerbs, RobotBackend):
             out[name] = message
         return out
 
-    def _wait_for_message(self, name: str, timeout: float) -> dict[str, Any]:
+    def next_message(self, name: str, timeout: float) -> dict[str, Any]:
+        """The topic's next message, at its next publication on the simulator's clock (a latched
+        topic's, or /plan's: the one it last published)."""
         spec = self.catalog.topics[name]
         if spec.rate_hz == 0 or name == "/plan":
             if name == "/plan" and self.sim.goal is None:
