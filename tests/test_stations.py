@@ -187,7 +187,7 @@ def test_a_database_that_cannot_be_written_never_keeps_the_stop_from_the_robot(t
             assert out.returncode == 1, out.stdout + out.stderr
             assert "not latched in the database" in out.stderr, out.stderr
             assert "E-STOP engaged" in out.stdout and "latched" not in out.stdout, out.stdout
-            assert took < 30, took
+            assert took < 60, took  # never the busy timeout (10 s) per write, over and over
     finally:
         if holder is not None:
             holder.rollback()
