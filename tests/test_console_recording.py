@@ -23,7 +23,7 @@ async def test_a_failing_robot_read_is_said_once_in_the_console_and_recording_go
     path = tmp_path / "console.mcap"
     app = console(tmp_path, record=path)
     async with app.run_test(size=SIZE) as pilot:
-        gateway, recorder = app.services.gateway, app.recorder
+        gateway, recorder = app.services.gateway, app.recording.recorder
         await wait_for(pilot, lambda: "/robot_pose" in recorder.counts)
         calls = []
 
@@ -53,7 +53,7 @@ async def test_the_console_lets_the_robot_go_even_when_its_recording_cannot_be_f
     monkeypatch.setattr(gateway, "close", lambda: (closed.append(True), close()))
     with pytest.raises(RecordingError, match="cannot finish"):
         async with app.run_test(size=SIZE) as pilot:
-            recorder = app.recorder
+            recorder = app.recording.recorder
             await wait_for(pilot, lambda: "/robot_pose" in recorder.counts)
             recorder._file.close()  # the file is gone from under the recording
     assert closed == [True]

@@ -380,13 +380,13 @@ async def test_the_console_records_the_session_and_stops_from_the_palette(tmp_pa
     path = tmp_path / "console.mcap"
     app = console(tmp_path, record=path)
     async with app.run_test(size=SIZE) as pilot:
-        assert app.recorder is not None and "REC" in app.sub_title
+        assert app.recording.recorder is not None and "REC" in app.sub_title
         sim_of(app).step(2.0)  # the robot's clock moves on: new messages to record
-        recorder = app.recorder
+        recorder = app.recording.recorder
         await wait_for(pilot, lambda: {"/robot_pose", "/battery_status"} <= recorder.counts.keys())
         stop = next(c for c in app.get_system_commands(app.screen) if c.title == "Stop recording")
         stop.callback()
-        assert app.recorder is None
+        assert app.recording.recorder is None
         assert "Start recording" in [c.title for c in app.get_system_commands(app.screen)]
     counts = summary(path)
     assert counts.get("/robot_pose", 0) >= 1 and counts.get("/battery_status", 0) >= 1
