@@ -23,7 +23,7 @@ from astiop.store import LocationError, Store, StoreError
 from astiop.transports.simulator.backend import SimBackend
 from tests.cli_runner import run_cli
 from tests.scripted_llm import ScriptedLLM
-from tests.test_agent import make_agent
+from tests.unit.test_agent import make_agent
 from tests.unprivileged import astiop_unprivileged, reachable_folder, run_unprivileged
 
 TWIST = "ros2 topic pub --once /cmd_vel geometry_msgs/msg/Twist"

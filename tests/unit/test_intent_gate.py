@@ -10,7 +10,7 @@ from astiop.ros2.catalog import astibot_catalog
 from astiop.ros2.validation import validate
 from astiop.store import Store
 from benchmarks.agent_requests import load_requests, run_one
-from tests.test_rules import GOTO, LOCS
+from tests.unit.test_rules import GOTO, LOCS
 
 PLACES = {
     "charging_dock": (2.5, 3.0),

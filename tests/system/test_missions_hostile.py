@@ -27,7 +27,7 @@ from astiop.store import Store
 from astiop.store.leases import LEASE_TTL_S
 from tests.cli_runner import run_cli
 from tests.ros import until
-from tests.test_missions import at, gateway_for, places, wait_for_step
+from tests.system.test_missions import at, gateway_for, places, wait_for_step
 
 YES = lambda _c: True  # noqa: E731
 PLACES = {"shipping": (0.0, 0.0), "inspection_zone_a": (1.0, 0.0), "assembly_station": (2.0, 0.0)}

@@ -19,7 +19,7 @@ from astiop.ros2.transforms import (
     yaw_of,
 )
 from astiop.transports.state import from_messages
-from tests.test_profile import tb3_graph
+from tests.unit.test_profile import tb3_graph
 
 HALF_PI = math.pi / 2
 

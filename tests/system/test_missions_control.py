@@ -16,7 +16,7 @@ from astiop.missions.runner import MissionError, MissionRunner
 from astiop.missions.steps import Step
 from astiop.store import Store
 from tests.cli_runner import run_cli
-from tests.test_missions import at, gateway_for, places, wait_for_step
+from tests.system.test_missions import at, gateway_for, places, wait_for_step
 
 YES = lambda _c: True  # noqa: E731
 
@@ -273,7 +273,7 @@ def test_the_cli_pauses_resumes_and_replaces_a_mission_another_runner_drives(tmp
 def test_mcp_start_mission_replaces_only_with_replace_and_the_approval_says_so(tmp_path):
     from astiop.mcp.approval import Policy
     from astiop.mcp.tools import CALL, Call, Refused, RobotTools
-    from tests.test_mcp import Console
+    from tests.system.test_mcp import Console
 
     db = tmp_path / "mcp.db"
     store = Store(db)

@@ -1,6 +1,6 @@
 """`astiop serve` as a browser meets it, without the browser: a console per websocket and none
 without the token, the page's origin checked, the E-STOP button, every process gone with its tab.
-(tests/test_serve_browser.py drives the same server from headless Chromium.)"""
+(tests/browser/test_serve_browser.py drives the same server from headless Chromium.)"""
 
 from __future__ import annotations
 

@@ -14,8 +14,8 @@ from astiop.robot.factory import make_robot_gateway
 from astiop.store import Store
 from tests.emulator import emulated_robot, on_path
 from tests.ros import require_ros, sim_node, whole_robot
-from tests.test_ros2_emulated import make_gateway
-from tests.test_ros2_rclpy import settings
+from tests.ros.test_ros2_emulated import make_gateway
+from tests.ros.test_ros2_rclpy import settings
 
 pytestmark = pytest.mark.slow
 STEPS = [Step("undock"), Step("goto", place="inspection_zone_a"), Step("dock")]

@@ -46,7 +46,7 @@ async def test_escape_cancels_the_running_mission(tmp_path):
 
 
 async def test_the_console_asks_once_for_the_whole_mission_every_step_shown(tmp_path):
-    from tests.test_tui_approvals import asked
+    from tests.console.test_tui_approvals import asked
 
     app = console(tmp_path)  # confirmation on, as shipped
     async with app.run_test(size=SIZE) as pilot:
@@ -76,7 +76,7 @@ def answers(app) -> str:
 async def test_a_new_mission_while_one_runs_asks_whether_to_replace_it(tmp_path):
     from textual.widgets import Input
 
-    from tests.test_tui_approvals import asked
+    from tests.console.test_tui_approvals import asked
 
     app = console(tmp_path, settings=NO_ASKING)  # replacing is asked even so
     async with app.run_test(size=SIZE) as pilot:

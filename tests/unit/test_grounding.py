@@ -14,7 +14,7 @@ from astiop.sim.simulator import Simulator
 from astiop.transports.base import Execution
 from astiop.transports.simulator.backend import SimBackend
 from tests.scripted_llm import ScriptedLLM
-from tests.test_agent import make_agent
+from tests.unit.test_agent import make_agent
 
 READ = "ros2 topic echo {} --once"
 

@@ -74,7 +74,7 @@ def test_fleet_questions_are_answered_from_what_each_robot_reported():
 
 def test_the_gate_refuses_a_plan_that_touches_another_robot():
     from astiop.ros2.grammar import parse
-    from tests.test_profile import tb3_graph
+    from tests.unit.test_profile import tb3_graph
 
     graph, two = tb3_graph("/tb3_1"), tb3_graph("/tb3_2")
     graph.topics.update(two.topics)

@@ -271,7 +271,7 @@ def test_a_robot_with_no_battery_reading_says_so_when_asked(monkeypatch, tmp_pat
     """The emulated ASTIbot without /battery_status, on the CLI transport: not "the robot is
     charging" read off its status instead."""
     from tests.emulator import emulated_robot, on_path
-    from tests.test_ros2_emulated import make_gateway
+    from tests.ros.test_ros2_emulated import make_gateway
 
     with emulated_robot(missing=("/battery_status",)) as folder:
         on_path(monkeypatch, folder)

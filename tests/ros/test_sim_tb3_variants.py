@@ -8,7 +8,7 @@ import math
 import pytest
 
 from tests.ros import require_ros, ros_client, tb3_node, until
-from tests.test_sim_tb3 import START, _amcl, _graph_matches, _latest, _param, _send, _xy
+from tests.ros.test_sim_tb3 import START, _amcl, _graph_matches, _latest, _param, _send, _xy
 
 pytestmark = [pytest.mark.slow, pytest.mark.ros]
 

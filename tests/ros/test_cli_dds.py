@@ -18,7 +18,7 @@ import pytest
 
 from tests.emulator import emulated_robot, on_path, ros2_calls
 from tests.ros import battery_answer_agrees, require_ros, ros_client, until
-from tests.test_tb3_operated import ask, gateway_on
+from tests.ros.test_tb3_operated import ask, gateway_on
 
 pytestmark = [pytest.mark.slow, pytest.mark.ros]
 

@@ -14,7 +14,7 @@ import pytest
 from tests.web_console import Terminal
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
-ARTIFACTS = Path(__file__).resolve().parents[1] / "test-artifacts" / "browser"
+ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts" / "browser"
 # as root, with no network but the loopback: no sandbox, nothing fetched in the background
 FLAGS = [
     "--no-sandbox",

@@ -292,7 +292,7 @@ async def test_a_models_plan_of_several_goals_is_a_mission_held_to_the_requests_
 async def test_mcp_start_mission_asks_once_for_every_step_and_reports_each(tmp_path):
     import json
 
-    from tests.test_mcp import Console, call, stdio
+    from tests.system.test_mcp import Console, call, stdio
 
     db = tmp_path / "mcp.db"
     Store(db).close()

@@ -15,7 +15,7 @@ import pytest
 
 from astiop.ros2.transforms import compose, yaw_of
 from tests.ros import require_ros, ros_client, until
-from tests.test_tb3_operated import gateway_on, settings
+from tests.ros.test_tb3_operated import gateway_on, settings
 
 pytestmark = [pytest.mark.slow, pytest.mark.ros]
 START = (4.0, 4.0, 0.0)  # astiop/robot_programs/turtlebot3/node.py

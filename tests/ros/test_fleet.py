@@ -43,7 +43,7 @@ def test_a_robot_of_the_fleet_is_its_namespace_and_profile(tmp_path):
 
 
 def test_robot_namespaces_are_those_with_a_velocity_command_and_a_pose():
-    from tests.test_profile import tb3_graph
+    from tests.unit.test_profile import tb3_graph
 
     one, two = tb3_graph("/tb3_1"), tb3_graph("/tb3_2")
     one.topics.update(two.topics)
