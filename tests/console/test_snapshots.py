@@ -80,7 +80,8 @@ def test_logs_snapshot(snap_compare, tmp_path, monkeypatch):
     app = console(tmp_path, sim=Simulator(seed=0))
     _history(app.services.store)
     try:
-        assert snap_compare(app, terminal_size=SIZE, run_before=showing("f3"))
+        logs = next(s.key for s in SCREENS if s.mode == "logs")
+        assert snap_compare(app, terminal_size=SIZE, run_before=showing(logs))
     finally:
         monkeypatch.undo()
         time.tzset()
