@@ -5,6 +5,7 @@ import time
 
 import pytest
 from textual.widgets import Input
+from textual.worker import WorkerCancelled
 
 from astiop.screens.registry import SCREENS
 from astiop.sim.simulator import Simulator
@@ -24,7 +25,12 @@ def scene() -> Simulator:
 def showing(key: str):
     async def run_before(pilot) -> None:
         await pilot.press(key)
-        await pilot.app.workers.wait_for_complete()
+        for _ in range(5):  # a refresh a newer one replaced (exclusive) is cancelled: wait again
+            try:
+                await pilot.app.workers.wait_for_complete()
+                break
+            except WorkerCancelled:
+                continue
         for field in pilot.app.screen.query(Input):
             field.cursor_blink = False
         await pilot.pause()
