@@ -155,15 +155,3 @@ def test_tf_is_watched_only_for_a_pose_built_from_it():
     robot = match_profile(astibot_catalog())
     assert robot.name("pose") == "/robot_pose" and robot.has("transforms")
     assert "/tf" not in robot.state_topics() and "/tf_static" not in robot.state_topics()
-
-
-def test_rclpy_messages_fold_as_their_dicts_do():
-    msgs = pytest.importorskip("tf2_msgs.msg")
-    from astiop.ros2.message_objects import to_message
-
-    sent = msg(tf("map", "odom", 2.0, -1.0, math.pi), tf("odom", "base_footprint", 0.5, 0.5, 0))
-    table = TransformTable()
-    table.fold_object(to_message(msgs.TFMessage, sent), at=0.0)
-    out = table.message(now=0.0)
-    assert [t["child_frame_id"] for t in out["transforms"]] == ["odom", "base_footprint"]
-    assert close(map_pose([out])[0], (1.5, -1.5, math.pi))

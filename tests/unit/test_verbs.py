@@ -1,5 +1,5 @@
-"""A verb is one module (astiop/ros2/verbs/): the registry, and `ros2 topic bw` on every
-transport: the simulator in process, the emulated `ros2` (CLI transport) and rclpy on DDS."""
+"""A verb is one module (astiop/ros2/verbs/): the registry, and the verbs on the simulator in
+process (tests/ros/test_verbs_transports.py: the emulated `ros2` and rclpy on DDS)."""
 
 from __future__ import annotations
 
