@@ -9,18 +9,18 @@ from __future__ import annotations
 
 import contextlib
 import logging
+from collections.abc import Iterable
 from dataclasses import replace
-from functools import partial
 from pathlib import Path
 from typing import Any
 
-from textual.app import App
+from textual.app import App, SystemCommand
 from textual.binding import Binding
+from textual.screen import Screen
 from textual.worker import Worker, WorkerState
 
 from astiop.agent.models.specs import LLMEndpoint, open_endpoint
 from astiop.config import Settings
-from astiop.recording import RecordingError, SessionRecorder, default_path
 from astiop.robot.factory import make_robot_gateway, make_sim_gateway
 from astiop.robot.fleet_watch import FleetRow, FleetWatch, control_of, row_from
 from astiop.robot.gateway import RobotGateway
@@ -28,8 +28,10 @@ from astiop.robot.sampler import StateSampler
 from astiop.ros2.render import goto_command
 from astiop.screens import control
 from astiop.screens.approvals import ApprovalDesk
+from astiop.screens.base import robot_name
 from astiop.screens.console_palette import ConsolePalette
-from astiop.screens.console_safety import ConsoleSafety
+from astiop.screens.console_recording import ConsoleRecording
+from astiop.screens.console_safety import SafetyKeys
 from astiop.screens.dashboard import motion_key
 from astiop.screens.messages import AlertsFired, RobotStateSampled, TurnFinished
 from astiop.screens.registry import SCREENS
@@ -40,7 +42,7 @@ from astiop.transports.state import RobotState, TopicStat
 STILL_HZ = 4.0  # a still robot's sampling: only its clock, scan noise and battery change
 
 
-class AstiopApp(ConsoleSafety, ConsolePalette, App):
+class AstiopApp(App):
     TITLE = "astiop"
     CSS_PATH = "app.tcss"
     MODES = {s.mode: s.screen for s in SCREENS}
@@ -75,15 +77,18 @@ class AstiopApp(ConsoleSafety, ConsolePalette, App):
         if fleet is not None:  # the current robot watched through the console's own gateway
             fleet.adopt(self.current_robot, services.gateway)
         self.record_path = record
-        self.recorder: SessionRecorder | None = None
         self.sample_hz = sample_hz
-        self.confirm_timeout_s = confirm_timeout_s
         self.robot_state: RobotState = services.gateway.state()
         self.recent_events = services.gateway.events_since(0)[-50:]  # shown at once, not later
         self.topic_stats: list[TopicStat] = []
         self.listeners: list[Any] = []  # screens that take broadcasts
         last = self.recent_events[-1].seq if self.recent_events else 0
         self._approvals = ApprovalDesk(self)  # outside agents' actuations, asked here
+        self.safety = SafetyKeys(self, services, fleet, lambda: self.robot_state, confirm_timeout_s)
+        self.recording = ConsoleRecording(self, services, fleet, self.refresh_subtitle)
+        self.palette = ConsolePalette(
+            self, services, self.safety, self.recording, self.goto_location
+        )
         self._sampler = StateSampler(
             services.gateway, self._state_sampled, self._sampler_failed, sample_hz, last
         )
@@ -107,7 +112,7 @@ class AstiopApp(ConsoleSafety, ConsolePalette, App):
         if self.services.gateway.playback is None:  # a replay moves no robot
             self._approvals.start()
         if self.record_path is not None:
-            self.start_recording(self.record_path)
+            self.recording.start(self.record_path)
         self.run_worker(self._warm_model(), group="warm", exit_on_error=False)
         if not self.services.settings.robot.confirm_actuation:
             self.notify(
@@ -143,8 +148,8 @@ class AstiopApp(ConsoleSafety, ConsolePalette, App):
             self._sampler.join(2.0)
             if self._approvals.is_alive():
                 self._approvals.join(2.0)
-            if self.recorder is not None:
-                self.recorder.stop()
+            if self.recording.recorder is not None:
+                self.recording.recorder.stop()
             if self.fleet is not None:
                 self.fleet.close()  # every robot's gateway, the current one's too
         finally:
@@ -205,11 +210,7 @@ class AstiopApp(ConsoleSafety, ConsolePalette, App):
     @property
     def current_robot(self) -> str:
         """The robot Dashboard, Chat, Teleop and Locations act on, by its fleet name."""
-        namespace = self.services.settings.robot.namespace
-        for name, ns, _ in self.fleet.robots if self.fleet is not None else ():
-            if ns == namespace:
-                return name
-        return namespace.strip("/") or "this robot"
+        return robot_name(self.services, self.fleet)
 
     def fleet_rows(self) -> list[FleetRow]:
         if self.fleet is not None:
@@ -225,7 +226,7 @@ class AstiopApp(ConsoleSafety, ConsolePalette, App):
         robot = self.services.gateway.label
         if self.fleet is not None:  # never the wrong robot: its name on every screen
             robot = f"{self.current_robot} ({robot})"
-        rec = "  ● REC" if self.recorder is not None else ""
+        rec = "  ● REC" if self.recording.recorder is not None else ""
         held = control.words(self.services.gateway)
         self.sub_title = f"robot: {robot}{held}  model: {self.services.endpoint.spec.raw}{rec}"
 
@@ -244,54 +245,15 @@ class AstiopApp(ConsoleSafety, ConsolePalette, App):
     def action_replay_speed(self, up: int) -> None:
         self.services.gateway.playback.faster(bool(up))
 
-    # -- recording --------------------------------------------------------------------------
-    def start_recording(self, path: Path | None = None) -> None:
-        if self.recorder is not None:
-            return
-        store = self.services.store
-        path = path or default_path(store.path.parent)
-        try:
-            said = partial(self.notify, severity="error", title="recording", markup=False)
-            fleet = self.fleet
-            recorder = SessionRecorder(
-                path,
-                self.services.gateway,
-                store,
-                on_error=said,
-                fleet=fleet.names if fleet else None,
-                gateway_of=fleet.gateway_of if fleet else None,
-            )
-            self.recorder = recorder.start()
-        except RecordingError as exc:
-            self.notify(str(exc), severity="error", title="recording", markup=False)
-            return
-        self.refresh_subtitle()
-        self.notify(f"recording to {path}", title="recording", markup=False)
-
-    def stop_recording(self) -> None:
-        if self.recorder is None:
-            return
-        recorder, self.recorder = self.recorder, None
-        try:
-            counts = recorder.stop()
-        except RecordingError as exc:  # the file could not be finished: said, not raised
-            self.refresh_subtitle()
-            self.notify(str(exc), severity="error", title="recording", markup=False)
-            return
-        self.refresh_subtitle()
-        self.notify(
-            f"{recorder.path}: {sum(counts.values())} messages",
-            title="recording saved",
-            markup=False,
-        )
-
     def goto_location(self, name: str) -> None:
         """Drive to a named location: the same y/n as every actuation, off the UI thread."""
         cmd = goto_command(name)
         self.run_worker(lambda: self._goto(cmd), thread=True, group="goto", exit_on_error=False)
 
     def _goto(self, cmd: str) -> None:
-        result = self.services.gateway.run(cmd, confirm=self.confirm_from_thread, source="console")
+        result = self.services.gateway.run(
+            cmd, confirm=self.safety.confirm_from_thread, source="console"
+        )
         values = result.values or {}
         if result.executed and values.get("success"):
             self.call_from_thread(self.notify, values["message"], markup=False)
@@ -299,8 +261,19 @@ class AstiopApp(ConsoleSafety, ConsolePalette, App):
             why = result.reason or result.error or values.get("message", "refused")
             self.call_from_thread(self.notify, why, severity="error", markup=False)
 
+    # -- the bindings' actions, done by the app's helpers ----------------------------------
+    def action_estop(self) -> None:
+        self.safety.estop()
+
+    def action_release_estop(self) -> None:
+        self.safety.release_estop()
+
     def action_take_control(self) -> None:
         control.take_over(self)
+
+    def get_system_commands(self, screen: Screen) -> Iterable[SystemCommand]:
+        yield from super().get_system_commands(screen)
+        yield from self.palette.commands()
 
     # -- one handler for every worker's failure --------------------------------------------
     def on_worker_state_changed(self, event: Worker.StateChanged) -> None:

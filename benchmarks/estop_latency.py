@@ -82,7 +82,7 @@ class Probe:
 
 
 class Console:
-    """What the console's ctrl+e runs (app._estop: gateway.estop()), in a console's gateway that
+    """What the console's ctrl+e runs (SafetyKeys._estop: gateway.estop()), in a console's gateway that
     is up before the trial, on the same database and robot."""
 
     def __init__(self, db: Path, transport: str, env: dict):

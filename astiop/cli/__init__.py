@@ -2,14 +2,37 @@
 
 from __future__ import annotations
 
+import ast
 import os
 import sys
+from pathlib import Path
 
-# the app's global options that take a value (a bare `--record` is made `--record=` first)
-_VALUED = (
-    "--db", "--model", "--robot", "--ros2-transport", "--namespace", "--profile", "--record",
-    "--robot-name", "--fleet",
-)  # fmt: skip
+
+def _valued_options() -> frozenset[str]:
+    """The app's global options that take a value, read from the typer.Option declarations of
+    `commands.main` without importing typer: this runs before the imports it starts things
+    ahead of (a bare `--record` is made `--record=` first)."""
+    source = (Path(__file__).parent / "commands.py").read_text(encoding="utf-8")
+    main = next(
+        node
+        for node in ast.parse(source).body
+        if isinstance(node, ast.FunctionDef) and node.name == "main"
+    )
+    args = main.args.args[len(main.args.args) - len(main.args.defaults) :]
+    names: set[str] = set()
+    for arg, default in zip(args, main.args.defaults, strict=True):
+        flag = isinstance(arg.annotation, ast.Name) and arg.annotation.id == "bool"
+        if flag or not isinstance(default, ast.Call):
+            continue
+        names |= {
+            c.value
+            for c in default.args
+            if isinstance(c, ast.Constant) and isinstance(c.value, str) and c.value[:1] == "-"
+        }
+    return frozenset(names)
+
+
+_VALUED = _valued_options()
 SERVED_ELSEWHERE = ("rules", "ollama:", "openai:", "dmr:")  # specs with no model process here
 ARGS: list[str] = []  # this run's command line (a process it starts may need its options)
 

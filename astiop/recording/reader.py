@@ -18,20 +18,7 @@ from mcap.stream_reader import StreamReader
 from mcap_ros2.decoder import DecoderFactory
 
 from astiop.recording.writer import RecordingError
-
-
-def plain(value: Any) -> Any:
-    """A decoded message as the dicts and lists the rest of astiop reads."""
-    slots = getattr(type(value), "__slots__", None)
-    if slots and not isinstance(value, (str, bytes)):
-        return {name: plain(getattr(value, name)) for name in slots}
-    if isinstance(value, (list, tuple)):
-        return [plain(v) for v in value]
-    if isinstance(value, (bytes, bytearray)):
-        return list(value)
-    if hasattr(value, "tolist"):  # numpy arrays of primitives
-        return value.tolist()
-    return value
+from astiop.ros2.message_objects import plain
 
 
 @dataclass

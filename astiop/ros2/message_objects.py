@@ -7,7 +7,6 @@ rosidl_runtime_py/convert.py and set_message.py do on humble and jazzy.
 
 from __future__ import annotations
 
-import array
 import importlib
 from functools import cache
 from typing import Any
@@ -66,21 +65,33 @@ def to_message(cls: Any, data: dict[str, Any]) -> Any:
 
 def to_dict(msg: Any) -> dict[str, Any]:
     """A message object as a plain dict: nested messages as dicts, arrays as lists."""
-    out: dict[str, Any] = {}
-    for key in msg.get_fields_and_field_types():
-        out[key] = _plain(getattr(msg, key))
+    out: dict[str, Any] = plain(msg)
     return out
 
 
-def _plain(value: Any) -> Any:
-    if hasattr(value, "get_fields_and_field_types"):
-        return to_dict(value)
+def plain(value: Any, *, byte_chars: bool = False) -> Any:
+    """A message as the dicts and lists the rest of astiop reads, whichever made it: a class
+    rosidl generated (rclpy, the emulated ros2) or one mcap-ros2-support decoded (a recording).
+    Nested messages become dicts, arrays and numpy values lists and numbers, and bytes a list
+    of ints or, with `byte_chars`, one string of characters (ros2cli prints a `byte` so:
+    rosidl_runtime_py/convert.py `_convert_value`, humble and jazzy)."""
+    fields = _field_names(value)
+    if fields is not None:
+        return {k: plain(getattr(value, k), byte_chars=byte_chars) for k in fields}
+    if isinstance(value, (bytes, bytearray)):
+        return "".join(chr(c) for c in value) if byte_chars else list(value)
+    if hasattr(value, "tolist") and not isinstance(value, (int, float)):
+        value = value.tolist()  # numpy arrays and scalars, array.array
     if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    if isinstance(value, array.array):
-        return value.tolist()
-    if isinstance(value, bytes):
-        return list(value)
-    if hasattr(value, "tolist"):  # a fixed-size array comes as numpy
-        return value.tolist()
+        return [plain(v, byte_chars=byte_chars) for v in value]
     return value
+
+
+def _field_names(value: Any) -> Any:
+    """A message's field names, None for a value that is no message."""
+    if hasattr(value, "get_fields_and_field_types"):  # rosidl's (its __slots__ are `_x`)
+        return value.get_fields_and_field_types()
+    slots = getattr(type(value), "__slots__", None)  # mcap-ros2-support's decoded classes
+    if slots and not isinstance(value, (str, bytes)):
+        return slots
+    return None

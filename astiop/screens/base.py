@@ -6,7 +6,17 @@ from textual.app import App
 from textual.screen import Screen
 from textual.worker import Worker
 
+from astiop.robot.fleet_watch import FleetWatch
 from astiop.services import Services
+
+
+def robot_name(services: Services, fleet: FleetWatch | None) -> str:
+    """The robot Dashboard, Chat, Teleop and Locations act on, by its fleet name."""
+    namespace = services.settings.robot.namespace
+    for name, ns, _ in fleet.robots if fleet is not None else ():
+        if ns == namespace:
+            return name
+    return namespace.strip("/") or "this robot"
 
 
 def services_of(app: App) -> Services:

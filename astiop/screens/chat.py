@@ -141,9 +141,9 @@ class ChatScreen(ConsoleScreen):
             services.store,
             mode=self._reply_mode or services.settings.llm.mode,
             max_tokens=services.settings.llm.max_tokens,
-            confirm=partial(self.app.confirm_from_thread, robot=robot),
-            confirm_mission=self.app.confirm_mission_from_thread,
-            replace_mission=self.app.replace_mission_from_thread,
+            confirm=partial(self.app.safety.confirm_from_thread, robot=robot),
+            confirm_mission=self.app.safety.confirm_mission_from_thread,
+            replace_mission=self.app.safety.replace_mission_from_thread,
             session="console",
             robot=robot,
         )

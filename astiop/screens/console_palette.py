@@ -1,73 +1,53 @@
 """The console's command palette (ctrl+p): its own commands beside Textual's, each a second way
-to a key; a mixin of the app."""
+to a key; a helper the app holds and asks for them."""
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
 from functools import partial
-from typing import TYPE_CHECKING, Any, Protocol
 
-from textual.app import SystemCommand
-from textual.screen import Screen
+from textual.app import App, SystemCommand
 
-from astiop.recording import SessionRecorder
-from astiop.screens import mission_commands
+from astiop.screens import control, mission_commands
 from astiop.screens.chat import ChatScreen
+from astiop.screens.console_recording import ConsoleRecording
+from astiop.screens.console_safety import SafetyKeys
 from astiop.screens.logs import LogsScreen
 from astiop.screens.registry import SCREENS
 from astiop.services import Services
 
 
-class PaletteHost(Protocol):
-    """What `ConsolePalette` needs of the app it is mixed into."""
+class ConsolePalette:
+    """`goto` drives to a named location after the y/n (the app's, as the Locations screen's)."""
 
-    services: Services
-    recorder: SessionRecorder | None
+    def __init__(
+        self,
+        app: App,
+        services: Services,
+        safety: SafetyKeys,
+        recording: ConsoleRecording,
+        goto: Callable[[str], None],
+    ) -> None:
+        self.app = app
+        self.services = services
+        self.safety = safety
+        self.recording = recording
+        self.goto = goto
 
-    @property
-    def screen(self) -> Screen: ...
-
-    def get_system_commands(self, screen: Screen) -> Iterable[SystemCommand]: ...
-
-    def switch_mode(self, mode: str) -> Any: ...
-
-    def call_after_refresh(self, callback: Callable[..., Any], *args: Any) -> bool: ...
-
-    def action_estop(self) -> None: ...
-
-    def action_release_estop(self) -> None: ...
-
-    def action_take_control(self) -> None: ...
-
-    def goto_location(self, name: str) -> None: ...
-
-    def start_recording(self, path: Any = None) -> None: ...
-
-    def stop_recording(self) -> None: ...
-
-
-if TYPE_CHECKING:
-    _Host = PaletteHost
-else:
-    _Host = object
-
-
-class ConsolePalette(_Host):
-    def get_system_commands(self, screen) -> Iterable[SystemCommand]:
-        """The console's own commands beside Textual's (ctrl+p)."""
-        yield from super().get_system_commands(screen)
-        yield SystemCommand("E-STOP", "Stop all motion now (ctrl+e)", self.action_estop)
+    def commands(self) -> Iterable[SystemCommand]:
+        """The console's own commands, after Textual's (ctrl+p)."""
+        yield SystemCommand("E-STOP", "Stop all motion now (ctrl+e)", self.safety.estop)
         # every screen's key has a second way here: a browser or a tablet may lack F-keys
         for s in SCREENS:
             yield SystemCommand(
                 f"Screen: {s.title}", f"Show the {s.mode} screen ({s.key})",
-                partial(self.switch_mode, s.mode),
+                partial(self.app.switch_mode, s.mode),
             )  # fmt: skip
-        yield from mission_commands.palette(self)
+        yield from mission_commands.palette(self.app)
         yield SystemCommand(
             "Release the E-STOP",
             "Let the robot move again, after a y/n (ctrl+r)",
-            self.action_release_estop,
+            self.safety.release_estop,
         )
         llm = self.services.settings.llm
         for spec in dict.fromkeys([llm.model, "rules", "embedded", *llm.endpoints]):
@@ -86,23 +66,25 @@ class ConsolePalette(_Host):
             yield SystemCommand(
                 f"Go to {loc.name}",
                 f"Drive to ({loc.x:.1f}, {loc.y:.1f}) after a y/n",
-                partial(self.goto_location, loc.name),
+                partial(self.goto, loc.name),
             )
         lease = self.services.gateway.lease
         if lease is not None:  # ctrl+t's second way: a browser never hands ctrl+t to a page
             title = "Let go of control" if lease.held else "Take control"
             yield SystemCommand(
-                f"{title} of {lease.name}", "Asked first (ctrl+t)", self.action_take_control
+                f"{title} of {lease.name}",
+                "Asked first (ctrl+t)",
+                partial(control.take_over, self.app),
             )
-        if self.recorder is None:
+        if self.recording.recorder is None:
             yield SystemCommand(
                 "Start recording",
                 "The session as MCAP, under the data dir's sessions/",
-                self.start_recording,
+                self.recording.start,
             )
         else:
             yield SystemCommand(
-                "Stop recording", f"Close {self.recorder.path}", self.stop_recording
+                "Stop recording", f"Close {self.recording.recorder.path}", self.recording.stop
             )
         for fmt in ("csv", "json"):
             yield SystemCommand(
@@ -112,10 +94,10 @@ class ConsolePalette(_Host):
             )
 
     def _in_chat(self, what: str, value: str) -> None:
-        self.switch_mode("chat")
+        self.app.switch_mode("chat")
 
         def apply() -> None:
-            chat = self.screen
+            chat = self.app.screen
             if not isinstance(chat, ChatScreen):
                 return
             if what == "model":
@@ -123,13 +105,13 @@ class ConsolePalette(_Host):
             else:
                 chat.switch_reply_mode(value)
 
-        self.call_after_refresh(apply)
+        self.app.call_after_refresh(apply)
 
     def _export_logs(self, fmt: str) -> None:
-        self.switch_mode("logs")
+        self.app.switch_mode("logs")
 
         def export() -> None:
-            if isinstance(self.screen, LogsScreen):
-                self.screen.action_export(fmt)
+            if isinstance(self.app.screen, LogsScreen):
+                self.app.screen.action_export(fmt)
 
-        self.call_after_refresh(export)
+        self.app.call_after_refresh(export)

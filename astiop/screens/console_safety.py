@@ -1,63 +1,56 @@
 """The console's safety keys (E-STOP, its release) and the y/n it asks from worker threads
-before anything moves the robot; a mixin of the app."""
+before anything moves the robot: a helper the app holds and hands itself to."""
 
 from __future__ import annotations
 
 import threading
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any, Protocol
 
-from textual.screen import Screen
+from textual.app import App
 
 from astiop.robot.fleet_watch import FleetWatch
 from astiop.ros2.render import sent_text
 from astiop.ros2.validation import Checked
+from astiop.screens.base import robot_name
 from astiop.screens.modals import ConfirmModal
 from astiop.services import Services
 from astiop.transports.state import RobotState
 
 
-class SafetyHost(Protocol):
-    """What `ConsoleSafety` needs of the app it is mixed into."""
+class SafetyKeys:
+    """`app` shows the questions and runs the workers; `sampled` is the robot's last sampled
+    state (a /stop the robot latched shows there); the services' gateway is the current
+    robot's, whichever that is now."""
 
-    services: Services
-    fleet: FleetWatch | None
-    robot_state: RobotState
-    confirm_timeout_s: float
+    def __init__(
+        self,
+        app: App,
+        services: Services,
+        fleet: FleetWatch | None,
+        sampled: Callable[[], RobotState],
+        confirm_timeout_s: float = 120.0,
+    ) -> None:
+        self.app = app
+        self.services = services
+        self.fleet = fleet
+        self.sampled = sampled
+        self.confirm_timeout_s = confirm_timeout_s
 
     @property
-    def screen(self) -> Screen: ...
+    def current_robot(self) -> str:
+        return robot_name(self.services, self.fleet)
 
-    @property
-    def current_robot(self) -> str: ...
-
-    def notify(self, message: str, **kwargs: Any) -> None: ...
-
-    def run_worker(self, work: Any, **kwargs: Any) -> Any: ...
-
-    def call_from_thread(self, callback: Callable[..., Any], *args: Any, **kwargs: Any) -> Any: ...
-
-    def push_screen(self, screen: Any, callback: Any = None, **kwargs: Any) -> Any: ...
-
-
-if TYPE_CHECKING:
-    _Host = SafetyHost
-else:
-    _Host = object
-
-
-class ConsoleSafety(_Host):
-    def action_estop(self) -> None:
-        if isinstance(self.screen, ConfirmModal):
-            self.screen.dismiss(False)  # the E-STOP answers any open question with "no"
-        self.run_worker(self._estop, thread=True, group="estop", exit_on_error=False)
+    def estop(self) -> None:
+        if isinstance(self.app.screen, ConfirmModal):
+            self.app.screen.dismiss(False)  # the E-STOP answers any open question with "no"
+        self.app.run_worker(self._estop, thread=True, group="estop", exit_on_error=False)
 
     def _estop(self) -> None:
         fleet: dict[str, list[str]] = {}
         others = None
         if self.fleet is not None:  # every robot of the fleet, each by its own gateway, at once
-            current = self.current_robot
-            others = threading.Thread(target=lambda: fleet.update(self.fleet.estop_all(current)))
+            current, every = self.current_robot, self.fleet
+            others = threading.Thread(target=lambda: fleet.update(every.estop_all(current)))
             others.start()
         failures = self.services.gateway.estop()
         text = "E-STOP engaged: all motion stopped. ctrl+r releases it."
@@ -67,12 +60,14 @@ class ConsoleSafety(_Host):
             text = f"E-STOP engaged on {len(fleet) + 1} robots. ctrl+r releases them."
         if failures:
             text += "\n" + "\n".join(failures)
-        self.call_from_thread(self.notify, text, severity="error", title="E-STOP", markup=False)
+        self.app.call_from_thread(
+            self.app.notify, text, severity="error", title="E-STOP", markup=False
+        )
 
-    def action_release_estop(self) -> None:
-        robot_holds = self.robot_state.state_word == "e_stopped"
+    def release_estop(self) -> None:
+        robot_holds = self.sampled().state_word == "e_stopped"
         if not (self.services.gateway.e_stopped or robot_holds):  # a /stop the robot latched
-            self.notify("The e-stop is not engaged.")
+            self.app.notify("The e-stop is not engaged.")
             return
 
         graph = self.services.gateway.station_latch
@@ -80,7 +75,7 @@ class ConsoleSafety(_Host):
 
         def done(ok: bool | None) -> None:
             if ok:
-                self.run_worker(
+                self.app.run_worker(
                     lambda: self._release(pressed), thread=True, group="estop", exit_on_error=False
                 )
 
@@ -90,12 +85,12 @@ class ConsoleSafety(_Host):
         if self.fleet is not None:
             names = ", ".join(name for name, _, _ in self.fleet.robots)
             question = f"Release the e-stop of {names}? They may move again."
-        self.push_screen(ConfirmModal(question), done)
+        self.app.push_screen(ConfirmModal(question), done)
 
     def _release(self, pressed=None) -> None:
         failures = self.services.gateway.release_estop(pressed)
         if failures and failures[0].startswith("pressed again since"):  # not what was asked
-            self.call_from_thread(self.notify, failures[0], severity="error", markup=False)
+            self.app.call_from_thread(self.app.notify, failures[0], severity="error", markup=False)
             return
         # the latch of every robot goes too: this console's robots are all it holds
         self.services.store.release_estop("console")
@@ -103,9 +98,9 @@ class ConsoleSafety(_Host):
             failures += self.fleet.release_all(self.current_robot)
         if failures:  # the latch let go; the robot's own stop did not
             text = "E-stop released here; the robot still holds:\n" + "\n".join(failures)
-            self.call_from_thread(self.notify, text, severity="error", markup=False)
+            self.app.call_from_thread(self.app.notify, text, severity="error", markup=False)
         else:
-            self.call_from_thread(self.notify, "E-stop released.")
+            self.app.call_from_thread(self.app.notify, "E-stop released.")
 
     def confirm_from_thread(
         self, checked: Checked, timeout_s: float | None = None, robot: str = ""
@@ -153,18 +148,18 @@ class ConsoleSafety(_Host):
             answer.append(bool(ok))
             ready.set()
 
-        self.call_from_thread(self.push_screen, modal, done)
+        self.app.call_from_thread(self.app.push_screen, modal, done)
         if ready.wait(timeout_s):
             return bool(answer and answer[0])
 
         def expire() -> None:
-            if self.screen is modal:  # dismiss() closes whatever is on top
+            if self.app.screen is modal:  # dismiss() closes whatever is on top
                 modal.dismiss(False)
-            self.notify(
+            self.app.notify(
                 f"No answer within {timeout_s:g} s: the command was not sent.",
                 severity="warning",
                 title="confirmation timed out",
             )
 
-        self.call_from_thread(expire)
+        self.app.call_from_thread(expire)
         return False

@@ -5,7 +5,7 @@ angular span, so a scan costs a few thousand ray-segment tests, not beams × edg
 
 `cast` is the plain statement of it; `cast_edges` is the same arithmetic on edges prepared
 once (`Edges`), in fewer numpy calls: a scan is ~1 k ray tests, so its cost is the number of
-numpy calls, not the arithmetic. The two agree bit for bit (tests/test_lidar_fast.py).
+numpy calls, not the arithmetic. The two agree bit for bit (tests/unit/test_lidar_fast.py).
 """
 
 from __future__ import annotations

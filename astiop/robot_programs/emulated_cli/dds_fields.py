@@ -14,25 +14,12 @@ import importlib
 from collections.abc import Callable
 from typing import Any
 
-from astiop.ros2.message_objects import interface_class
+from astiop.ros2.message_objects import interface_class, plain
 from astiop.ros2.printing import ros2cli_yaml
 
 
-def plain(value: Any) -> Any:
-    """message_to_ordereddict, whole length: nested messages as dicts, bytes as characters."""
-    if hasattr(value, "get_fields_and_field_types"):
-        return {k: plain(getattr(value, k)) for k in value.get_fields_and_field_types()}
-    if isinstance(value, bytes):
-        return "".join(chr(c) for c in value)
-    if hasattr(value, "tolist") and not isinstance(value, (int, float)):
-        value = value.tolist()  # numpy arrays and scalars
-    if isinstance(value, (list, tuple, array.array)):
-        return [plain(v) for v in value]
-    return value
-
-
 def message_to_yaml(msg: Any) -> str:
-    return ros2cli_yaml(plain(msg))
+    return ros2cli_yaml(plain(msg, byte_chars=True))
 
 
 def load_class(type_name: str, kind: str) -> Any:

@@ -20,8 +20,9 @@ from rclpy.qos import (
 )
 
 from astiop.robot_programs.emulated_cli.call import Call
-from astiop.robot_programs.emulated_cli.dds_fields import load_class, plain, set_message_fields
+from astiop.robot_programs.emulated_cli.dds_fields import load_class, set_message_fields
 from astiop.robot_programs.emulated_cli.verb_table import runs
+from astiop.ros2.message_objects import plain
 from astiop.ros2.printing import echo_yaml
 
 QOS_FLAGS = ("qos_reliability", "qos_durability", "qos_depth", "qos_history", "qos_liveliness",
@@ -130,7 +131,7 @@ class TopicVerbs:
                     except AttributeError as exc:
                         raise RuntimeError(f"Invalid field '{'.'.join(field)}': {exc}") from None
                 if hasattr(msg, "get_fields_and_field_types"):
-                    values = plain(msg)
+                    values = plain(msg, byte_chars=True)
                     call.out(echo_yaml(values, a.get("no_arr"), truncate, a.get("no_str")))
                 else:  # a field's plain value is printed as print() does it
                     call.out(f"{msg}\n---\n")

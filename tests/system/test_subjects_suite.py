@@ -1,0 +1,22 @@
+"""`astiop bench run --suite questions` in its own process: every question of the suite right
+or honestly declined (tests/unit/test_subjects.py: each kind of question, in process)."""
+
+
+def test_the_questions_suite_scores_rules_with_nothing_answered_else(tmp_path):
+    """`astiop bench run --suite questions`: every case right or honestly declined."""
+    import json
+    import subprocess
+    import sys
+
+    from astiop.bench.library import builtin
+
+    suite = builtin("questions")
+    assert len(suite.cases) >= 60 and len({c.category for c in suite.cases}) >= 9
+    out = subprocess.run(
+        [sys.executable, "-m", "astiop", "--db", str(tmp_path / "b.db"), "bench", "run",
+         "--stage", "2", "--suite", "questions", "-m", "rules", "--json"],
+        capture_output=True, text=True, check=True, timeout=300,
+    )  # fmt: skip
+    comps = json.loads(out.stdout)["results"][0]["components"]
+    assert comps["questions_other"] == 0, comps
+    assert comps["questions_right"] + comps["questions_declined"] == len(suite.cases)
