@@ -25,7 +25,7 @@ from astiop.screens.panel_text import show_text
 from astiop.transports.state import RobotState, TopicStat
 from astiop.widgets.gauges import BatteryGauge
 from astiop.widgets.live_table import LiveTable
-from astiop.widgets.map_view import FleetRobot, Place, WarehouseMapView
+from astiop.widgets.map_view import Place, WarehouseMapView
 from astiop.widgets.mission_panel import MissionPanel
 
 STATE_COLOURS = {
@@ -132,6 +132,9 @@ class DashboardScreen(ConsoleScreen):
         yield Footer()
 
     def on_mount(self) -> None:
+        self.map_actions = MapActions(self.app, self._show_places)
+        # a replay's clock has the arrows; its robot takes no goal
+        self.query_one(WarehouseMapView).steers = self.services.gateway.playback is None
         self.reach = ""
         self.last_turn = None
         topics = self.query_one("#topics", DataTable)
@@ -152,9 +155,6 @@ class DashboardScreen(ConsoleScreen):
         self._show_events()
         self.set_interval(1.0, self.read_mission)
         self.read_mission()
-        self.map_actions = MapActions(self.app, self._show_places)
-        # a replay's clock has the arrows; its robot takes no goal
-        self.query_one(WarehouseMapView).steers = self.services.gateway.playback is None
 
     @work(thread=True, exclusive=True, group="mission", exit_on_error=False)
     def read_mission(self) -> None:
@@ -258,11 +258,7 @@ class DashboardScreen(ConsoleScreen):
     def show_state(self, st: RobotState) -> None:
         view = self.query_one(WarehouseMapView)
         view.set_geometry(self.services.gateway.map_geometry())
-        if self.app.fleet is not None:  # the fleet's other robots, at its watch's pace
-            current = self.app.current_robot
-            view.set_fleet([FleetRobot(r.name, r.x, r.y, r.theta or 0.0, r.plan)
-                            for r in self.app.fleet_rows()
-                            if r.name != current and r.x is not None and r.y is not None])  # fmt: skip
+        view.set_fleet(self.map_actions.others())  # a fleet's, at its watch's pace
         view.show(st)
         panel = self.query_one("#robot", Static)
         self._robot_text = show_text(panel, robot_text(st), getattr(self, "_robot_text", None))

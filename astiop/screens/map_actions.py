@@ -18,7 +18,7 @@ from astiop.screens import control
 from astiop.screens.base import services_of
 from astiop.screens.modals import FormModal
 from astiop.store import LocationError
-from astiop.widgets.map_view import WarehouseMapView
+from astiop.widgets.map_view import FleetRobot, WarehouseMapView
 from astiop.zones import KINDS, ZoneError
 
 
@@ -41,7 +41,9 @@ class PointMenuModal(ModalScreen[str | None]):
             )
 
     def on_mount(self) -> None:
-        self.query_one(OptionList).focus()
+        menu = self.query_one(OptionList)
+        menu.highlighted = 0  # enter sends, as the first line says
+        menu.focus()
 
     def on_option_list_option_selected(self, event: OptionList.OptionSelected) -> None:
         self.dismiss(event.option.id)
@@ -54,6 +56,18 @@ class MapActions:
     def __init__(self, app, reload: Callable[[], None]):
         self.app = app
         self.reload = reload
+
+    def others(self) -> list[FleetRobot]:
+        """The fleet's robots but the current one, where they said they are (none alone)."""
+        app = self.app
+        if app.fleet is None:
+            return []
+        current = app.current_robot
+        return [
+            FleetRobot(r.name, r.x, r.y, r.theta or 0.0, r.plan)
+            for r in app.fleet_rows()
+            if r.name != current and r.x is not None and r.y is not None
+        ]
 
     def point_picked(self, msg: WarehouseMapView.PointPicked) -> None:
         app = self.app

@@ -108,7 +108,7 @@ class MapCanvas(Widget):
     def set_locations(self, locations: list[Place] | list[tuple[float, float]]) -> None:
         """Markers: `Place`s are written with their name, bare (x, y) points are not."""
         self.places = [p for p in locations if isinstance(p, Place)]
-        self.locations = [(p.x, p.y) if isinstance(p, Place) else tuple(p) for p in locations]
+        self.locations = [(p.x, p.y) if isinstance(p, Place) else (p[0], p[1]) for p in locations]
         self._redraw()
 
     def set_zones(self, zones: list[MapZone]) -> None:
@@ -199,11 +199,11 @@ class MapCanvas(Widget):
             ys = geo.origin_y + (rows + 0.5) * geo.resolution
             plot(px, xs, ys, WALL, frame)
         if self.locations:
-            xs, ys = zip(*self.locations)
-            plot(px, xs, ys, LABEL, frame)
+            plot(px, [p[0] for p in self.locations], [p[1] for p in self.locations], LABEL, frame)
         for other in self.others:  # at the fleet's pace (2 Hz), not each sample
             polyline(px, other.plan, OTHER_PLAN, frame)
-            plot(px, *body_points(other.x, other.y, other.theta), OTHER, frame)
+            bx, by = body_points(other.x, other.y, other.theta)
+            plot(px, bx, by, OTHER, frame)
             ahead = (other.x + 0.8 * math.cos(other.theta), other.y + 0.8 * math.sin(other.theta))
             plot(px, [ahead[0]], [ahead[1]], HEADING, frame)
         self._names = place_names(px, frame, self._names_to_write(), (FREE, *AREAS), LABEL)
@@ -216,7 +216,7 @@ class MapCanvas(Widget):
         frame = self.viewport.frame(w, h, self.bounds)
         if self.draft:
             polyline(px, self.draft, DRAFT, frame)
-            plot(px, *zip(*self.draft), DRAFT, frame)
+            plot(px, [p[0] for p in self.draft], [p[1] for p in self.draft], DRAFT, frame)
         st = self.robot_state
         if st is None or st.pose is None or not math.isfinite(st.pose.x):
             return px  # no pose reported: the map alone
@@ -231,7 +231,8 @@ class MapCanvas(Widget):
             ang = th + scan.angle_min + scan.angle_increment * np.arange(len(scan.ranges))
             r = scan.ranges[finite]
             plot(px, x + r * np.cos(ang[finite]), y + r * np.sin(ang[finite]), LIDAR, frame)
-        plot(px, *body_points(x, y, th), ROBOT, frame)
+        bx, by = body_points(x, y, th)
+        plot(px, bx, by, ROBOT, frame)
         plot(px, [x + 0.8 * math.cos(th)], [y + 0.8 * math.sin(th)], HEADING, frame)
         return px
 

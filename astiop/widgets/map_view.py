@@ -26,8 +26,8 @@ class WarehouseMapView(MapCanvas):
     BINDINGS = [
         Binding("enter", "choose", "Point menu"),
         Binding("z", "draw", "Draw zone"),
-        Binding("plus,equals_sign", "zoom(1)", "Zoom in"),
-        Binding("minus", "zoom(-1)", "Zoom out"),
+        Binding("plus,equals_sign", "zoom(1)", "Zoom in", show=False),  # said under the map
+        Binding("minus", "zoom(-1)", "Zoom out", show=False),
         Binding("0", "fit", "Fit"),
         *(Binding(k, f"cursor({dx}, {dy})", show=False) for k, dx, dy in
           (("up", 0, -1), ("down", 0, 1), ("left", -1, 0), ("right", 1, 0))),
@@ -60,6 +60,7 @@ class WarehouseMapView(MapCanvas):
         if at is None or at.y >= self._map_rows():
             return  # the border or the legend
         self.cursor = (at.x, at.y)
+        self._say_where()
         self._choose_cell(at.x, at.y, corner=self.draft is not None)
 
     def on_mouse_scroll_up(self, event: events.MouseScrollUp) -> None:
@@ -84,8 +85,8 @@ class WarehouseMapView(MapCanvas):
         drawing = self.draft is not None
         if action in ("corner", "undo_corner", "cancel_draw"):
             return drawing  # else the key goes on (space, escape: the screen's and app's)
-        if action == "cursor":
-            return self.steers
+        if action in ("cursor", "pan"):
+            return self.steers  # else the arrows step a replay's clock
         if action == "draw":
             return self.steers and not drawing
         return True
@@ -185,10 +186,9 @@ class WarehouseMapView(MapCanvas):
             self.border_subtitle = f"zoom {self.viewport.zoom:g}×"
             return
         x, y = self.frame.cell_centre(*self._cursor())
-        said = f"({x:.2f}, {y:.2f}) m  zoom {self.viewport.zoom:g}×"
-        if self.draft is not None:
-            said = (f"new zone: {len(self.draft)} corners (space/click adds, backspace undoes,"
-                    f" enter closes, esc cancels)  {said}")  # fmt: skip
+        said = f"({x:.2f}, {y:.2f}) m  zoom {self.viewport.zoom:g}× (+/-, wheel)"
+        if self.draft is not None:  # the keys that end it; space and clicks add corners
+            said = f"zone: {len(self.draft)} corners, enter ends, esc cancels  {said}"
         self.border_subtitle = said
 
     # -- the legend -----------------------------------------------------------------------
