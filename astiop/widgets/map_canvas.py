@@ -265,13 +265,14 @@ class MapCanvas(Widget):
         top, bottom = self._pixels[2 * y], self._pixels[2 * y + 1]
         names = self._names.get(y, {})
         cursor = self.cursor if self.has_focus or self.draft is not None else None
+        cursor_x = cursor[0] if cursor is not None and cursor[1] == y else -1
         segments = []
         run: list[str] = []
         run_style = None
         for x in range(w):
             t, b = int(top[x]), int(bottom[x])
             ch = names.get(x)
-            if cursor is not None and cursor == (x, y):
+            if x == cursor_x:
                 ch, style = "+", CURSOR
             elif ch is not None and not ({t, b} & {ROBOT, HEADING}):
                 # a name over a zone keeps the zone's colour; elsewhere it is written on the floor
