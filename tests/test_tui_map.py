@@ -173,3 +173,30 @@ async def test_the_fleets_other_robots_are_drawn_named_and_picked_by_a_click(tmp
             await wait_for(pilot, lambda: "astibot_2" in {r.name for r in view.others})
     finally:
         runner.stop()
+
+
+async def test_a_click_on_a_rack_is_said_in_one_line_and_asks_nothing(tmp_path):
+    app = console(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.pause()
+        view = _view(app)
+        x0, y0, x1, y1 = app.services.gateway.map_geometry().shelves[0]
+        await _click_at(pilot, view, (x0 + x1) / 2, (y0 + y1) / 2)
+        await pilot.pause()
+        said = [n.message for n in app._notifications]
+        assert any("is on a rack: pick a point of the floor" in m for m in said), said
+        assert not isinstance(app.screen, PointMenuModal) and sim_of(app).goal is None
+
+
+def test_a_point_on_an_occupied_cell_of_a_robots_map_is_not_floor():
+    import numpy as np
+
+    from astiop.screens.map_actions import occupied
+    from astiop.transports.state import OccupancyGrid
+
+    cells = np.zeros((100, 200), dtype=np.int8)  # 20 x 10 m at 0.1 m, origin (-5, -2)
+    cells[50, 120] = 100  # the cell holding (7.0..7.1, 3.0..3.1)
+    grid = OccupancyGrid(0.1, -5.0, -2.0, 200, 100, cells)
+    assert occupied(grid, 7.05, 3.05) == "an occupied cell of the robot's map"
+    assert occupied(grid, 7.15, 3.05) == "" and occupied(grid, 50.0, 3.0) == ""
+    assert occupied(None, 7.05, 3.05) == ""  # no map: nothing known to be in the way

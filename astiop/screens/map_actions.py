@@ -5,6 +5,7 @@ clicked robot of the fleet becomes the current one; a drawn polygon is stored as
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 from textual.app import ComposeResult
@@ -18,8 +19,26 @@ from astiop.screens import control
 from astiop.screens.base import services_of
 from astiop.screens.modals import FormModal
 from astiop.store import LocationError
+from astiop.transports.state import OccupancyGrid
+from astiop.warehouse import WarehouseMap
 from astiop.widgets.map_view import FleetRobot, WarehouseMapView
 from astiop.zones import KINDS, ZoneError
+
+
+def occupied(geometry, x: float, y: float) -> str:
+    """What fixed obstacle of the map the point is on ("" on the floor): a wall, a rack, a
+    pillar of the known layout, or an occupied cell of the robot's /map."""
+    if isinstance(geometry, WarehouseMap):
+        for kind, (x0, y0, x1, y1) in geometry.static_rects:
+            if kind in ("wall", "shelf", "pillar") and x0 <= x <= x1 and y0 <= y <= y1:
+                return "a rack" if kind == "shelf" else f"a {kind}"
+    elif isinstance(geometry, OccupancyGrid):
+        col = math.floor((x - geometry.origin_x) / geometry.resolution)
+        row = math.floor((y - geometry.origin_y) / geometry.resolution)
+        inside = 0 <= row < geometry.height and 0 <= col < geometry.width
+        if inside and geometry.cells[row, col] >= 50:
+            return "an occupied cell of the robot's map"
+    return ""
 
 
 class PointMenuModal(ModalScreen[str | None]):
@@ -77,6 +96,11 @@ class MapActions:
             control.use_robot(app, msg.robot)
             return
         x, y = round(msg.x, 2), round(msg.y, 2)  # a centimetre: what the menu says is sent
+        on = occupied(services_of(app).gateway.map_geometry(), x, y)
+        if on:  # said before anything is asked: no robot stands there, no place is there
+            app.notify(f"({x:.2f}, {y:.2f}) is on {on}: pick a point of the floor",
+                       severity="error", markup=False)  # fmt: skip
+            return
 
         def chosen(what: str | None) -> None:
             if what == "send":
