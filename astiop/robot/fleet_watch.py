@@ -37,6 +37,7 @@ class FleetRow:
     age_s: float | None = None  # since its state last changed on our side (None: never heard)
     error: str = ""  # why it could not be reached, or how its E-STOP failed
     control: str = ""  # who controls it (its lease): "this console", a holder, "free"
+    plan: tuple[tuple[float, float], ...] = ()  # the path it follows now (map frame, metres)
 
     @property
     def stale(self) -> bool:
@@ -108,6 +109,7 @@ def row_from(name: str, namespace: str, make: str, st: RobotState, age_s: float 
         speed=st.speed,
         goal=st.status.active_goal if st.status else "",
         age_s=age_s,
+        plan=tuple(st.plan),
     )
 
 

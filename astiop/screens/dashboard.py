@@ -19,6 +19,7 @@ from astiop.agent.models.probe import probe
 from astiop.bounded import escape_controls
 from astiop.screens import mission_commands
 from astiop.screens.base import ConsoleScreen
+from astiop.screens.map_actions import MapActions
 from astiop.screens.messages import RobotStateSampled, TurnFinished
 from astiop.screens.panel_text import show_text
 from astiop.transports.state import RobotState, TopicStat
@@ -131,6 +132,9 @@ class DashboardScreen(ConsoleScreen):
         yield Footer()
 
     def on_mount(self) -> None:
+        self.map_actions = MapActions(self.app, self._show_places)
+        # a replay's clock has the arrows; its robot takes no goal
+        self.query_one(WarehouseMapView).steers = self.services.gateway.playback is None
         self.reach = ""
         self.last_turn = None
         topics = self.query_one("#topics", DataTable)
@@ -178,12 +182,21 @@ class DashboardScreen(ConsoleScreen):
     def on_screen_resume(self) -> None:
         # on first show too; locations may have changed on the Locations screen, and events
         # may have come while another screen was shown
+        self._show_places()
+        self._show_events()
+
+    def _show_places(self) -> None:
         view = self.query_one(WarehouseMapView)
         view.set_locations(
             [Place(loc.name, loc.x, loc.y) for loc in self.services.store.list_locations()]
         )
         view.set_zones(self.services.store.list_zones())  # added from the CLI meanwhile, too
-        self._show_events()
+
+    def on_warehouse_map_view_point_picked(self, msg: WarehouseMapView.PointPicked) -> None:
+        self.map_actions.point_picked(msg)
+
+    def on_warehouse_map_view_zone_drawn(self, msg: WarehouseMapView.ZoneDrawn) -> None:
+        self.map_actions.zone_drawn(msg)
 
     def on_robot_state_sampled(self, msg: RobotStateSampled) -> None:
         self.show_state(msg.state)
@@ -245,6 +258,7 @@ class DashboardScreen(ConsoleScreen):
     def show_state(self, st: RobotState) -> None:
         view = self.query_one(WarehouseMapView)
         view.set_geometry(self.services.gateway.map_geometry())
+        view.set_fleet(self.map_actions.others())  # a fleet's, at its watch's pace
         view.show(st)
         panel = self.query_one("#robot", Static)
         self._robot_text = show_text(panel, robot_text(st), getattr(self, "_robot_text", None))

@@ -17,14 +17,14 @@ from astiop.robot.fleet_watch import FleetRow
 from astiop.screens import control
 from astiop.screens.base import ConsoleScreen
 from astiop.screens.modals import ConfirmModal
-from astiop.widgets.map_view import Place, WarehouseMapView
+from astiop.widgets.map_canvas import MapCanvas, Place
 
 SORTS = ("name", "battery", "state", "age")
 FILTERS = ("all", "low battery", "stale")
 REFRESH_S = 0.5
 
 
-class FleetMapView(WarehouseMapView):
+class FleetMapView(MapCanvas):
     markers_are = "robots"
 
 

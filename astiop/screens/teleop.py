@@ -21,7 +21,7 @@ from astiop.screens.messages import RobotStateSampled
 from astiop.screens.panel_text import show_text
 from astiop.transports.state import RobotState, wheel_speeds
 from astiop.widgets.gauges import WheelBars
-from astiop.widgets.map_view import WarehouseMapView
+from astiop.widgets.map_canvas import MapCanvas
 
 STEPS = (0.1, 0.2, 0.4, 0.8)
 
@@ -51,7 +51,7 @@ class TeleopScreen(ConsoleScreen):
     def compose(self) -> ComposeResult:
         yield Header(show_clock=False)
         with Vertical(id="teleop-grid"):
-            yield WarehouseMapView(self.services.gateway.map_geometry())
+            yield MapCanvas(self.services.gateway.map_geometry())
             with Vertical():
                 yield Static(id="teleop-help", classes="panel")
                 yield WheelBars(id="wheels", classes="panel")
@@ -59,7 +59,7 @@ class TeleopScreen(ConsoleScreen):
         yield Footer()
 
     def on_screen_resume(self) -> None:
-        view = self.query_one(WarehouseMapView)
+        view = self.query_one(MapCanvas)
         view.set_locations([(loc.x, loc.y) for loc in self.services.store.list_locations()])
         view.set_zones(self.services.store.list_zones())  # where teleop may not go or slows
 
@@ -138,7 +138,7 @@ class TeleopScreen(ConsoleScreen):
         self.show_state(msg.state)
 
     def show_state(self, st: RobotState) -> None:
-        self.query_one(WarehouseMapView).show(st)
+        self.query_one(MapCanvas).show(st)
         if st.wheel_speeds is not None:
             self._show_wheels(st.wheel_speeds)
         text = Text(f"state {st.state_word}")

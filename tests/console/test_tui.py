@@ -404,8 +404,7 @@ async def test_the_maps_keepout_and_speed_zones_are_drawn_in_their_colours_and_n
         assert "loading_bay" in text and "packing" in text
         assert "keepout" in text and "speed limit" in text  # the legend
         px = view._pixels
-        s, x0, y0 = view._scale(px.shape[1], px.shape[0])
-        top = view._top(px, s)
+        s, x0, y0, top = view.frame
 
         def at(x, y):
             return px[top - 1 - math.floor((y - y0) * s), math.floor((x - x0) * s)]
