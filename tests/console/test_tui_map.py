@@ -151,7 +151,7 @@ async def test_the_keyboard_alone_saves_a_point_and_draws_a_zone(tmp_path):
 
 
 async def test_the_fleets_other_robots_are_drawn_named_and_picked_by_a_click(tmp_path):
-    from tests.test_tui_fleet import fleet_console
+    from tests.console.test_tui_fleet import fleet_console
 
     app, fleet, runner = fleet_console(tmp_path)  # astibot_2 is the current robot
     fleet.robots[0].goto(37.6, 21.0, 0.0, "cps_storage")  # astibot_1 follows a plan
