@@ -259,3 +259,23 @@ def test_physics_drives_teleop_drains_the_battery_and_faults_on_a_wall():
     assert p.base.pose[0] + ASTIBOT_BODY.length / 2 < 9.5 + 0.01  # stopped at the wall
     assert physics.max_penetration < 0.01
     assert p.events.since(0)[-1].message.startswith("collision with wall at (")
+
+
+def test_the_simulators_attributes_are_its_helpers_state_read_and_written_through():
+    from astiop.sim.simulator import Simulator
+
+    sim = Simulator(ROOM, start=(5.0, 5.0, 0.0), lidar_enabled=False)
+    sim.gains = ControllerGains(v_max=0.3)  # as the ROS node's max_vel parameter does
+    sim.e_stopped = True
+    sim.zone_source = list
+    assert sim.navigation.gains.v_max == 0.3 and sim.holds.e_stopped and sim.held
+    assert sim.navigation.zone_source is list
+    with pytest.raises(GoalError, match="e-stopped"):
+        sim.goto(8.0, 5.0, 0.0)
+    sim.release()
+    goal = sim.goto(8.0, 5.0, 0.0)
+    assert sim.goal is goal is sim.navigation.goal and sim.plan == sim.navigation.plan
+    sim.step(0.5)
+    assert sim.t == sim.clock.t == pytest.approx(0.5) and sim.pose == sim.base.pose
+    assert sim.scan_ranges is sim.scanner.ranges and sim.after_step is sim.physics.after_step
+    assert sim.snapshot().vx == sim.base.v[0] > 0.0

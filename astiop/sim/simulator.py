@@ -49,9 +49,9 @@ ROBOT_MASS = ASTIBOT_BODY.mass
 T = TypeVar("T")
 
 
-class Held(Generic[T]):
+class OwnedBy(Generic[T]):
     """An attribute of the simulator whose state one of its helpers owns: `goal =
-    Held[Goal | None]("navigation")` makes `sim.goal` read and write `sim.navigation.goal`."""
+    OwnedBy[Goal | None]("navigation")` makes `sim.goal` read and write `sim.navigation.goal`."""
 
     def __init__(self, helper: str, name: str = "") -> None:
         self.helper, self.name = helper, name
@@ -72,25 +72,25 @@ class Simulator:
     `base` (bodies, pose, motors), `holds` (E-STOP, /stop, fault), `scanner` (lidar),
     `navigation` (goals, zones, dock), `commands` and `physics` (the step)."""
 
-    t = Held[float]("clock")
-    goal = Held[Goal | None]("navigation")
-    plan = Held[tuple[tuple[float, float], ...]]("navigation")
-    last_result = Held[GoalResult | None]("navigation")
-    plan_ms = Held[list[float]]("navigation")
-    gains = Held[ControllerGains]("navigation")
-    blocked_give_up_s = Held[float]("navigation")  # a blocked goal is aborted after this
-    zones = Held[tuple[MapZone, ...]]("navigation")
-    zone_source = Held[Callable[[], Sequence[MapZone]] | None]("navigation")
-    e_stopped = Held[bool]("holds")  # the robot's E-STOP input
-    stop_latched = Held[bool]("holds")  # /stop holds the base, as a safety controller does
-    fault = Held[str]("holds")
-    collisions = Held[int]("physics")
-    max_penetration = Held[float]("physics")
-    after_step = Held[list[Callable[[], Any]]]("physics")  # called after each step()
-    scan_ranges = Held[np.ndarray]("scanner", "ranges")
-    scan_stamp = Held[float]("scanner", "stamp")
-    detected = Held[list[DetectedObstacle]]("scanner")
-    lidar_ms = Held[collections.deque[float]]("scanner", "ms")
+    t = OwnedBy[float]("clock")
+    goal = OwnedBy[Goal | None]("navigation")
+    plan = OwnedBy[tuple[tuple[float, float], ...]]("navigation")
+    last_result = OwnedBy[GoalResult | None]("navigation")
+    plan_ms = OwnedBy[list[float]]("navigation")
+    gains = OwnedBy[ControllerGains]("navigation")
+    blocked_give_up_s = OwnedBy[float]("navigation")  # a blocked goal is aborted after this
+    zones = OwnedBy[tuple[MapZone, ...]]("navigation")
+    zone_source = OwnedBy[Callable[[], Sequence[MapZone]] | None]("navigation")
+    e_stopped = OwnedBy[bool]("holds")  # the robot's E-STOP input
+    stop_latched = OwnedBy[bool]("holds")  # /stop holds the base, as a safety controller does
+    fault = OwnedBy[str]("holds")
+    collisions = OwnedBy[int]("physics")
+    max_penetration = OwnedBy[float]("physics")
+    after_step = OwnedBy[list[Callable[[], Any]]]("physics")  # called after each step()
+    scan_ranges = OwnedBy[np.ndarray]("scanner", "ranges")
+    scan_stamp = OwnedBy[float]("scanner", "stamp")
+    detected = OwnedBy[list[DetectedObstacle]]("scanner")
+    lidar_ms = OwnedBy[collections.deque[float]]("scanner", "ms")
 
     def __init__(
         self,
