@@ -52,9 +52,6 @@ def _slow_gains(v_max: float) -> ControllerGains:
     return ControllerGains(v_max=v_max, w_max=0.3)
 
 
-__all__ = ["GoalError", "Navigation"]  # GoalError: where the simulator's callers import it
-
-
 class Navigation:
     """The goal the base drives (one at a time, under `lock`) and how the last one ended; the
     map's keepout and speed zones it keeps to; the dock it charges at."""

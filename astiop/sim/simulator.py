@@ -22,7 +22,7 @@ from astiop.sim.clock import Clock, SimEvents
 from astiop.sim.commands import TELEOP_TIMEOUT_S, SimCommands
 from astiop.sim.controller import ControllerGains
 from astiop.sim.conveyor import Conveyor
-from astiop.sim.goal import Goal, GoalResult
+from astiop.sim.goal import Goal, GoalError, GoalResult
 from astiop.sim.holds import Holds
 from astiop.sim.kinematics import (
     ASTIBOT,
@@ -33,7 +33,6 @@ from astiop.sim.navigation import (
     BLOCKED_GIVE_UP_S,
     ROBOT_LENGTH,  # noqa: F401 - the ASTIbot's size, read from here by tests
     ROBOT_WIDTH,  # noqa: F401
-    GoalError,
     Navigation,
 )
 from astiop.sim.path_planner import PathPlanner
