@@ -3,7 +3,8 @@ the robot reported (`grounding`); its reply is never turned into commands."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Protocol
+from collections.abc import Awaitable, Callable
+from typing import Any
 
 from astiop.agent import grounding, prompts, rules
 from astiop.agent.answer_grammar import answer_grammar
@@ -13,36 +14,30 @@ from astiop.agent.models.specs import LLMEndpoint
 from astiop.agent.result import TurnResult
 from astiop.agent.summaries import summarize
 
-
-class InterpretingHost(Protocol):
-    """What `InterpretingMixin` needs of the agent it is mixed into."""
-
-    endpoint: LLMEndpoint
-    interpretation: str
-    interpret_tokens: int
-
-    async def _ask(
-        self,
-        messages: Any,
-        schema: Any,
-        result: TurnResult,
-        emit: Any,
-        kind: str,
-        grammar: str | None = None,
-        max_tokens: int | None = None,
-    ) -> Completion: ...
+# the agent's one way to the model: (messages, schema, result, emit, kind, grammar=,
+# max_tokens=), the reply streamed to `emit` as `kind` and accounted in `result`
+Ask = Callable[..., Awaitable[Completion]]
+Emit = Callable[[str, Any], None]
 
 
-if TYPE_CHECKING:
-    _Host = InterpretingHost
-else:
-    _Host = object
+class Interpreter:
+    """Says a turn's results back: by the rules, or by the model asked through `ask` and held
+    to what the robot reported (`style` "grounded"), or in the model's own words ("raw")."""
 
+    def __init__(self, ask: Ask, style: str = "grounded", max_tokens: int = 96) -> None:
+        if style not in ("grounded", "raw"):
+            raise ValueError(f"interpretation must be 'grounded' or 'raw', not '{style}'")
+        self.ask = ask
+        self.style = style
+        self.max_tokens = max_tokens  # of the model's answer
 
-class InterpretingMixin(_Host):
-    async def _interpret(self, request: str, result: TurnResult, emit, fallback: str) -> str:
-        if self.endpoint.is_rules or fallback:
-            answer = rules.interpret(request, result.commands, self._waited_lines(result))
+    async def interpret(
+        self, endpoint: LLMEndpoint, request: str, result: TurnResult, emit: Emit, fallback: str
+    ) -> str:
+        """The answer to `request` from `result`'s commands; `fallback` labels an answer the
+        model did not write (it is not asked)."""
+        if endpoint.is_rules or fallback:
+            answer = rules.interpret(request, result.commands, _waited_lines(result))
             if result.started:
                 answer += f" | {result.started}"
             answer = fallback + answer  # the label of an answer the model did not write
@@ -55,30 +50,30 @@ class InterpretingMixin(_Host):
             emit("answer_token", reason)
             return reason
         results = "\n".join(summarize(ex) for ex in result.commands)  # some command ran
-        results += "".join(f"\n{line}" for line in self._waited_lines(result))
+        results += "".join(f"\n{line}" for line in _waited_lines(result))
         if result.started:
             results += f"\n{result.started} (the robot is on its way; it has not arrived)"
         outcome = "succeeded" if "succeeded" in result.waited.values() else None
         facts = facts_of(
-            request, result.commands, outcome, [result.started, *self._waited_lines(result)]
+            request, result.commands, outcome, [result.started, *_waited_lines(result)]
         )
         messages = prompts.interpret_messages(request, results)
         grammar = None  # llama.cpp servers: the words and figures this turn's results allow
-        if self.interpretation == "grounded" and self.endpoint.local:
+        if self.style == "grounded" and endpoint.local:
             ran = [ex for ex in result.commands if ex.executed and not ex.error]
             commanded = all(ex.provenance == "commanded" for ex in ran)
             grammar = answer_grammar(request, results, facts.words, facts.kinds, commanded)
-        c = await self._ask(
+        c = await self.ask(
             messages,
             None,
             result,
             emit,
             "answer_token",
             grammar=grammar,
-            max_tokens=self.interpret_tokens,
+            max_tokens=self.max_tokens,
         )
         text = result.model_answer = c.text.strip()
-        if self.interpretation == "raw":
+        if self.style == "raw":
             result.grounding = "raw"
             return _with_started(text, result.started)
         dropped = 0
@@ -92,17 +87,15 @@ class InterpretingMixin(_Host):
                 emit("answer_trimmed", text)
             return _with_started(text, result.started)
         result.grounding = f"replaced: {reason}"
-        answer = grounding.factual_answer(
-            result.commands, result.started, self._waited_lines(result)
-        )
+        answer = grounding.factual_answer(result.commands, result.started, _waited_lines(result))
         emit("answer_replaced", answer)
         return answer
 
-    def _waited_lines(self, result: TurnResult) -> list[str]:
-        return [
-            f"{result.commands[seq].command}: goal {outcome}"
-            for seq, outcome in result.waited.items()
-        ]
+
+def _waited_lines(result: TurnResult) -> list[str]:
+    return [
+        f"{result.commands[seq].command}: goal {outcome}" for seq, outcome in result.waited.items()
+    ]
 
 
 def _with_started(text: str, started: str) -> str:

@@ -30,7 +30,7 @@ from astiop.agent import (
     watch_turn,
 )
 from astiop.agent.intent import Intent
-from astiop.agent.interpretation import InterpretingMixin
+from astiop.agent.interpretation import Interpreter
 from astiop.agent.models.llm import LLMError, LLMHTTPError, LLMTimeout, LLMUnavailable
 from astiop.agent.models.reply_stream import Completion
 from astiop.agent.models.specs import LLMEndpoint
@@ -48,7 +48,7 @@ HISTORY_TURNS = 3
 DEADLINE_S = 120.0  # no reply streams longer than this, whatever the server does
 
 
-class Agent(InterpretingMixin):
+class Agent:
     def __init__(
         self,
         gateway: RobotGateway,
@@ -70,8 +70,7 @@ class Agent(InterpretingMixin):
         replace_mission: mission_turn.ReplaceMission = None,
         robot: str = "",
     ):
-        if interpretation not in ("grounded", "raw"):
-            raise ValueError(f"interpretation must be 'grounded' or 'raw', not '{interpretation}'")
+        self.interpreter = Interpreter(self._ask, interpretation, interpret_tokens)
         _check_mode(endpoint, mode)
         self.gateway = gateway
         self.endpoint = endpoint
@@ -87,8 +86,6 @@ class Agent(InterpretingMixin):
         self.fallback = fallback  # the rules answer when the model is unreachable
         self._places = places
         self._turn_places: dict[str, tuple[float, float]] | None = None
-        self.interpretation = interpretation
-        self.interpret_tokens = interpret_tokens
         self.narrow_tools = narrow_tools
         self._schema_ok = True
         self._missions = missions
@@ -216,7 +213,9 @@ class Agent(InterpretingMixin):
                 await mission_turn.begin(self, request, steps, result, emit)
             else:
                 await self._execute(commands, result, emit)
-                result.answer = await self._interpret(request, result, emit, fallback)
+                result.answer = await self.interpreter.interpret(
+                    self.endpoint, request, result, emit, fallback
+                )
         except LLMError as exc:
             _keep_partial(result, exc)
             result.error = str(exc)

@@ -3,7 +3,7 @@
 Each robot is a `Simulator` of its own (its battery, goals, lidar, events and dock) sharing the
 world and one lock: every robot's lidar sees the others, no two pass through each other (a
 contact is a collision fault, as with a wall), and navigation waits for a robot in the way,
-plans around it, or gives its goal up and says so (`navigation.py: _yield_to_robots`).
+plans around it, or gives its goal up and says so (`Navigation._yield_to_robots`).
 """
 
 from __future__ import annotations
@@ -119,17 +119,17 @@ class SimFleet:
             self._carry -= n * self.dt
             for _ in range(n):
                 for robot in self.robots:
-                    robot._before_physics()
+                    robot.physics.before_world_step()
                 self.world.step(self.dt)
                 for robot in self.robots:
-                    robot._after_physics()
+                    robot.physics.after_world_step()
         for observe in self.after_step:
             observe()
 
     def _on_contact(self, arbiter, space, data) -> None:
         a, b = (self._by_shape[s] for s in arbiter.shapes)
-        a._contact, b._contact = b.shape.kind, a.shape.kind
+        a.physics.contact, b.physics.contact = b.shape.kind, a.shape.kind
 
     def _on_depth(self, arbiter, space, data) -> None:
         for robot in (self._by_shape[s] for s in arbiter.shapes):
-            robot._on_depth(arbiter, space, data)
+            robot.physics.on_depth(arbiter, space, data)

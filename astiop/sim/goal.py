@@ -8,6 +8,10 @@ from dataclasses import dataclass, field
 from astiop.sim.geometry import path_length
 
 
+class GoalError(ValueError):
+    """A goal or command was refused; the robot's state is unchanged."""
+
+
 @dataclass
 class Leg:
     kind: str  # navigate | dock | undock

@@ -8,19 +8,22 @@ threads command or read `snapshot()`.
 from __future__ import annotations
 
 import collections
-import math
 import threading
+from collections.abc import Callable, Sequence
+from typing import Any, Generic, TypeVar
 
 import numpy as np
 
 from astiop.sim import lidar
-from astiop.sim.battery import Battery
+from astiop.sim.base import Base, Pose
+from astiop.sim.battery import Battery, LipoBattery
 from astiop.sim.body import ASTIBOT_BODY, Body
-from astiop.sim.commands import CommandsMixin, Teleop
-from astiop.sim.controller import ControllerGains, tracking_error
+from astiop.sim.clock import Clock, SimEvents
+from astiop.sim.commands import TELEOP_TIMEOUT_S, SimCommands
+from astiop.sim.controller import ControllerGains
 from astiop.sim.conveyor import Conveyor
-from astiop.sim.geometry import wrap_angle
-from astiop.sim.goal import Goal, GoalResult
+from astiop.sim.goal import Goal, GoalError, GoalResult
+from astiop.sim.holds import Holds
 from astiop.sim.kinematics import (
     ASTIBOT,
     MecanumParams,
@@ -30,20 +33,64 @@ from astiop.sim.navigation import (
     BLOCKED_GIVE_UP_S,
     ROBOT_LENGTH,  # noqa: F401 - the ASTIbot's size, read from here by tests
     ROBOT_WIDTH,  # noqa: F401
-    GoalError,
-    NavigationMixin,
+    Navigation,
 )
 from astiop.sim.path_planner import PathPlanner
 from astiop.sim.perception import DetectedObstacle
+from astiop.sim.scanner import Scanner
 from astiop.sim.state import Event, SimState, lamp, state_word
-from astiop.sim.stepping import SteppingMixin
-from astiop.sim.world import CT_OBSTACLE, CT_STATIC, World
+from astiop.sim.stepping import Physics
+from astiop.sim.world import Obstacle, World
 from astiop.warehouse import WarehouseMap, default_map
+from astiop.zones import MapZone
 
 ROBOT_MASS = ASTIBOT_BODY.mass
+T = TypeVar("T")
 
 
-class Simulator(NavigationMixin, CommandsMixin, SteppingMixin):
+class OwnedBy(Generic[T]):
+    """An attribute of the simulator whose state one of its helpers owns: `goal =
+    OwnedBy[Goal | None]("navigation")` makes `sim.goal` read and write `sim.navigation.goal`."""
+
+    def __init__(self, helper: str, name: str = "") -> None:
+        self.helper, self.name = helper, name
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name = self.name or name
+
+    def __get__(self, sim: Any, owner: type | None = None) -> T:
+        value: T = getattr(getattr(sim, self.helper), self.name)
+        return value
+
+    def __set__(self, sim: Any, value: T) -> None:
+        setattr(getattr(sim, self.helper), self.name, value)
+
+
+class Simulator:
+    """The one front of the simulated robot; its state is its helpers': `clock` and `events`,
+    `base` (bodies, pose, motors), `holds` (E-STOP, /stop, fault), `scanner` (lidar),
+    `navigation` (goals, zones, dock), `commands` and `physics` (the step)."""
+
+    t = OwnedBy[float]("clock")
+    goal = OwnedBy[Goal | None]("navigation")
+    plan = OwnedBy[tuple[tuple[float, float], ...]]("navigation")
+    last_result = OwnedBy[GoalResult | None]("navigation")
+    plan_ms = OwnedBy[list[float]]("navigation")
+    gains = OwnedBy[ControllerGains]("navigation")
+    blocked_give_up_s = OwnedBy[float]("navigation")  # a blocked goal is aborted after this
+    zones = OwnedBy[tuple[MapZone, ...]]("navigation")
+    zone_source = OwnedBy[Callable[[], Sequence[MapZone]] | None]("navigation")
+    e_stopped = OwnedBy[bool]("holds")  # the robot's E-STOP input
+    stop_latched = OwnedBy[bool]("holds")  # /stop holds the base, as a safety controller does
+    fault = OwnedBy[str]("holds")
+    collisions = OwnedBy[int]("physics")
+    max_penetration = OwnedBy[float]("physics")
+    after_step = OwnedBy[list[Callable[[], Any]]]("physics")  # called after each step()
+    scan_ranges = OwnedBy[np.ndarray]("scanner", "ranges")
+    scan_stamp = OwnedBy[float]("scanner", "stamp")
+    detected = OwnedBy[list[DetectedObstacle]]("scanner")
+    lidar_ms = OwnedBy[collections.deque[float]]("scanner", "ms")
+
     def __init__(
         self,
         warehouse: WarehouseMap | None = None,
@@ -59,7 +106,7 @@ class Simulator(NavigationMixin, CommandsMixin, SteppingMixin):
         blocked_give_up_s: float = BLOCKED_GIVE_UP_S,
         body: Body = ASTIBOT_BODY,
         gains: ControllerGains | None = None,
-        battery=None,
+        battery: Battery | LipoBattery | None = None,
         lidar_spec: lidar.LidarSpec | None = None,
         world: World | None = None,
         lock: threading.RLock | None = None,
@@ -76,59 +123,45 @@ class Simulator(NavigationMixin, CommandsMixin, SteppingMixin):
         self.chassis = body  # `self.body` is the pymunk body
         if body is not ASTIBOT_BODY:
             params = body.wheels
-        self.blocked_give_up_s = blocked_give_up_s  # a blocked goal is aborted after this
         self.params = params
         self.rng = np.random.default_rng(seed)
         self.seed = seed
         self.lock = lock or threading.RLock()
         self.dt = 1.0 / physics_hz
-        self._control_every = max(1, physics_hz // 20)
-        self._lidar_every = max(1, physics_hz // 10)
         self.lidar_enabled = lidar_enabled
         self.lidar_spec = lidar_spec or lidar.LidarSpec()
-        self._beam_angles = self.lidar_spec.beam_angles()
-        self.gains = gains or ControllerGains(v_max=v_max, w_max=w_max)
         self.in_fleet = world is not None
         self.world = world or World(self.map)
         self.path_planner = PathPlanner(self.world.static_boxes, self.map.bounds, body.inflation)
         self.battery = battery if battery is not None else Battery(battery_soc)
         self.conveyor = Conveyor()
-        self._build_robot(self._resolve_start(start))
-        self.t = 0.0
-        self._tick = 0
-        self._carry = 0.0
-        self.after_step: list = []  # called after each step(), outside the lock
-        self._v = [0.0, 0.0, 0.0]  # body velocity being applied (robot frame), floats: per step
-        self._applied = (0.0, 0.0, 0.0)
-        self._target = (0.0, 0.0, 0.0)
-        self._teleop = Teleop()
-        self.goal: Goal | None = None
-        self.plan: tuple[tuple[float, float], ...] = ()
-        self.last_result: GoalResult | None = None
-        self._goal_ids = 0
-        self.e_stopped = False  # the robot's E-STOP input
-        self.stop_latched = False  # /stop holds the base, as a safety controller does
-        self._ignored_said = False  # /cmd_vel ignored during this hold: said once
-        self.fault = ""
-        self.max_penetration = 0.0
-        self.collisions = 0
-        self._contact: str | None = None
-        self.scan_ranges = np.full(self.lidar_spec.beams, np.inf)
-        self.scan_stamp = 0.0
-        self.detected: list[DetectedObstacle] = []
-        self.lidar_ms: collections.deque[float] = collections.deque(maxlen=2000)
-        self.plan_ms: list[float] = []
-        self._events: collections.deque[Event] = collections.deque(maxlen=500)
-        self._event_seq = 0
-        self._motor_power = 0.0
-        self._energy_dt = 0.0
-        self._pose_at = (-1, (0.0, 0.0, 0.0))  # (world step, pose): the body moves only in a step
-        self._dock_at: tuple = (None, None, None)  # (map, dock name, station)
+        self.clock = Clock(self.dt)
+        self.events = SimEvents(self.clock)
+        self.base = Base(self.world, self._resolve_start(start), body, params, owner=self)
+        self.control, self.body, self.shape = self.base.control, self.base.body, self.base.shape
+        self.holds = Holds()
+        self.scanner = Scanner(self.world, self.base, self.clock, self.lidar_spec, self.rng)
+        self.navigation = Navigation(
+            lock=self.lock, warehouse=self.map, dock_name=dock, world=self.world,
+            planner=self.path_planner, base=self.base, holds=self.holds, scanner=self.scanner,
+            clock=self.clock, events=self.events,
+            gains=gains or ControllerGains(v_max=v_max, w_max=w_max),
+            blocked_give_up_s=blocked_give_up_s,
+        )  # fmt: skip
+        self.commands = SimCommands(
+            lock=self.lock, clock=self.clock, events=self.events, holds=self.holds,
+            base=self.base, navigation=self.navigation, conveyor=self.conveyor, world=self.world,
+        )  # fmt: skip
+        self.physics = Physics(
+            lock=self.lock, clock=self.clock, world=self.world, base=self.base, holds=self.holds,
+            navigation=self.navigation, scanner=self.scanner, battery=self.battery,
+            conveyor=self.conveyor, events=self.events, physics_hz=physics_hz,
+            lidar_enabled=lidar_enabled, in_fleet=self.in_fleet,
+        )  # fmt: skip
         if self.lidar_enabled:
-            self._scan()
+            self.scanner.scan()
 
-    # -- construction ----------------------------------------------------------------
-    def _resolve_start(self, start) -> tuple[float, float, float]:
+    def _resolve_start(self, start: tuple[float, float, float] | str | None) -> Pose:
         if start is None or start == "docked":
             dock = self.map.station(self.dock_name)
             return dock.docked_pose if dock and dock.docked_pose else (2.0, 2.0, 0.0)
@@ -137,71 +170,96 @@ class Simulator(NavigationMixin, CommandsMixin, SteppingMixin):
             if st is None:
                 raise GoalError(f"unknown station '{start}'")
             return st.pose
-        return tuple(float(v) for v in start)
+        x, y, theta = (float(v) for v in start)
+        return (x, y, theta)
 
-    def _build_robot(self, pose) -> None:
-        self.control, self.body, self.shape = self.world.add_robot(
-            pose, self.chassis.mass, self.chassis.length, self.chassis.width, self
-        )
-        for other in (CT_STATIC, CT_OBSTACLE):
-            self.world.space.on_collision(
-                self.shape.collision_type, other, begin=self._on_contact, post_solve=self._on_depth
-            )
+    # -- the clock (physics) -------------------------------------------------------------
+    def step(self, duration: float) -> None:
+        self.physics.step(duration)
 
-    def _on_contact(self, arbiter, space, data) -> None:
-        other = arbiter.shapes[1] if arbiter.shapes[0] is self.shape else arbiter.shapes[0]
-        self._contact = getattr(other, "kind", "obstacle")
+    def run_until(
+        self, predicate: Callable[[], bool], max_sim_s: float, chunk: float = 0.1
+    ) -> bool:
+        return self.physics.run_until(predicate, max_sim_s, chunk)
 
-    def _on_depth(self, arbiter, space, data) -> None:
-        for p in arbiter.contact_point_set.points:
-            if -p.distance > self.max_penetration:
-                self.max_penetration = -p.distance
+    def run_goal(self, max_sim_s: float = 900.0) -> GoalResult | None:
+        """Step until the active goal ends (fast mode); returns its result."""
+        return self.physics.run_goal(max_sim_s)
 
-    # -- events ----------------------------------------------------------------------
-    def _event(self, kind: str, message: str, severity: str = "info") -> None:
-        self._event_seq += 1
-        self._events.append(Event(self._event_seq, self.t, kind, severity, message))
+    # -- goals (navigation) --------------------------------------------------------------
+    def set_zones(self, zones: Sequence[MapZone]) -> None:
+        self.navigation.set_zones(zones)
 
+    def check_goal(self, x: float, y: float, theta: float) -> None:
+        """Raise GoalError if the robot could never stand at this pose."""
+        self.navigation.check_goal(x, y, theta)
+
+    def goto(self, x: float, y: float, theta: float, name: str = "") -> Goal:
+        return self.navigation.goto(x, y, theta, name)
+
+    def dock(self) -> Goal:
+        return self.navigation.dock()
+
+    def undock(self) -> Goal:
+        return self.navigation.undock()
+
+    def cancel(self, reason: str = "canceled by the operator") -> bool:
+        return self.navigation.cancel(reason)
+
+    # -- commands ------------------------------------------------------------------------
+    def stop(self) -> str:
+        """Stop all motion, cancel the goal and acknowledge a collision fault; then hold the
+        base (no /cmd_vel, goal, dock or conveyor job) until /release."""
+        return self.commands.stop()
+
+    def release(self) -> str:
+        """/release: let go of a latched /stop and of the E-STOP input."""
+        return self.commands.release()
+
+    def set_cmd_vel(
+        self, vx: float, vy: float, wz: float, timeout: float = TELEOP_TIMEOUT_S
+    ) -> None:
+        """Teleop velocity in the robot frame; it lapses unless repeated within `timeout`."""
+        self.commands.set_cmd_vel(vx, vy, wz, timeout)
+
+    def clear_fault(self) -> None:
+        self.commands.clear_fault()
+
+    def estop(self) -> None:
+        self.commands.estop()
+
+    def release_estop(self) -> None:
+        self.commands.release_estop()
+
+    def conveyor_transfer(self, direction: int) -> str:
+        return self.commands.conveyor_transfer(direction)
+
+    def add_obstacle(self, kind: str, x: float, y: float, theta: float = 0.0) -> Obstacle:
+        return self.commands.add_obstacle(kind, x, y, theta)
+
+    def remove_obstacle(self, obstacle_id: int) -> Obstacle:
+        return self.commands.remove_obstacle(obstacle_id)
+
+    # -- events --------------------------------------------------------------------------
     def events_since(self, seq: int) -> list[Event]:
         with self.lock:
-            return [e for e in self._events if e.seq > seq]
+            return self.events.since(seq)
 
     # -- state -----------------------------------------------------------------------
     @property
-    def pose(self) -> tuple[float, float, float]:
-        step, pose = self._pose_at
-        if step != self.world.steps:  # read once per physics step, not per use
-            p = self.body.position
-            pose = (p.x, p.y, wrap_angle(self.body.angle))
-            self._pose_at = (self.world.steps, pose)
-        return pose
-
-    def _dock(self):
-        """The dock station, looked up once per map and dock name (`docked()` is 20 Hz)."""
-        held_map, held_name, dock = self._dock_at
-        if held_map is not self.map or held_name != self.dock_name:
-            dock = self.map.station(self.dock_name)
-            self._dock_at = (self.map, self.dock_name, dock)
-        return dock
+    def pose(self) -> Pose:
+        return self.base.pose
 
     def docked(self) -> bool:
-        dock = self._dock()
-        if dock is None or dock.docked_pose is None:
-            return False
-        pose = self.pose
-        dx, dy, _ = dock.docked_pose
-        if abs(dx - pose[0]) > 0.09 or abs(dy - pose[1]) > 0.09:
-            return False  # surely more than 0.08 m off, the error below turned or not (20 Hz)
-        ex, ey, eth = tracking_error(pose, dock.docked_pose)
-        return math.hypot(ex, ey) < 0.08 and abs(eth) < math.radians(5) and self.speed() < 0.05
+        return self.navigation.docked()
 
     def speed(self) -> float:
-        return float(math.hypot(self._v[0], self._v[1]))
+        return self.base.speed()
 
     @property
     def held(self) -> bool:
         """Whether the base holds still until /release: its E-STOP input, or a latched /stop."""
-        return self.e_stopped or self.stop_latched
+        return self.holds.held
 
     def state_word(self) -> str:
         goal = self.goal
@@ -217,19 +275,25 @@ class Simulator(NavigationMixin, CommandsMixin, SteppingMixin):
     def snapshot(self) -> SimState:
         with self.lock:
             x, y, th = self.pose
-            wheels = inverse_kinematics(*self._v, self.params)
+            v = self.base.v
+            wheels = inverse_kinematics(v[0], v[1], v[2], self.params)
             goal = self.goal
             return SimState(
                 t=self.t,
                 x=x,
                 y=y,
                 theta=th,
-                vx=float(self._v[0]),
-                vy=float(self._v[1]),
-                wz=float(self._v[2]),
-                wheel_speeds=tuple(float(w) for w in wheels),
+                vx=float(v[0]),
+                vy=float(v[1]),
+                wz=float(v[2]),
+                wheel_speeds=(
+                    float(wheels[0]),
+                    float(wheels[1]),
+                    float(wheels[2]),
+                    float(wheels[3]),
+                ),
                 state=self.state_word(),
-                mode="manual" if self._teleop.until > self.t else "auto",
+                mode="manual" if self.base.teleop.until > self.t else "auto",
                 active_goal=goal.name if goal else "",
                 fault=self.fault,
                 e_stopped=self.e_stopped,
@@ -254,5 +318,5 @@ class Simulator(NavigationMixin, CommandsMixin, SteppingMixin):
                 obstacles=tuple(self.world.obstacles.values()),
                 max_penetration=self.max_penetration,
                 collisions=self.collisions,
-                event_seq=self._event_seq,
+                event_seq=self.events.seq,
             )

@@ -166,7 +166,7 @@ async def test_a_looping_answer_is_replaced(llm, store):
 async def test_raw_interpretation_keeps_the_models_words(llm, store):
     llm.replies = ['{"commands": ["ros2 topic echo /obstacles --once"]}', "A drone blocks it."]
     agent = make_agent(llm, store)
-    agent.interpretation = "raw"
+    agent.interpreter.style = "raw"
     result = await agent.turn("is anything blocking the robot?")
     assert result.answer == "A drone blocks it." and result.grounding == "raw"
 
