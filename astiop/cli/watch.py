@@ -158,8 +158,7 @@ def run(ctx: typer.Context, as_json: bool = typer.Option(False, "--json")) -> No
     SIGTERM; each new alert is written once to the database and printed (--json: a line each)."""
     from astiop.robot.factory import make_robot_gateway
     from astiop.transports.base import BackendError
-    from astiop.watches.evaluator import Evaluator
-    from astiop.watches.runner import WatchRunner
+    from astiop.watches.runner import WatchRunner, make_evaluator
 
     st = state(ctx)
     settings = st.settings
@@ -168,12 +167,7 @@ def run(ctx: typer.Context, as_json: bool = typer.Option(False, "--json")) -> No
         gateway.start()
     except BackendError as exc:
         fail(str(exc))
-    ev = Evaluator(
-        st.store,
-        _robot(st),
-        battery_low=settings.watches.battery_low,
-        builtins=settings.watches.builtins,
-    )
+    ev = make_evaluator(gateway, st.store, settings, _robot(st))
     runner = WatchRunner(
         gateway,
         ev,

@@ -16,6 +16,38 @@ AGE_ROLES = sorted({r for f in FIELDS.values() for r in f.roles} | {"status"})
 
 
 ALWAYS_READ = ("battery", "status")  # the built-in alerts' roles: always watched anyway
+BATTERY_LOW = 20.0  # %, where neither the settings nor the robot's profile say
+
+
+def battery_low(gateway: RobotGateway, configured: float | None) -> float:
+    """The settings' threshold, else the robot profile's, else BATTERY_LOW."""
+    if configured is not None:
+        return configured
+    profile = gateway.profile
+    low = profile.limits.battery_low if profile is not None else None
+    return BATTERY_LOW if low is None else low
+
+
+def pressed_by(gateway: RobotGateway) -> str:
+    """Who pressed the E-STOP, as the robot's graph says it (never waits: '' until heard)."""
+    latch = gateway.station_latch
+    if latch is None or not latch.wait_ready(0) or not latch.engaged:
+        return ""
+    press = latch.press
+    return press.words if press is not None else ""
+
+
+def make_evaluator(gateway: RobotGateway, store, settings, robot: str = "") -> Evaluator:
+    """The watches and built-in alerts of the gateway's robot (`robot`: its fleet name)."""
+    w = settings.watches
+    ev = Evaluator(
+        store, robot, battery_low=battery_low(gateway, w.battery_low), builtins=w.builtins,
+        no_progress_s=w.no_progress_s, mission_robot=gateway.label,
+        pressed_by=lambda: pressed_by(gateway),
+    )  # fmt: skip
+    if w.battery_low is None:  # the profile is matched once the robot is found: read it then
+        ev.builtin.threshold = lambda: battery_low(gateway, None)
+    return ev
 
 
 def reading_ages(gateway: RobotGateway, t: float, evaluator: Evaluator) -> dict[str, float]:
@@ -47,11 +79,14 @@ class WatchRunner:
     def run(self) -> None:
         """Until `halt` is set; a failing read or write is said once per streak."""
         failing = False
+        seq = self.gateway.state().event_seq
         while not self.halt.wait(self.period):
             try:
                 state = self.gateway.state()
+                events = self.gateway.events_since(seq)
+                seq = events[-1].seq if events else seq
                 alerts = self.evaluator.step(
-                    state, reading_ages(self.gateway, state.t, self.evaluator)
+                    state, reading_ages(self.gateway, state.t, self.evaluator), events=events
                 )
                 failing = False
             except Exception as exc:  # noqa: BLE001 - say it once, keep watching
@@ -72,9 +107,10 @@ class Watching:
         self.evaluator = evaluator
         self._failing = False
 
-    def step(self, state) -> list[dict]:
+    def step(self, state, events=()) -> list[dict]:
         try:
-            alerts = self.evaluator.step(state, reading_ages(self.gateway, state.t, self.evaluator))
+            ages = reading_ages(self.gateway, state.t, self.evaluator)
+            alerts = self.evaluator.step(state, ages, events=events)
         except Exception as exc:  # noqa: BLE001 - the console goes on showing the robot
             if not self._failing:
                 log.info("watches not evaluated: %s", exc)
@@ -82,3 +118,34 @@ class Watching:
             return []
         self._failing = False
         return alerts
+
+
+class FleetWatching(threading.Thread):
+    """Every robot of a fleet console's watch (`gateways()`: name -> gateway, as they are
+    reached), evaluated on one thread at `hz`; new alerts handed to `on_alert`."""
+
+    def __init__(self, gateways, store, settings, on_alert: Callable[[list[dict]], None]):
+        super().__init__(name="fleet-watches", daemon=True)
+        self.gateways = gateways
+        self.store = store
+        self.settings = settings
+        self.on_alert = on_alert
+        self.period = 1.0 / settings.watches.hz
+        self.halt = threading.Event()
+        self._each: dict[str, tuple[Watching, int]] = {}
+
+    def run(self) -> None:
+        while not self.halt.wait(self.period):
+            for name, gateway in list(self.gateways().items()):
+                if name not in self._each:
+                    ev = make_evaluator(gateway, self.store, self.settings, name)
+                    self._each[name] = (Watching(gateway, ev), gateway.state().event_seq)
+                watching, seq = self._each[name]
+                try:
+                    state, events = gateway.state(), gateway.events_since(seq)
+                except Exception:  # noqa: BLE001 - its Fleet row says it is not read
+                    continue
+                self._each[name] = (watching, events[-1].seq if events else seq)
+                alerts = watching.step(state, events)
+                if alerts:
+                    self.on_alert(alerts)
