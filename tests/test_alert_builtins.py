@@ -181,3 +181,31 @@ def test_two_processes_on_one_database_write_each_built_in_alert_once(tmp_path):
     finally:
         store.close()
     assert written == ["battery_low", "estop", "goal_aborted", "no_progress"]
+
+
+def test_a_robot_blocked_during_a_goal_raises_no_progress_then_goal_aborted(store):
+    """On the simulator: a pallet and two forklifts close the room; the goal behind them."""
+    import math
+
+    from tests.test_sim import ROOM
+
+    sim = Simulator(ROOM, start=(2.0, 5.0, 0.0), seed=2, blocked_give_up_s=20.0)
+    for kind, y in (("forklift", 3.0), ("forklift", 7.0), ("pallet", 5.0)):
+        sim.add_obstacle(kind, 5.0, y, math.pi / 2)
+    gateway = RobotGateway(SimBackend(sim, store), SafetyPolicy())
+    ev = Evaluator(store, no_progress_s=5.0)
+    sim.goto(8.0, 5.0, 0.0, "behind the pallet")
+    seen, seq, blocked_at = [], 0, None
+    while sim.t < 60 and "goal_aborted" not in kinds(seen):
+        sim.step(0.1)
+        state, events = gateway.state(), gateway.events_since(seq)
+        seq = events[-1].seq if events else seq
+        if blocked_at is None and state.status.state == "blocked":
+            blocked_at = state.t
+        for a in ev.step(state, now=state.t, events=events):
+            seen.append({**a, "t": state.t})
+    assert kinds(seen) == ["no_progress", "goal_aborted"]
+    stuck, aborted = seen
+    assert stuck["message"].startswith("no progress toward behind the pallet for 5 s")
+    assert blocked_at is not None and stuck["t"] - blocked_at <= 5.5  # it stopped before blocked
+    assert aborted["message"] == "goal aborted: path blocked for 20 s"

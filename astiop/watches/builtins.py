@@ -22,7 +22,8 @@ KINDS = (
     "battery_low", "fault", "contact_lost", "contact_regained", "estop", "goal_aborted",
     "goal_canceled", "no_progress", "mission_failed", "mission_interrupted",
 )  # fmt: skip
-PROGRESS_M = 0.10  # nearer the goal by this much (or moved this far without a plan) is progress
+PROGRESS_M = 0.10  # nearer the goal along its plan by this much is progress
+MOVED_M = 0.5  # and so is moving this far (Nav2's progress checker's required_movement_radius)
 OPERATOR_STOP_S = 5.0  # a cancel this soon after an astiop stop or cancel is the operator's own
 MISSIONS_S = 1.0  # the store's missions are read this often
 GOING = ("navigating", "blocked", "docking")
@@ -91,8 +92,8 @@ def goal_end(event: RobotEvent) -> tuple[str, str, str] | None:
 
 
 class Progress:
-    """Whether a goal is being approached: nearer along its plan by PROGRESS_M, or, without a
-    plan, moved PROGRESS_M from where it last progressed. `stalled_s` since the last progress."""
+    """Whether a goal is being approached: nearer along its plan by PROGRESS_M, or moved MOVED_M
+    from where it last progressed (around an obstacle, or without a plan)."""
 
     def __init__(self) -> None:
         self.goal: str | None = None
@@ -111,13 +112,11 @@ class Progress:
         here = (state.pose.x, state.pose.y) if state.pose is not None else None
         if goal != self.goal:
             self.goal, self.best, self.anchor, self.at = goal, math.inf, here, now
-        if left is not None and left <= self.best - PROGRESS_M:
-            self.best, self.at = left, now
-        elif left is not None and self.best == math.inf:
-            self.best = left
-        elif here is not None and self.anchor is not None and left is None:
-            if math.dist(here, self.anchor) >= PROGRESS_M:
-                self.anchor, self.at = here, now
+        nearer = left is not None and left <= self.best - PROGRESS_M
+        moved = here is not None and self.anchor is not None
+        if nearer or (moved and math.dist(here, self.anchor) >= MOVED_M):
+            self.best = left if left is not None else self.best
+            self.anchor, self.at = here, now
         return now - self.at
 
 
