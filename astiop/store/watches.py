@@ -163,3 +163,37 @@ class WatchTables(Connection):
             [t],
         ).fetchone()
         return row is not None
+
+    # -- what the Alerts screen and MCP read -----------------------------------------------
+    def alerts_where(
+        self,
+        robot: str | None = None,
+        kind: str | None = None,
+        open_only: bool = False,
+        limit: int = 500,
+    ) -> list[dict]:
+        """The newest alerts first, filtered (`open_only`: not yet acknowledged)."""
+        where, args = [], []
+        if robot is not None:
+            where.append("robot = ?")
+            args.append(robot)
+        if kind is not None:
+            where.append("kind = ?")
+            args.append(kind)
+        if open_only:
+            where.append("acknowledged_at IS NULL")
+        clause = f" WHERE {' AND '.join(where)}" if where else ""
+        rows = self.db.query(
+            f"SELECT * FROM alerts{clause} ORDER BY id DESC LIMIT ?", [*args, limit]
+        )
+        return list(rows)
+
+    def alerts_version(self) -> tuple[int, float]:
+        """Changes whenever an alert is written or acknowledged, by any process."""
+        row = self.db.conn.execute(
+            "SELECT COALESCE(MAX(id), 0), COALESCE(MAX(acknowledged_at), 0) FROM alerts"
+        ).fetchone()
+        return int(row[0]), float(row[1])
+
+    def alert_robots(self) -> list[str]:
+        return [r[0] for r in self.db.conn.execute("SELECT DISTINCT robot FROM alerts ORDER BY 1")]

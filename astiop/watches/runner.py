@@ -85,9 +85,8 @@ class WatchRunner:
                 state = self.gateway.state()
                 events = self.gateway.events_since(seq)
                 seq = events[-1].seq if events else seq
-                alerts = self.evaluator.step(
-                    state, reading_ages(self.gateway, state.t, self.evaluator), events=events
-                )
+                ages = reading_ages(self.gateway, state.t, self.evaluator)
+                alerts = self.evaluator.step(state, ages, now=state.t, events=events)
                 failing = False
             except Exception as exc:  # noqa: BLE001 - say it once, keep watching
                 if not failing:
@@ -110,7 +109,8 @@ class Watching:
     def step(self, state, events=()) -> list[dict]:
         try:
             ages = reading_ages(self.gateway, state.t, self.evaluator)
-            alerts = self.evaluator.step(state, ages, events=events)
+            # on the robot's clock: a paused simulator's goal stalls no watch
+            alerts = self.evaluator.step(state, ages, now=state.t, events=events)
         except Exception as exc:  # noqa: BLE001 - the console goes on showing the robot
             if not self._failing:
                 log.info("watches not evaluated: %s", exc)
