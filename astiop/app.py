@@ -392,9 +392,8 @@ def _fleet_watching(app: AstiopApp):
     s, fleet = app.services, app.fleet
     if s.gateway.playback is not None or fleet is None:
         return None
-    return FleetWatching(
-        lambda: dict(fleet.gateways),
-        s.store,
-        s.settings,
-        lambda a: app.post_message(AlertsFired(a)),
-    )
+
+    def fired(alerts: list[dict]) -> None:
+        app.post_message(AlertsFired(alerts))
+
+    return FleetWatching(lambda: dict(fleet.gateways), s.store, s.settings, fired)

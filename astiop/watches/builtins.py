@@ -113,8 +113,10 @@ class Progress:
         if goal != self.goal:
             self.goal, self.best, self.anchor, self.at = goal, math.inf, here, now
         nearer = left is not None and left <= self.best - PROGRESS_M
-        moved = here is not None and self.anchor is not None
-        if nearer or (moved and math.dist(here, self.anchor) >= MOVED_M):
+        moved = (
+            here is not None and self.anchor is not None and math.dist(here, self.anchor) >= MOVED_M
+        )
+        if nearer or moved:
             self.best = left if left is not None else self.best
             self.anchor, self.at = here, now
         return now - self.at
@@ -185,10 +187,11 @@ class BuiltinAlerts:
             self._goal_ended(event, state)
         stalled = self._progress.stalled_s(state, now)
         going = stalled is not None and not engaged
+        held = (stalled or 0.0) if going else 0.0
         self._condition(
-            "no_progress", going and stalled >= self.no_progress_s, not going or stalled == 0.0,
-            now, f"no progress toward {self._progress.goal} for {stalled or 0:.0f} s",
-            f"{stalled or 0:.0f} s", ages.get("status"),
+            "no_progress", held >= self.no_progress_s, held == 0.0, now,
+            f"no progress toward {self._progress.goal} for {held:.0f} s", f"{held:.0f} s",
+            ages.get("status"),
         )  # fmt: skip
 
     def _contact(self, state: RobotState, now: float) -> None:
