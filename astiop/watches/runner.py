@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import logging
 import threading
+import time
 from collections.abc import Callable
 
 from astiop.robot.gateway import RobotGateway
@@ -15,6 +16,7 @@ log = logging.getLogger("astiop.watches")
 AGE_ROLES = sorted({r for f in FIELDS.values() for r in f.roles} | {"status"})
 
 
+NEW_S = 0.01  # how often `watch run` looks for a new reading
 ALWAYS_READ = ("battery", "status")  # the built-in alerts' roles: always watched anyway
 BATTERY_LOW = 20.0  # %, where neither the settings nor the robot's profile say
 
@@ -77,11 +79,19 @@ class WatchRunner:
         self.halt = threading.Event()
 
     def run(self) -> None:
-        """Until `halt` is set; a failing read or write is said once per streak."""
+        """Until `halt` is set; a failing read or write is said once per streak. Evaluated at
+        `hz`, and at once when a reading the watches read arrives (looked for every NEW_S): a
+        watch fires within NEW_S of its reading, not within a whole period."""
         failing = False
         seq = self.gateway.state().event_seq
-        while not self.halt.wait(self.period):
+        last: dict[str, float] = {}
+        due = time.monotonic()
+        while not self.halt.wait(NEW_S):
             try:
+                times = self._times()
+                if times == last and time.monotonic() < due:
+                    continue
+                last, due = times, time.monotonic() + self.period
                 state = self.gateway.state()
                 events = self.gateway.events_since(seq)
                 seq = events[-1].seq if events else seq
@@ -95,6 +105,12 @@ class WatchRunner:
                 continue
             for alert in alerts:
                 self.on_alert(alert)
+
+    def _times(self) -> dict[str, float]:
+        """When each topic the watches and built-in alerts read last brought a message."""
+        wanted = set(ALWAYS_READ) | {w.role for w in self.evaluator.watches}
+        names = [self.gateway.profile.name(r) for r in wanted] if self.gateway.profile else []
+        return self.gateway.message_times([n for n in names if n])
 
 
 class Watching:
