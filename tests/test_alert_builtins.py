@@ -209,3 +209,20 @@ def test_a_robot_blocked_during_a_goal_raises_no_progress_then_goal_aborted(stor
     assert stuck["message"].startswith("no progress toward behind the pallet for 5 s")
     assert blocked_at is not None and stuck["t"] - blocked_at <= 5.5  # it stopped before blocked
     assert aborted["message"] == "goal aborted: path blocked for 20 s"
+
+
+def test_another_clients_nav2_goal_that_aborts_is_said_once_and_ours_is_not():
+    """As the action server's status topic lists them (action_msgs/msg/GoalStatus: 2
+    EXECUTING, 4 SUCCEEDED, 5 CANCELED, 6 ABORTED)."""
+    from astiop.transports.event_log import EventLog
+    from astiop.transports.goal_ends import GoalEnds
+
+    events = EventLog(0.0)
+    ends = GoalEnds(events)
+    ends.sent.append("ffff0000" * 4)  # a goal this process sent: said with its result
+    ends.listed([("aaaa1111" * 4, 2), ("ffff0000" * 4, 2), ("bbbb2222" * 4, 2)])
+    ends.listed([("aaaa1111" * 4, 6), ("ffff0000" * 4, 6), ("bbbb2222" * 4, 4)])
+    ends.listed([("aaaa1111" * 4, 6), ("cccc3333" * 4, 5)])  # listed again; never seen running
+    said = [e.message for e in events.since(0)]
+    assert said == ["goal aaaa1111 aborted (another client's goal)"]
+    assert goal_end(events.since(0)[0]) == ("aborted", "another client's goal", "aaaa1111")

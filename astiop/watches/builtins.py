@@ -28,9 +28,10 @@ OPERATOR_STOP_S = 5.0  # a cancel this soon after an astiop stop or cancel is th
 MISSIONS_S = 1.0  # the store's missions are read this often
 GOING = ("navigating", "blocked", "docking")
 # a goal's end as each transport says it: the simulator's "goal 3 aborted: why", rclpy's and
-# ros2cli's "goal finished: ABORTED (why)" and "goal canceled"
+# ros2cli's "goal finished: ABORTED (why)" and "goal canceled", and another client's Nav2 goal
+# "goal 1a2b3c4d aborted (another client's goal)" (transports/goal_ends.py)
 GOAL_END = re.compile(
-    r"^goal (?:finished: )?(?:(?P<id>\d+) )?(?P<how>aborted|canceled)(?:: | \()?(?P<why>.*?)\)?$",
+    r"^goal (?:finished: )?(?:(?P<id>[0-9a-f]+) )?(?P<how>aborted|canceled)(?:: | \()?(?P<why>.*?)\)?$",
     re.IGNORECASE,
 )
 

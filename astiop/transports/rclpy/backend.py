@@ -15,6 +15,7 @@ from astiop.ros2.profile import ProfileSpec
 from astiop.transports import live_robot
 from astiop.transports.base import RobotBackend
 from astiop.transports.event_log import Contact, EstopWork, EventLog
+from astiop.transports.goal_ends import GoalEnds, status_list
 from astiop.transports.inflight import InFlight, Job
 from astiop.transports.live_catalog import GraphLists, describe_graph
 from astiop.transports.live_robot import MOVING, without_finished_plan
@@ -80,6 +81,7 @@ class RclpyBackend(RclpyEstop, RclpyTeleop, RclpyStateWatches, RclpyVerbs, Robot
         self._hold_until = 0.0
         self.t0 = time.monotonic()
         self.events = EventLog(self.t0)
+        self._goal_ends = GoalEnds(self.events)  # any client's goals, as the server lists them
         self._estop = EstopWork(self.events)
         self._calls = EmptyCalls(self.proc, self.events, timeout_s)
         self._lock_hold = LockHold(self.proc, lambda: self._name("estop_lock"), self.events)
@@ -253,7 +255,9 @@ class RclpyBackend(RclpyEstop, RclpyTeleop, RclpyStateWatches, RclpyVerbs, Robot
 
     # -- live state --------------------------------------------------------------------------
     def _on_message(self, name: str, msg: Any) -> None:
-        if name == self._name("status"):
+        if name == goal_status_topic(self.catalog.profile):
+            self._goal_ends.listed(status_list(msg))
+        elif name == self._name("status"):
             self.events.status(msg.state, msg.fault)
             if msg.state in MOVING or getattr(msg, "speed", 0.0) > MOVING_SPEED:
                 self._want(

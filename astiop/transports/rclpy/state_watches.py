@@ -82,7 +82,7 @@ class RclpyStateWatches(_Host):
             and goals not in self._watches
             and self.proc.node.get_publishers_info_by_topic(goals)
         ):
-            w = watch(self.proc, goals, GOAL_STATUS)
+            w = watch(self.proc, goals, GOAL_STATUS, self._on_message)  # any client's goal's end
             if w is not None:
                 self._watches = {**self._watches, goals: w}
 

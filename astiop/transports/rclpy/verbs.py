@@ -18,6 +18,7 @@ from astiop.ros2.render import STAMPED
 from astiop.ros2.validation import Checked
 from astiop.ros2.verbs import VERBS
 from astiop.transports.base import BackendError
+from astiop.transports.goal_ends import GoalEnds
 from astiop.transports.inflight import ENDED, Job
 from astiop.transports.rclpy.graph import (
     full_name,
@@ -42,6 +43,8 @@ PARAM_FIELDS = {1: "bool_value", 2: "integer_value", 3: "double_value", 4: "stri
 
 class RclpyVerbs:
     """Mixed into RclpyBackend: uses its proc, catalog, watches, goals and events."""
+
+    _goal_ends: GoalEnds  # the goals sent here, not said as another client's
 
     def execute(self, checked: Checked, timeout: float) -> tuple[str, Any]:
         try:
@@ -207,6 +210,7 @@ class RclpyVerbs:
             lines.append("Goal was rejected.")
             return "\n".join(lines) + "\n", {"accepted": False, "status": "REJECTED"}
         goal_id = bytes(handle.goal_id.uuid).hex()
+        self._goal_ends.sent.append(goal_id)  # its end is said with its result, not as another's
         try:  # followed as a job of its own until it ends: the E-STOP cancels it
             job = self.inflight.start(
                 f"goal {c.command.name}", handle.cancel_goal_async, c.command.name
