@@ -176,6 +176,8 @@ class AstiopApp(ConsoleSafety, ConsolePalette, App):
         for a in msg.alerts:  # the current robot's own events say contact, faults, E-STOP, goals
             if a["kind"] in SAID_HERE or (a["robot"] and a["robot"] != self.current_robot):
                 self.notify(a["message"], title="alert", severity="warning", markup=False)
+            if a.get("reaction"):  # a watch that moves the robot: what it did or why not
+                self.notify(a["reaction"], title="watch reaction", markup=False)
 
     def _sampler_failed(self, text: str) -> None:  # the sampler's thread
         self.call_from_thread(self.notify, text, severity="error", markup=False)
@@ -392,8 +394,5 @@ def _fleet_watching(app: AstiopApp):
     s, fleet = app.services, app.fleet
     if s.gateway.playback is not None or fleet is None:
         return None
-
-    def fired(alerts: list[dict]) -> None:
-        app.post_message(AlertsFired(alerts))
-
+    fired = lambda alerts: app.post_message(AlertsFired(alerts))  # noqa: E731
     return FleetWatching(lambda: dict(fleet.gateways), s.store, s.settings, fired)

@@ -11,6 +11,7 @@ from collections.abc import Callable
 from astiop.robot.gateway import RobotGateway
 from astiop.watches.evaluator import Evaluator
 from astiop.watches.model import FIELDS
+from astiop.watches.reactions import react
 
 log = logging.getLogger("astiop.watches")
 AGE_ROLES = sorted({r for f in FIELDS.values() for r in f.roles} | {"status"})
@@ -105,6 +106,9 @@ class WatchRunner:
                 continue
             for alert in alerts:
                 self.on_alert(alert)
+                said = react(self.gateway, self.evaluator.store, alert, state.e_stopped)
+                if said is not None:
+                    self.report(said)
 
     def _times(self) -> dict[str, float]:
         """When each topic the watches and built-in alerts read last brought a message."""
@@ -133,6 +137,10 @@ class Watching:
             self._failing = True
             return []
         self._failing = False
+        for alert in alerts:  # this process wrote it first: its reaction is this process's
+            said = react(self.gateway, self.evaluator.store, alert, state.e_stopped)
+            if said is not None:
+                alert["reaction"] = said
         return alerts
 
 
@@ -140,7 +148,7 @@ class FleetWatching(threading.Thread):
     """Every robot of a fleet console's watch (`gateways()`: name -> gateway, as they are
     reached), evaluated on one thread at `hz`; new alerts handed to `on_alert`."""
 
-    def __init__(self, gateways, store, settings, on_alert: Callable[[list[dict]], None]):
+    def __init__(self, gateways, store, settings, on_alert: Callable[[list[dict]], object]):
         super().__init__(name="fleet-watches", daemon=True)
         self.gateways = gateways
         self.store = store
