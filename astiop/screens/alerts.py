@@ -84,7 +84,13 @@ class AlertsScreen(ConsoleScreen):
         table = self.query_one(DataTable)
         for label, width in COLUMNS:
             table.add_column(label, width=width)
-        self.set_interval(POLL_S, self._poll)
+        self.set_interval(POLL_S, self._tick)
+
+    def _tick(self) -> None:
+        """A look at the store while shown, one at a time (a slow one is not cancelled)."""
+        busy = any(w.group == "alerts-poll" and w.is_running for w in self.workers)
+        if self.is_current and not busy:
+            self._poll()
 
     def on_screen_resume(self) -> None:
         self.query_one(DataTable).focus()  # `a` acknowledges from the first key
@@ -103,7 +109,7 @@ class AlertsScreen(ConsoleScreen):
             str(state),
         )
 
-    @work(thread=True, exclusive=True, group="alerts-poll", exit_on_error=False)
+    @work(thread=True, group="alerts-poll", exit_on_error=False)
     def _poll(self) -> None:
         """Reloaded when any process wrote or acknowledged an alert since the last look."""
         version = self.services.store.alerts_version()
