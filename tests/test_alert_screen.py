@@ -64,3 +64,37 @@ async def test_open_alerts_are_listed_filtered_and_acknowledged_with_a_key(tmp_p
         finally:
             other.close()
         await wait_for(pilot, lambda: _rows(app)[0][0] == str(later), what="another's alert")
+
+
+async def test_a_fleet_console_raises_every_robots_built_in_alerts(tmp_path):
+    """Three simulated ASTIbots, astibot_2 current: astibot_3's E-STOP is an alert of its own,
+    notified though it is not the robot shown, and listed on the Alerts screen."""
+    from tests.test_tui_fleet import fleet_console
+
+    app, _fleet, runner = fleet_console(tmp_path)
+    runner.start()
+    try:
+        async with app.run_test(size=(150, 40)) as pilot:
+            await wait_for(pilot, lambda: "astibot_3" in app.fleet.gateways, what="astibot_3")
+            assert app.fleet.estop("astibot_3") == []
+            store = app.services.store
+
+            def stopped() -> list[dict]:
+                return [a for a in store.list_alerts() if a["kind"] == "estop"]
+
+            await wait_for(pilot, stopped, what="astibot_3's E-STOP alert")
+            (alert,) = stopped()
+            assert alert["robot"] == "astibot_3"
+            assert alert["message"].startswith("E-STOP engaged")
+            await wait_for(
+                pilot,
+                lambda: (
+                    alert["message"]
+                    in [n.message for n in app._notifications if n.title == "alert"]
+                ),
+                what="the notification",
+            )
+            await pilot.press("f8")
+            await wait_for(pilot, lambda: any(r[2] == "astibot_3" for r in _rows(app)))
+    finally:
+        runner.stop()
