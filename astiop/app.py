@@ -39,6 +39,7 @@ from astiop.services import Services
 from astiop.store import Store
 from astiop.transports.state import RobotState, TopicStat
 
+SAID_HERE = ("watch", "battery_low", "no_progress", "mission_failed", "mission_interrupted")
 STILL_HZ = 4.0  # a still robot's sampling: only its clock, scan noise and battery change
 
 
@@ -94,6 +95,7 @@ class AstiopApp(App):
         )
         self._motion: tuple = ()  # the last sample's motion_key
         self._watching = _watching(services) if fleet is None else None
+        self._fleet_watching = _fleet_watching(self) if fleet is not None else None
 
     def on_mount(self) -> None:
         gateway = self.services.gateway
@@ -109,6 +111,8 @@ class AstiopApp(App):
         self._sampler.start()
         if self.fleet is not None:
             self.fleet.start()
+        if self._fleet_watching is not None:
+            self._fleet_watching.start()
         if self.services.gateway.playback is None:  # a replay moves no robot
             self._approvals.start()
         if self.record_path is not None:
@@ -145,6 +149,8 @@ class AstiopApp(App):
         try:
             self._sampler.halt.set()
             self._approvals.halt.set()
+            if self._fleet_watching is not None:
+                self._fleet_watching.halt.set()
             self._sampler.join(2.0)
             if self._approvals.is_alive():
                 self._approvals.join(2.0)
@@ -167,14 +173,16 @@ class AstiopApp(App):
     # -- live state ---------------------------------------------------------------------
     def _state_sampled(self, state, events, stats) -> None:  # the sampler's thread
         self.post_message(RobotStateSampled(state, events, stats))
-        alerts = self._watching.step(state) if self._watching is not None else []
+        alerts = self._watching.step(state, events) if self._watching is not None else []
         if alerts:
             self.post_message(AlertsFired(alerts))
 
     def on_alerts_fired(self, msg: AlertsFired) -> None:
-        for a in msg.alerts:  # the robot's own events say contact, faults and the E-STOP
-            if a["kind"] in ("watch", "battery_low"):
+        for a in msg.alerts:  # the current robot's own events say contact, faults, E-STOP, goals
+            if a["kind"] in SAID_HERE or (a["robot"] and a["robot"] != self.current_robot):
                 self.notify(a["message"], title="alert", severity="warning", markup=False)
+            if a.get("reaction"):  # a watch that moves the robot: what it did or why not
+                self.notify(a["reaction"], title="watch reaction", markup=False)
 
     def _sampler_failed(self, text: str) -> None:  # the sampler's thread
         self.call_from_thread(self.notify, text, severity="error", markup=False)
@@ -358,9 +366,18 @@ def _watching(services: Services):
     on a replay: it happened already)."""
     if services.gateway.playback is not None:
         return None
-    from astiop.watches.evaluator import Evaluator
-    from astiop.watches.runner import Watching
+    from astiop.watches.runner import Watching, make_evaluator
 
-    w = services.settings.watches
-    ev = Evaluator(services.store, battery_low=w.battery_low, builtins=w.builtins)
+    ev = make_evaluator(services.gateway, services.store, services.settings)
     return Watching(services.gateway, ev)
+
+
+def _fleet_watching(app: AstiopApp):
+    """Every fleet robot's watches and built-in alerts, on a thread of their own."""
+    from astiop.watches.runner import FleetWatching
+
+    s, fleet = app.services, app.fleet
+    if s.gateway.playback is not None or fleet is None:
+        return None
+    fired = lambda alerts: app.post_message(AlertsFired(alerts))  # noqa: E731
+    return FleetWatching(lambda: dict(fleet.gateways), s.store, s.settings, fired)

@@ -99,8 +99,10 @@ class SimSettings(_Section):
 
 
 class WatchSettings(_Section):
-    builtins: StrictBool = True  # battery low, fault, contact, E-STOP alerts
-    battery_low: float = Field(default=20.0, ge=0, le=100, allow_inf_nan=False)  # %
+    builtins: StrictBool = True  # battery, fault, contact, E-STOP, goal, progress, mission alerts
+    # %, None: the robot profile's limits.battery_low, else 20
+    battery_low: float | None = Field(default=None, ge=0, le=100, allow_inf_nan=False)
+    no_progress_s: float = Field(default=30.0, gt=0, le=3600, allow_inf_nan=False)
     hz: float = Field(default=10.0, gt=0, le=50, allow_inf_nan=False)  # `watch run` samples
 
 

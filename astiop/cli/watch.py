@@ -95,6 +95,10 @@ def add(
     above: float | None = typer.Option(None, "--above", help="Fires when the reading is above."),
     hold_s: float = typer.Option(0.0, "--for", help="Only once it has held this long (s)."),
     every: bool = typer.Option(False, "--every", help="Every time, not only once."),
+    then: list[str] = typer.Option(
+        None, "--then", help="Then move the robot: dock, undock or a place (repeatable)."
+    ),
+    yes: bool = typer.Option(False, "--yes", help="Approve the --then steps without asking."),
     as_json: bool = typer.Option(False, "--json"),
 ) -> None:
     """Add a watch: `add tell me when the battery is below 20 %`, or `add --field battery
@@ -120,6 +124,8 @@ def add(
             op, threshold = ("<", below) if below is not None else (">", above)
             assert threshold is not None  # one of the two, checked above
             watch = Watch(field, op, threshold, hold_s, "every" if every else "once", _robot(st))
+        if then:
+            watch = _armed(st, watch, then, yes)
         validate(watch, _profile(st))
     except WatchError as exc:
         fail(f"{exc}; nothing was stored")
@@ -128,6 +134,30 @@ def add(
         print_json(Watch.from_row(st.store.watch(watch_id) or watch.row()).as_json())
     else:
         typer.echo(f"watch {watch_id}: I will tell you when {watch.sentence()}")
+
+
+def _armed(st: CliState, watch, then: list[str], yes: bool):
+    """The watch with mission steps as its reaction, approved here by the operator (once)."""
+    import getpass
+    import socket
+    from dataclasses import replace
+
+    from astiop.missions.steps import Step, describe
+    from astiop.watches.model import WatchError
+    from astiop.watches.reactions import ReactionError, mission_reaction
+
+    steps = [Step(t) if t in ("dock", "undock") else Step("goto", place=t) for t in then]
+    unknown = [s.place for s in steps if s.place and st.store.get_location(s.place) is None]
+    if unknown:
+        raise WatchError(f"no place called '{unknown[0]}' (astiop locations list)")
+    said = f"When {watch.condition()}, the robot will: {describe(steps)} (once)."
+    if not yes and not typer.confirm(f"{said} Arm it?", default=False, err=True):
+        fail("not approved; nothing was stored")
+    who = f"{getpass.getuser()} on {socket.gethostname()} (astiop watch add)"
+    try:
+        return replace(watch, reaction=mission_reaction(steps, who))
+    except ReactionError as exc:
+        raise WatchError(str(exc)) from None
 
 
 @app.command("remove")
@@ -166,8 +196,7 @@ def run(
     from astiop.metrics import figures_of
     from astiop.robot.factory import make_robot_gateway
     from astiop.transports.base import BackendError
-    from astiop.watches.evaluator import Evaluator
-    from astiop.watches.runner import WatchRunner
+    from astiop.watches.runner import WatchRunner, make_evaluator
 
     st = state(ctx)
     settings = st.settings
@@ -181,12 +210,7 @@ def run(
     except BackendError as exc:
         fail(str(exc))
     gateways.append(gateway)
-    ev = Evaluator(
-        st.store,
-        _robot(st),
-        battery_low=settings.watches.battery_low,
-        builtins=settings.watches.builtins,
-    )
+    ev = make_evaluator(gateway, st.store, settings, _robot(st))
     runner = WatchRunner(
         gateway,
         ev,

@@ -12,13 +12,16 @@ import time
 from typing import Any
 
 import anyio
+from mcp import types
 from mcp.server.mcpserver import Context, MCPServer
 from mcp.server.mcpserver.exceptions import ToolError
+from mcp.server.subscriptions import InMemorySubscriptionBus
 from mcp.types import CallToolResult, TextContent, ToolAnnotations
 from pydantic import ValidationError
 
 from astiop import __version__
 from astiop.bounded import escape_controls, one_line
+from astiop.mcp.alerts import ALERTS_URI, AlertFeed
 from astiop.mcp.fleet_tools import FleetTools
 from astiop.mcp.tools import CALL, TOOL_CLASSES, Call, Refused, RobotTools
 from astiop.ros2.interfaces import InterfaceError, interface_show
@@ -64,6 +67,12 @@ DESCRIPTIONS = {
     "robot's pose at its end, as stored.",
     "cancel_mission": "Cancel the running mission (default) and stop the robot; drops an "
     "interrupted one. Always allowed.",
+    "list_alerts": "The alerts that watches and the built-in alerts fired (battery low, fault, "
+    "contact lost, E-STOP, goal aborted, no progress, mission failed, ...), newest first: "
+    "open_only (default) those not yet acknowledged; robot and kind filter them. The resource "
+    "astiop://alerts holds the open ones and can be subscribed to.",
+    "acknowledge_alert": "Acknowledge an alert by its id (from list_alerts): every station "
+    "then shows it as acknowledged by this client. Moves nothing.",
 }
 
 
@@ -106,11 +115,22 @@ def reason_of(name: str, exc: BaseException) -> str:
 
 class AstiopMCP(MCPServer):
     def __init__(self, robot: RobotTools | FleetTools, read_only: bool = False):
-        super().__init__(
-            "astiop", instructions=INSTRUCTIONS, version=__version__, log_level="WARNING"
-        )
         if isinstance(robot, RobotTools):  # one robot: a fleet of one, named for its namespace
             robot = FleetTools({robot.gateway.profile.namespace.strip("/") or "robot": robot})
+        bus = InMemorySubscriptionBus()  # subscriptions/listen streams, told of alerts too
+        self.alerts = AlertFeed(robot.first.store, bus)
+        super().__init__(
+            "astiop", instructions=INSTRUCTIONS, version=__version__, log_level="WARNING",
+            subscriptions=bus, lifespan=self.alerts.watching,
+        )  # fmt: skip
+        # resources/subscribe of a 2025-era client: MCPServer serves subscriptions/listen only
+        lowlevel = self._lowlevel_server
+        lowlevel.add_request_handler(
+            "resources/subscribe", types.SubscribeRequestParams, self.alerts.subscribe
+        )
+        lowlevel.add_request_handler(
+            "resources/unsubscribe", types.UnsubscribeRequestParams, self.alerts.unsubscribe
+        )
         self.fleet = robot
         self.robot = robot.first  # the store's audit trail, and the resources' robot
         self.read_only = read_only
@@ -119,19 +139,26 @@ class AstiopMCP(MCPServer):
             if read_only and cls != "read":
                 continue
             self.add_tool(
-                robot.fleet_status if name == "fleet_status" else robot.tool(name),
+                self._tool(robot, name),
                 name=name,
                 description=DESCRIPTIONS[name],
                 annotations=ToolAnnotations(
                     read_only_hint=cls == "read",
                     destructive_hint=False
                     if cls == "read"
-                    else name not in ("stop", "cancel_mission"),
+                    else name not in ("stop", "cancel_mission", "acknowledge_alert"),
                     open_world_hint=True,
                 ),
                 meta={"astiop/class": cls},
             )
         self._resources()
+
+    def _tool(self, robot: FleetTools, name: str):
+        if name == "fleet_status":
+            return robot.fleet_status
+        if name in ("list_alerts", "acknowledge_alert"):
+            return getattr(self.alerts, name)
+        return robot.tool(name)
 
     async def call_tool(self, name: str, arguments: dict[str, Any], context=None):
         if not self._slots.acquire(blocking=False):
@@ -196,6 +223,12 @@ class AstiopMCP(MCPServer):
                 except InterfaceError:
                     parts.append(f"## {type_}\n(not known to astiop)\n")
             return "\n".join(parts)
+
+        @self.resource(ALERTS_URI, name="alerts", mime_type="application/json",
+                       description="The open alerts, newest first: subscribe to be told when "
+                       "one opens or is acknowledged.")  # fmt: skip
+        def alerts() -> str:
+            return self.alerts.open_alerts()
 
         @self.resource("astiop://locations", name="locations", mime_type="application/json",
                        description="The named locations the robot can be sent to.")  # fmt: skip

@@ -44,6 +44,8 @@ TOOL_CLASSES: dict[str, str] = {
     "mission_status": "read",
     "start_mission": "actuate",
     "cancel_mission": "actuate",
+    "list_alerts": "read",
+    "acknowledge_alert": "actuate",  # moves no robot, but changes what every station sees
 }
 
 MAX_MOVE_S = 3.0

@@ -100,6 +100,8 @@ def parse(text: str, source: str) -> ProfileSpec:
             f"{source}: units.battery_percentage is fraction or percent, not {pct!r}"
         )
     limits = _table(data, "limits", source, dict.fromkeys(Limits.__dataclass_fields__, float))
+    if limits.get("battery_low", 0) >= 100:
+        raise ProfileError(f"{source}: limits.battery_low is a percentage below 100")
     try:
         ns = normalise_namespace(robot.get("namespace", ""))
     except ValueError as exc:

@@ -34,6 +34,7 @@ class Limits:
     max_linear_speed: float | None = None  # m/s
     max_angular_speed: float | None = None  # rad/s
     radius: float | None = None  # m, the body's footprint
+    battery_low: float | None = None  # %, below which the built-in alert says the battery is low
 
     def over(self, base: Limits) -> Limits:
         return Limits(
@@ -43,6 +44,7 @@ class Limits:
                     (self.max_linear_speed, base.max_linear_speed),
                     (self.max_angular_speed, base.max_angular_speed),
                     (self.radius, base.radius),
+                    (self.battery_low, base.battery_low),
                 )
             )
         )
@@ -139,6 +141,7 @@ class Profile:
                     ("max_linear_speed", self.limits.max_linear_speed),
                     ("max_angular_speed", self.limits.max_angular_speed),
                     ("radius", self.limits.radius),
+                    ("battery_low", self.limits.battery_low),
                 )
                 if v is not None
             },

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 from textual.screen import Screen
 
+from astiop.screens.alerts import AlertsScreen
 from astiop.screens.bench import BenchScreen
 from astiop.screens.chat import ChatScreen
 from astiop.screens.dashboard import DashboardScreen
@@ -33,4 +34,5 @@ SCREENS: tuple[ScreenEntry, ...] = (
     ScreenEntry("teleop", "f5", "Teleop", TeleopScreen),
     ScreenEntry("bench", "f6", "Bench", BenchScreen),
     ScreenEntry("fleet", "f7", "Fleet", FleetScreen),
+    ScreenEntry("alerts", "f8", "Alerts", AlertsScreen),
 )

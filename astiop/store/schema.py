@@ -11,6 +11,7 @@ import yaml
 
 from astiop.resources import data_path
 from astiop.store.records import StoreError
+from astiop.store.schema_watches import _migrate_v13, _migrate_v14
 
 SQLITE_HEADER = b"SQLite format 3\x00"
 
@@ -296,44 +297,6 @@ def _migrate_v12(conn: sqlite3.Connection) -> None:
     )
 
 
-def _migrate_v13(conn: sqlite3.Connection) -> None:
-    # Watches (a condition on one robot's reading, said in plain language) and the alerts they
-    # and the built-in ones fire: one row per event, whichever process saw it first (event_key
-    # is the event's name and its episode, alert_episodes the episode each name is on).
-    _run(
-        conn,
-        """
-        CREATE TABLE watches (
-            id INTEGER PRIMARY KEY,
-            robot TEXT NOT NULL DEFAULT '',
-            role TEXT NOT NULL, field TEXT NOT NULL,
-            op TEXT NOT NULL CHECK (op IN ('<', '<=', '>', '>=')),
-            threshold REAL NOT NULL, unit TEXT NOT NULL DEFAULT '',
-            duration_s REAL NOT NULL DEFAULT 0,
-            repeat TEXT NOT NULL DEFAULT 'once' CHECK (repeat IN ('once', 'every')),
-            reaction TEXT NOT NULL DEFAULT 'notify' CHECK (reaction IN ('notify')),
-            said TEXT NOT NULL DEFAULT '',
-            created_at REAL NOT NULL,
-            armed INTEGER NOT NULL DEFAULT 1
-        );
-        CREATE TABLE alerts (
-            id INTEGER PRIMARY KEY,
-            robot TEXT NOT NULL DEFAULT '',
-            kind TEXT NOT NULL, message TEXT NOT NULL,
-            reading TEXT, reading_age_s REAL,
-            fired_at REAL NOT NULL,
-            acknowledged_by TEXT, acknowledged_at REAL,
-            watch_id INTEGER,
-            event_key TEXT NOT NULL UNIQUE
-        );
-        CREATE INDEX alerts_by_robot ON alerts (robot, id);
-        CREATE TABLE alert_episodes (
-            name TEXT PRIMARY KEY, episode INTEGER NOT NULL DEFAULT 0
-        );
-        """,
-    )
-
-
 # Ordered; the database's PRAGMA user_version counts how many have run. Each runs inside one
 # transaction (Store._run_migrations): on a plain connection, with execute only.
 MIGRATIONS = [
@@ -350,6 +313,7 @@ MIGRATIONS = [
     _migrate_v11,
     _migrate_v12,
     _migrate_v13,
+    _migrate_v14,
 ]
 SCHEMA_VERSION = len(MIGRATIONS)
 _OUR_TABLES = {

@@ -5,11 +5,13 @@ the end move it on once."""
 
 from __future__ import annotations
 
+import math
 import time
 from typing import Any
 
 from astiop.store.connection import Connection, row_id
 
+SETTLE_S = 5.0
 WATCH_COLUMNS = (
     "robot", "role", "field", "op", "threshold", "unit", "duration_s", "repeat", "reaction", "said",
 )  # fmt: skip
@@ -95,13 +97,15 @@ class WatchTables(Connection):
                 self.db.conn.execute("UPDATE watches SET armed = 0 WHERE id = ?", [watch_id])
             return row_id(cur.lastrowid)
 
-    def end_episode(self, name: str) -> None:
+    def end_episode(self, name: str, settled: bool = False) -> None:
         """The condition `name` watches has cleared: its next event is a new one (once, however
-        many processes say so)."""
+        many processes say so). `settled`: only an alert fired SETTLE_S ago or more is ended (a
+        process that first sees the condition clear may lag one that has just seen it hold)."""
+        before = time.time() - SETTLE_S if settled else math.inf
         fired = self.db.conn.execute(  # a read first: most ends follow no alert, and a
             "SELECT 1 FROM alert_episodes e JOIN alerts a "  # write would wait for the lock
-            "ON a.event_key = e.name || '#' || e.episode WHERE e.name = ?",
-            [name],
+            "ON a.event_key = e.name || '#' || e.episode WHERE e.name = ? AND a.fired_at < ?",
+            [name, before],
         ).fetchone()
         if fired is None:
             return
@@ -109,8 +113,8 @@ class WatchTables(Connection):
             self.db.conn.execute(
                 "UPDATE alert_episodes SET episode = episode + 1 WHERE name = ? AND EXISTS "
                 "(SELECT 1 FROM alerts WHERE event_key = alert_episodes.name || '#' || "
-                "alert_episodes.episode)",
-                [name],
+                "alert_episodes.episode AND fired_at < ?)",
+                [name, before],
             )
 
     def list_alerts(
@@ -139,3 +143,57 @@ class WatchTables(Connection):
                 [who, time.time(), alert_id],
             )
             return cur.rowcount == 1
+
+    # -- what the built-in alerts read ---------------------------------------------------
+    def missions_ended_badly(self, robot: str, limit: int = 20) -> list[dict]:
+        """The robot's newest missions that failed or were interrupted."""
+        return list(
+            self.db.query(
+                "SELECT id, status, reason, request FROM missions WHERE robot = ? AND status "
+                "IN ('failed', 'interrupted') ORDER BY id DESC LIMIT ?",
+                [robot, limit],
+            )
+        )
+
+    def operator_stopped_since(self, t: float) -> bool:
+        """Whether an astiop station on this database ran a stop or a cancel since `t`."""
+        row = self.db.conn.execute(
+            "SELECT 1 FROM commands WHERE created_at >= ? AND "
+            "(command LIKE '%stop%' OR command LIKE '%cancel%') LIMIT 1",
+            [t],
+        ).fetchone()
+        return row is not None
+
+    # -- what the Alerts screen and MCP read -----------------------------------------------
+    def alerts_where(
+        self,
+        robot: str | None = None,
+        kind: str | None = None,
+        open_only: bool = False,
+        limit: int = 500,
+    ) -> list[dict]:
+        """The newest alerts first, filtered (`open_only`: not yet acknowledged)."""
+        where, args = [], []
+        if robot is not None:
+            where.append("robot = ?")
+            args.append(robot)
+        if kind is not None:
+            where.append("kind = ?")
+            args.append(kind)
+        if open_only:
+            where.append("acknowledged_at IS NULL")
+        clause = f" WHERE {' AND '.join(where)}" if where else ""
+        rows = self.db.query(
+            f"SELECT * FROM alerts{clause} ORDER BY id DESC LIMIT ?", [*args, limit]
+        )
+        return list(rows)
+
+    def alerts_version(self) -> tuple[int, float]:
+        """Changes whenever an alert is written or acknowledged, by any process."""
+        row = self.db.conn.execute(
+            "SELECT COALESCE(MAX(id), 0), COALESCE(MAX(acknowledged_at), 0) FROM alerts"
+        ).fetchone()
+        return int(row[0]), float(row[1])
+
+    def alert_robots(self) -> list[str]:
+        return [r[0] for r in self.db.conn.execute("SELECT DISTINCT robot FROM alerts ORDER BY 1")]

@@ -9,51 +9,15 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Mapping
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping, Sequence
 
-from astiop.transports.state import RobotState
-from astiop.watches.model import FIELDS, OPS, Watch
+from astiop.transports.state import RobotEvent, RobotState
+from astiop.watches.builtins import KINDS, BuiltinAlerts, Edge
+from astiop.watches.builtins import compare as _compare
+from astiop.watches.model import Watch
 
 RELOAD_S = 1.0  # the store's watches are read again this often (added, removed, disarmed)
-BUILTIN_KINDS = ("battery_low", "fault", "contact_lost", "contact_regained", "estop")
-
-
-@dataclass
-class Edge:
-    """One condition over time: `since` it has held (None: it does not), `on` once it has held
-    long enough (None: not seen yet)."""
-
-    since: float | None = None
-    on: bool | None = None
-
-    def update(self, holds: bool | None, clear: bool, now: float, hold_s: float = 0.0) -> str:
-        """'rise' when the condition has just held for `hold_s`, 'fall' when it has cleared
-        (or is first seen clear), '' otherwise or without a reading (`holds` None)."""
-        if holds is None:
-            return ""
-        if self.on:
-            if clear:
-                self.on, self.since = False, None
-                return "fall"
-            return ""
-        if holds:
-            self.since = now if self.since is None else self.since
-            if now - self.since >= hold_s:
-                self.on = True
-                return "rise"
-            return ""
-        first = self.on is None
-        self.on, self.since = False, None
-        return "fall" if first else ""
-
-
-def _compare(watch: Watch, value: float) -> tuple[bool, bool]:
-    """Whether the condition holds, and whether it has cleared (back over by the margin)."""
-    holds = OPS[watch.op](value, watch.threshold)
-    margin = FIELDS[watch.field].margin
-    back = watch.threshold + margin if watch.op in ("<", "<=") else watch.threshold - margin
-    return holds, not OPS[watch.op](value, back)
+BUILTIN_KINDS = KINDS
 
 
 class Evaluator:
@@ -64,11 +28,18 @@ class Evaluator:
         *,
         battery_low: float = 20.0,
         builtins: bool = True,
+        no_progress_s: float = 30.0,
+        mission_robot: str | None = None,
+        pressed_by: Callable[[], str] | None = None,
     ):
         self.store = store
         self.robot = robot
-        self.battery_low = Watch("battery", "<", battery_low, repeat="every", robot=robot)
         self.builtins = builtins
+        self.builtin = BuiltinAlerts(
+            store, robot, _Writer(self), battery_low=battery_low, no_progress_s=no_progress_s,
+            mission_robot=mission_robot, pressed_by=pressed_by,
+        )  # fmt: skip
+        self._fired: list[dict] = []
         self.watches: list[Watch] = []
         self._edges: dict[str, Edge] = {}
         self._loaded_at = -math.inf
@@ -85,7 +56,11 @@ class Evaluator:
         self._loaded_at = time.monotonic()
 
     def step(
-        self, state: RobotState, ages: Mapping[str, float] | None = None, now: float | None = None
+        self,
+        state: RobotState,
+        ages: Mapping[str, float] | None = None,
+        now: float | None = None,
+        events: Sequence[RobotEvent] = (),
     ) -> list[dict]:
         """The alerts this state fired and this process wrote first (new rows)."""
         now = time.monotonic() if now is None else now
@@ -93,8 +68,9 @@ class Evaluator:
             self.reload()
         ages = ages or {}
         fired: list[dict] = []
+        self._fired = fired
         if self.builtins:
-            self._builtins(state, ages, now, fired)
+            self.builtin.step(state, ages, now, events)
         for watch in list(self.watches):
             self._watch(watch, state, ages, now, fired)
         return fired
@@ -114,59 +90,8 @@ class Evaluator:
             )  # fmt: skip
             if watch.repeat == "once":
                 self.watches.remove(watch)  # disarmed, by this process or the one first
-        elif edge == "fall":
-            self.store.end_episode(name)
-
-    # -- the built-in alerts ---------------------------------------------------------------
-    def _builtins(self, state: RobotState, ages, now: float, fired: list) -> None:
-        lost = state.lost_s is not None
-        edge = self._edge(self._name("contact_lost")).update(lost, not lost, now)
-        if edge == "rise":
-            self._fire(
-                fired, self._name("contact_lost"), "contact_lost",
-                f"contact lost: the robot has not been heard for {state.lost_s:.1f} s",
-                f"{state.lost_s:.1f} s",
-            )  # fmt: skip
-        elif edge == "fall":
-            self._fire(
-                fired, self._name("contact_regained"), "contact_regained", "contact regained",
-                paired_with=self._name("contact_lost"),
-            )  # fmt: skip
-            self.store.end_episode(self._name("contact_lost"))
-        if lost:
-            return  # nothing else it last said holds
-        battery = FIELDS["battery"].read(state)
-        if battery is not None:
-            holds, clear = _compare(self.battery_low, battery)
-            self._builtin(
-                "battery_low", holds, clear, now, fired,
-                f"battery low: {battery:.1f} % (below {self.battery_low.threshold:g} %)",
-                f"{battery:.1f} %", ages.get("battery"),
-            )  # fmt: skip
-        if state.status is not None:
-            fault = state.status.fault or ("fault" if state.status.state == "fault" else "")
-            self._builtin(
-                "fault", bool(fault), not fault, now, fired, f"fault reported: {fault}", fault,
-                ages.get("status"),
-            )  # fmt: skip
-        engaged = state.e_stopped
-        by = self._estop_by() if engaged and not self._edge(self._name("estop")).on else ""
-        self._builtin(
-            "estop", engaged, not engaged, now, fired,
-            f"E-STOP engaged{f' by {by}' if by else ''}", None, None,
-        )  # fmt: skip
-
-    def _builtin(self, kind, holds, clear, now, fired, message, reading, age) -> None:
-        name = self._name(kind)
-        edge = self._edge(name).update(holds, clear, now)
-        if edge == "rise":
-            self._fire(fired, name, kind, message, reading, age)
-        elif edge == "fall":
-            self.store.end_episode(name)
-
-    def _estop_by(self) -> str:
-        latch = self.store.robot_latch(self.robot) if self.robot else self.store.estop_latch()
-        return (latch or {}).get("by") or ""
+        elif edge in ("fall", "first"):
+            self.store.end_episode(name, settled=edge == "first")
 
     def _fire(
         self,
@@ -186,3 +111,17 @@ class Evaluator:
         )  # fmt: skip
         if alert_id is not None:
             fired.append(self.store.alert(alert_id))
+
+
+class _Writer:
+    """The built-in alerts' events written through the evaluator's store, each new one kept
+    among this step's fired alerts."""
+
+    def __init__(self, evaluator: Evaluator):
+        self.ev = evaluator
+
+    def fire(self, name, kind, message, reading=None, age=None, *, paired_with=None) -> None:
+        self.ev._fire(self.ev._fired, name, kind, message, reading, age, paired_with=paired_with)
+
+    def cleared(self, name: str, settled: bool = False) -> None:
+        self.ev.store.end_episode(name, settled=settled)

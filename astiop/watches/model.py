@@ -101,7 +101,12 @@ class Watch:
 
     def sentence(self) -> str:
         """The watch in one clause: "the battery is below 20 % for 5 s (every time)"."""
-        return f"{self.condition()} ({'every time' if self.repeat == 'every' else 'once'})"
+        said = f"{self.condition()} ({'every time' if self.repeat == 'every' else 'once'})"
+        if self.reaction == "notify":
+            return said
+        from astiop.watches.reactions import reaction_words
+
+        return f"{said}, {reaction_words(self.reaction)}"
 
     def condition(self) -> str:
         """ "the battery is below 20 % for 5 s"."""
@@ -154,7 +159,14 @@ def validate(watch: Watch, profile: Any = None) -> Watch:
     if watch.repeat not in REPEATS:
         raise WatchError("a watch fires once or every time")
     if watch.reaction != "notify":
-        raise WatchError("a watch's reaction is to notify (moving the robot is not yet kept)")
+        from astiop.watches.reactions import ReactionError, reaction_steps
+
+        try:
+            reaction_steps(watch.reaction)
+        except ReactionError as exc:
+            raise WatchError(str(exc)) from None
+        if watch.repeat != "once":
+            raise WatchError("a watch that moves the robot fires once (then armed again by hand)")
     if profile is not None and not any(profile.has(r) for r in spec.roles):
         raise WatchError(f"this robot has no {' or '.join(spec.roles)} to read {spec.words} from")
     return watch

@@ -17,6 +17,7 @@ from astiop.ros2.validation import Checked
 from astiop.transports import live_robot
 from astiop.transports.base import RobotBackend
 from astiop.transports.event_log import Contact, EventLog
+from astiop.transports.goal_ends import GoalEnds, status_list
 from astiop.transports.inflight import InFlight
 from astiop.transports.live_catalog import GraphLists, LiveGraph, describe_graph
 from astiop.transports.live_robot import MOVING, without_finished_plan
@@ -84,9 +85,11 @@ class RclpyBackend(RobotBackend):
             self.proc, self._live, self.inflight, self.events, timeout_s, self._teleop,
             self._closed,
         )  # fmt: skip
+        self._goal_ends = GoalEnds(self.events)  # any client's goals, as the server lists them
         self._verbs = RclpyVerbs(
-            self.proc, self._live, self.inflight, self.events, self._watching, self._teleop
-        )
+            self.proc, self._live, self.inflight, self.events, self._watching, self._teleop,
+            self._goal_ends,
+        )  # fmt: skip
 
     def _discover(self, settle_s: float) -> GraphLists:
         """Discovery is under way in a new process: read until the graph stops growing (Fast
@@ -249,7 +252,9 @@ class RclpyBackend(RobotBackend):
 
     # -- live state --------------------------------------------------------------------------
     def _on_message(self, name: str, msg: Any) -> None:
-        if name == self._name("status"):
+        if name == goal_status_topic(self.catalog.profile):
+            self._goal_ends.listed(status_list(msg))
+        elif name == self._name("status"):
             self.events.status(msg.state, msg.fault)
             if msg.state in MOVING or getattr(msg, "speed", 0.0) > MOVING_SPEED:
                 # its velocity is worth its cost while the robot moves

@@ -85,7 +85,7 @@ class RclpyStateWatches:
             and goals not in self.watches
             and self.proc.node.get_publishers_info_by_topic(goals)
         ):
-            w = watch(self.proc, goals, GOAL_STATUS)
+            w = watch(self.proc, goals, GOAL_STATUS, self._on_status)  # any client's goal's end
             if w is not None:
                 self.watches = {**self.watches, goals: w}
 

@@ -28,6 +28,7 @@ from astiop.transports.base import (
     name_of,
 )
 from astiop.transports.event_log import EventLog
+from astiop.transports.goal_ends import GoalEnds
 from astiop.transports.inflight import ENDED, InFlight, Job
 from astiop.transports.live_catalog import LiveGraph
 from astiop.transports.rclpy.graph import (
@@ -66,6 +67,7 @@ class RclpyVerbs:
         events: EventLog,
         watching: RclpyStateWatches,
         teleop: RclpyTeleop,
+        goal_ends: GoalEnds,
     ):
         self.proc = proc
         self.live = live
@@ -75,6 +77,7 @@ class RclpyVerbs:
         self.teleop = teleop
         self.goals: list[ClientGoalHandle] = []  # goals this process sent that have not ended
         self.last_outcome: str | None = None  # how the last goal ended ("succeeded", ...)
+        self.goal_ends = goal_ends  # the goals sent here, not said as another client's
 
     def execute(self, checked: Checked, timeout: float) -> tuple[str, Any]:
         try:
@@ -245,6 +248,7 @@ class RclpyVerbs:
             lines.append("Goal was rejected.")
             return "\n".join(lines) + "\n", {"accepted": False, "status": "REJECTED"}
         goal_id = bytes(handle.goal_id.uuid).hex()
+        self.goal_ends.sent.append(goal_id)  # its end is said with its result, not as another's
         try:  # followed as a job of its own until it ends: the E-STOP cancels it
             job = self.inflight.start(f"goal {name}", handle.cancel_goal_async, name)
         except BackendError:
