@@ -164,6 +164,7 @@ def test_state_topics_are_watched_once_published_and_odometry_only_while_wanted(
 def test_the_verbs_transport_publishes_and_is_refused_while_the_estop_holds(parts):
     from geometry_msgs.msg import Twist
 
+    from astiop.transports.goal_ends import GoalEnds
     from astiop.transports.rclpy.state_watches import RclpyStateWatches
     from astiop.transports.rclpy.verbs import RclpyVerbs
 
@@ -171,7 +172,10 @@ def test_the_verbs_transport_publishes_and_is_refused_while_the_estop_holds(part
     watching = RclpyStateWatches(
         parts.proc, parts.live, parts.closed, lambda *_: None, lambda *_: None
     )
-    verbs = RclpyVerbs(parts.proc, parts.live, parts.inflight, parts.events, watching, teleop)
+    verbs = RclpyVerbs(
+        parts.proc, parts.live, parts.inflight, parts.events, watching, teleop,
+        GoalEnds(parts.events),
+    )  # fmt: skip
     assert verbs.graph("service") == parts.live.lists["service"]
     twist = '"{linear: {x: 0.1}}"'
     text = f"ros2 topic pub -r 10 -t 3 {parts.ns}/cmd_vel geometry_msgs/msg/Twist {twist}"
