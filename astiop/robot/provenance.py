@@ -16,7 +16,7 @@ MAX_STAMP_AGE_S = 86400.0  # a stamp older than a day is on another clock, not a
 def provenance(cmd: Ros2Command, kind: str, catalog: Catalog) -> str:
     if VERBS[cmd.key].measures:
         return "measured"
-    if cmd.verb == "service" and cmd.sub == "call":
+    if cmd.command == "service" and cmd.verb == "call":
         spec = catalog.services.get(cmd.name) if cmd.name is not None else None
         return "accepted" if spec is not None and spec.starts_job else "reported"
     return "commanded" if kind == "actuate" else "reported"

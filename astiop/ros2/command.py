@@ -10,8 +10,8 @@ from typing import Any
 @dataclass(frozen=True)
 class Ros2Command:
     text: str
-    verb: str
-    sub: str
+    command: str  # ros2cli's command: topic, service, action, param, node, interface
+    verb: str  # and its verb: echo, call, send_goal, ...
     args: dict[str, Any]  # name (full), type, values (parsed YAML), node, param, value
     flags: frozenset[str]
     options: dict[str, Any]
@@ -20,7 +20,7 @@ class Ros2Command:
 
     @property
     def key(self) -> tuple[str, str]:
-        return (self.verb, self.sub)
+        return (self.command, self.verb)
 
     @property
     def name(self) -> str | None:

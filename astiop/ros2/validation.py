@@ -33,7 +33,7 @@ def validate(text: str, catalog: Catalog, distro: str | None = None) -> Checked:
 
 
 def _named(cmd: Ros2Command) -> str:
-    return cmd.args["node"] if cmd.verb == "param" else (cmd.name or "")
+    return cmd.args["node"] if cmd.command == "param" else (cmd.name or "")
 
 
 def in_namespace(cmd: Ros2Command, catalog: Catalog, namespace: str) -> Ros2Command:
@@ -48,14 +48,14 @@ def in_namespace(cmd: Ros2Command, catalog: Catalog, namespace: str) -> Ros2Comm
         "action": catalog.actions,
     }
     known: Container[str] | None = tables.get(
-        cmd.verb, catalog.nodes if cmd.verb in ("node", "param") else None
+        cmd.command, catalog.nodes if cmd.command in ("node", "param") else None
     )
-    key = "node" if cmd.verb == "param" else "name"
+    key = "node" if cmd.command == "param" else "name"
     name = cmd.args.get(key)
     if known is None or not name or name in known:
         return cmd
     inside = namespace + name
-    is_cancel = cmd.verb == "service" and cancel_service(catalog, inside) is not None
+    is_cancel = cmd.command == "service" and cancel_service(catalog, inside) is not None
     if inside not in known and not is_cancel:
         return cmd
     return replace(cmd, args={**cmd.args, key: inside})

@@ -70,7 +70,7 @@ def moving_topics(catalog: Catalog) -> set[str]:
 def topic_spec(cmd: Ros2Command, catalog: Catalog):
     spec = catalog.topics.get(cmd.name or "")
     if spec is None:
-        avoid = moving_topics(catalog) if cmd.sub != "pub" else frozenset()
+        avoid = moving_topics(catalog) if cmd.verb != "pub" else frozenset()
         raise InterfaceError(
             f"there is no topic {cmd.name} on this robot"
             + suggest(cmd.name, catalog.topics, avoid)
