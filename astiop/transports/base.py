@@ -13,7 +13,7 @@ from typing import Any, Union
 from astiop.ros2.catalog import Catalog
 from astiop.ros2.grammar import Ros2Command
 from astiop.ros2.validation import Checked, always_allowed
-from astiop.transports.errors import BackendError
+from astiop.transports.errors import BackendError as BackendError  # raised by every transport
 from astiop.transports.inflight import InFlight, Job
 from astiop.transports.state import OccupancyGrid, RobotEvent, RobotState, TopicStat
 from astiop.warehouse import WarehouseMap
@@ -73,31 +73,22 @@ class Execution:
 
 def command_of(checked: Checked) -> Ros2Command:
     """The command a transport runs: only a valid one reaches it, and a valid one has it."""
-    if checked.command is None:
-        raise BackendError(f"not a command: {checked.reason or checked.text}")
-    return checked.command
+    return checked.parsed
 
 
 def name_of(checked: Checked) -> str:
     """The topic, service, action or node the command names; BackendError if it names none."""
-    name = command_of(checked).name
-    if not name:
-        raise BackendError(f"{checked.text}: names no topic, service or action")
-    return name
+    return checked.named
 
 
 def interface_of(checked: Checked) -> str:
     """The interface type validation resolved for the command (a message, service or action)."""
-    if checked.type is None:
-        raise BackendError(f"{checked.text}: no interface type was resolved for it")
-    return checked.type
+    return checked.interface
 
 
 def message_of(checked: Checked) -> dict[str, Any]:
     """The checked values the command sends (its message, request or goal)."""
-    if checked.message is None:
-        raise BackendError(f"{checked.text}: it has no values to send")
-    return checked.message
+    return checked.values
 
 
 def actuating(inflight: InFlight, checked: Checked) -> AbstractContextManager[Job | None]:

@@ -2,7 +2,13 @@
 
 from __future__ import annotations
 
-from astiop.ros2.verbs.base import Verb
+from typing import TYPE_CHECKING
+
+from astiop.ros2.verbs.base import Output, Verb
+
+if TYPE_CHECKING:
+    from astiop.ros2.verbs.checks import Checked
+    from astiop.ros2.verbs.transport import Transport
 
 
 def arguments(p, distro: str) -> None:
@@ -17,9 +23,9 @@ def check(cmd, catalog):
     return Checked(cmd.text, cmd, True, type=action_spec(cmd, catalog).type)
 
 
-def run(t, c, timeout: float):
-    servers = t.action_servers(c.command.name)
-    lines = [f"Action: {c.command.name}", "Action clients: 0", f"Action servers: {len(servers)}"]
+def run(t: Transport, c: Checked, timeout: float) -> Output:
+    servers = t.action_servers(c.named)
+    lines = [f"Action: {c.named}", "Action clients: 0", f"Action servers: {len(servers)}"]
     return "\n".join(lines + [f"    {s}" for s in servers]) + "\n", {"servers": servers}
 
 

@@ -2,8 +2,14 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from astiop.ros2.verbs.arguments import values_or_stdin
-from astiop.ros2.verbs.base import GOAL, Verb
+from astiop.ros2.verbs.base import GOAL, Output, Verb
+
+if TYPE_CHECKING:
+    from astiop.ros2.verbs.checks import Checked
+    from astiop.ros2.verbs.transport import Transport
 
 
 def arguments(p, distro: str) -> None:
@@ -28,7 +34,7 @@ def check(cmd, catalog):
     return Checked(cmd.text, cmd, True, "", "actuate", spec.type, msg, notes)
 
 
-def run(t, c, timeout: float):
+def run(t: Transport, c: Checked, timeout: float) -> Output:
     return t.send_goal(c, timeout)
 
 

@@ -11,6 +11,7 @@ from typing import Any
 from astiop.ros2.catalog import Catalog, ServiceSpec
 from astiop.ros2.command import Ros2Command
 from astiop.ros2.interfaces import InterfaceError, normalize_type
+from astiop.ros2.verbs.base import BackendError
 
 MAX_PUBLISH_S = 30.0
 
@@ -26,6 +27,35 @@ class Checked:
     message: dict[str, Any] | None = None  # checked values with defaults filled
     notes: tuple[str, ...] = field(default_factory=tuple)
     namespace: str = ""  # the robot's: names were resolved inside it
+
+    @property
+    def parsed(self) -> Ros2Command:
+        """The command a verb runs: only a valid one reaches it, and a valid one has it."""
+        if self.command is None:
+            raise BackendError(f"not a command: {self.reason or self.text}")
+        return self.command
+
+    @property
+    def named(self) -> str:
+        """The topic, service, action or node the command names; BackendError if none."""
+        name = self.parsed.name
+        if not name:
+            raise BackendError(f"{self.text}: names no topic, service or action")
+        return name
+
+    @property
+    def interface(self) -> str:
+        """The interface type validation resolved for the command (a message, service, action)."""
+        if self.type is None:
+            raise BackendError(f"{self.text}: no interface type was resolved for it")
+        return self.type
+
+    @property
+    def values(self) -> dict[str, Any]:
+        """The checked values the command sends (its message, request or goal)."""
+        if self.message is None:
+            raise BackendError(f"{self.text}: it has no values to send")
+        return self.message
 
     @property
     def local_name(self) -> str | None:

@@ -2,7 +2,13 @@
 
 from __future__ import annotations
 
-from astiop.ros2.verbs.base import Verb
+from typing import TYPE_CHECKING
+
+from astiop.ros2.verbs.base import Output, Verb
+
+if TYPE_CHECKING:
+    from astiop.ros2.verbs.checks import Checked
+    from astiop.ros2.verbs.transport import Transport
 
 
 def arguments(p, distro: str) -> None:
@@ -11,10 +17,10 @@ def arguments(p, distro: str) -> None:
     p.add_argument("-a", "--only-actions", action="store_true")
 
 
-def run(t, c, timeout: float):
+def run(t: Transport, c: Checked, timeout: float) -> Output:
     from astiop.ros2.printing import interface_list_text
 
-    return interface_list_text(t.interfaces(), c.command.flags)
+    return interface_list_text(t.interfaces(), c.parsed.flags)
 
 
 VERB = Verb(("interface", "list"), arguments, run)

@@ -2,7 +2,13 @@
 
 from __future__ import annotations
 
-from astiop.ros2.verbs.base import Verb
+from typing import TYPE_CHECKING
+
+from astiop.ros2.verbs.base import Output, Verb
+
+if TYPE_CHECKING:
+    from astiop.ros2.verbs.checks import Checked
+    from astiop.ros2.verbs.transport import Transport
 
 
 def arguments(p, distro: str) -> None:
@@ -27,10 +33,10 @@ def check(cmd, catalog):
     return Checked(cmd.text, cmd, True)
 
 
-def run(t, c, timeout: float):
+def run(t: Transport, c: Checked, timeout: float) -> Output:
     from astiop.ros2.interfaces import interface_show
 
-    return interface_show(c.command.args["type"]), None
+    return interface_show(c.parsed.args["type"]), None
 
 
 VERB = Verb(

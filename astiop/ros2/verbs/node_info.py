@@ -2,8 +2,14 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from astiop.ros2.verbs.arguments import strategy
-from astiop.ros2.verbs.base import Verb
+from astiop.ros2.verbs.base import Output, Verb
+
+if TYPE_CHECKING:
+    from astiop.ros2.verbs.checks import Checked
+    from astiop.ros2.verbs.transport import Transport
 
 
 def arguments(p, distro: str) -> None:
@@ -21,11 +27,11 @@ def check(cmd, catalog):
     return Checked(cmd.text, cmd, True)
 
 
-def run(t, c, timeout: float):
+def run(t: Transport, c: Checked, timeout: float) -> Output:
     from astiop.ros2.printing import node_info_text
 
-    info = t.node_info(c.command.name)
-    return node_info_text(c.command.name, info), info
+    info = t.node_info(c.named)
+    return node_info_text(c.named, info), info
 
 
 VERB = Verb(("node", "info"), arguments, run, check)

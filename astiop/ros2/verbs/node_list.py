@@ -2,8 +2,14 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from astiop.ros2.verbs.arguments import strategy
-from astiop.ros2.verbs.base import Verb
+from astiop.ros2.verbs.base import Output, Verb
+
+if TYPE_CHECKING:
+    from astiop.ros2.verbs.checks import Checked
+    from astiop.ros2.verbs.transport import Transport
 
 
 def arguments(p, distro: str) -> None:
@@ -12,7 +18,7 @@ def arguments(p, distro: str) -> None:
     strategy(p)
 
 
-def run(t, c, timeout: float):
+def run(t: Transport, c: Checked, timeout: float) -> Output:
     names = [name for name, _ in t.graph("node")]
     return "".join(f"{n}\n" for n in names), names
 

@@ -2,8 +2,15 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from astiop.ros2.verbs.arguments import strategy
-from astiop.ros2.verbs.base import Verb
+from astiop.ros2.verbs.base import Output, Verb
+
+if TYPE_CHECKING:
+    from astiop.ros2.verbs.checks import Checked
+    from astiop.ros2.verbs.transport import Transport
+
 
 WORDS = {bool: "Boolean", int: "Integer", float: "Double", str: "String"}
 
@@ -25,8 +32,8 @@ def check(cmd, catalog):
     return Checked(cmd.text, cmd, True)
 
 
-def run(t, c, timeout: float):
-    value = t.get_param(c.command.args["node"], c.command.args["param"], timeout)
+def run(t: Transport, c: Checked, timeout: float) -> Output:
+    value = t.get_param(c.parsed.args["node"], c.parsed.args["param"], timeout)
     return f"{WORDS[type(value)]} value is: {value}\n", {"value": value}
 
 

@@ -2,8 +2,14 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from astiop.ros2.verbs.arguments import strategy
-from astiop.ros2.verbs.base import Verb
+from astiop.ros2.verbs.base import Output, Verb
+
+if TYPE_CHECKING:
+    from astiop.ros2.verbs.checks import Checked
+    from astiop.ros2.verbs.transport import Transport
 
 
 def arguments(p, distro: str) -> None:
@@ -29,12 +35,12 @@ def check(cmd, catalog):
     return Checked(cmd.text, cmd, True)
 
 
-def run(t, c, timeout: float):
+def run(t: Transport, c: Checked, timeout: float) -> Output:
     from astiop.ros2.printing import param_list_text
 
-    node = c.command.args.get("node")
+    node = c.parsed.args.get("node")
     params = t.list_params(node, timeout)
-    return param_list_text(params, node, c.command.flags, c.command.options)
+    return param_list_text(params, node, c.parsed.flags, c.parsed.options)
 
 
 VERB = Verb(("param", "list"), arguments, run, check)

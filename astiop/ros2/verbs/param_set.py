@@ -2,8 +2,14 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from astiop.ros2.verbs.arguments import strategy
-from astiop.ros2.verbs.base import Verb
+from astiop.ros2.verbs.base import Output, Verb
+
+if TYPE_CHECKING:
+    from astiop.ros2.verbs.checks import Checked
+    from astiop.ros2.verbs.transport import Transport
 
 
 def arguments(p, distro: str) -> None:
@@ -44,8 +50,8 @@ def check(cmd, catalog):
     return Checked(cmd.text, cmd, True, kind="actuate", message={"value": value})
 
 
-def run(t, c, timeout: float):
-    node, param, value = c.command.args["node"], c.command.args["param"], c.message["value"]
+def run(t: Transport, c: Checked, timeout: float) -> Output:
+    node, param, value = c.parsed.args["node"], c.parsed.args["param"], c.values["value"]
     reason = t.set_param(node, param, value, timeout)
     return "Set parameter successful" + (f": {reason}" if reason else "") + "\n", {"value": value}
 

@@ -2,8 +2,14 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from astiop.ros2.verbs.arguments import strategy
-from astiop.ros2.verbs.base import Verb
+from astiop.ros2.verbs.base import Output, Verb
+
+if TYPE_CHECKING:
+    from astiop.ros2.verbs.checks import Checked
+    from astiop.ros2.verbs.transport import Transport
 
 
 def arguments(p, distro: str) -> None:
@@ -17,8 +23,8 @@ def check(cmd, catalog):
     return Checked(cmd.text, cmd, True, type=service_spec(cmd, catalog).type)
 
 
-def run(t, c, timeout: float):
-    return c.type + "\n", c.type
+def run(t: Transport, c: Checked, timeout: float) -> Output:
+    return c.interface + "\n", c.interface
 
 
 VERB = Verb(("service", "type"), arguments, run, check)

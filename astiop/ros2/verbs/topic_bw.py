@@ -4,9 +4,15 @@ second; astiop prints its first two reports, a second apart."""
 from __future__ import annotations
 
 import re
+from typing import TYPE_CHECKING
 
 from astiop.ros2.verbs.arguments import positive_int
-from astiop.ros2.verbs.base import SAMPLE, Verb
+from astiop.ros2.verbs.base import SAMPLE, Output, Verb
+
+if TYPE_CHECKING:
+    from astiop.ros2.verbs.checks import Checked
+    from astiop.ros2.verbs.transport import Transport
+
 
 REPORTS = 2
 ROS2_WINDOW = 100  # messages, bw.py's DEFAULT_WINDOW_SIZE
@@ -61,9 +67,11 @@ def report_text(bytes_per_s: float, sizes: list[int]) -> str:
     )
 
 
-def run(t, c, timeout: float):
-    name, window = c.command.name, c.command.options.get("window", ROS2_WINDOW)
-    arrivals = t.samples(name, c.type, lambda got: len(reports(got, window)) >= REPORTS, timeout)
+def run(t: Transport, c: Checked, timeout: float) -> Output:
+    name, window = c.named, c.parsed.options.get("window", ROS2_WINDOW)
+    arrivals = t.samples(
+        name, c.interface, lambda got: len(reports(got, window)) >= REPORTS, timeout
+    )
     found = reports(arrivals, window)[:REPORTS]
     if not found:
         raise VERB.nothing_came(name, timeout)

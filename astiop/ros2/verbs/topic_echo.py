@@ -2,8 +2,14 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from astiop.ros2.verbs.arguments import nonnegative_int, positive_float, qos, strategy
-from astiop.ros2.verbs.base import TAKE, BackendError, Verb
+from astiop.ros2.verbs.base import TAKE, BackendError, Output, Verb
+
+if TYPE_CHECKING:
+    from astiop.ros2.verbs.checks import Checked
+    from astiop.ros2.verbs.transport import Transport
 
 
 def arguments(p, distro: str) -> None:
@@ -40,15 +46,15 @@ def check(cmd, catalog):
     return checked_topic(cmd, catalog)
 
 
-def run(t, c, timeout: float):
+def run(t: Transport, c: Checked, timeout: float) -> Output:
     from astiop.ros2.printing import echo_text, ros2cli_yaml
 
-    values = t.take(c, c.command.options.get("timeout", timeout))
-    field = c.command.options.get("field")
+    values = t.take(c, c.parsed.options.get("timeout", timeout))
+    field = c.parsed.options.get("field")
     if field:
         for part in field.split("."):
             if not isinstance(values, dict) or part not in values:
-                raise BackendError(f"{c.command.name} has no field {field}")
+                raise BackendError(f"{c.named} has no field {field}")
             values = values[part]
         return ros2cli_yaml(values) + "---\n", values
     return echo_text(values, c.command), values

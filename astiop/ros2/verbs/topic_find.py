@@ -2,8 +2,14 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from astiop.ros2.verbs.arguments import strategy
-from astiop.ros2.verbs.base import Verb
+from astiop.ros2.verbs.base import Output, Verb
+
+if TYPE_CHECKING:
+    from astiop.ros2.verbs.checks import Checked
+    from astiop.ros2.verbs.transport import Transport
 
 
 def arguments(p, distro: str) -> None:
@@ -13,10 +19,10 @@ def arguments(p, distro: str) -> None:
     p.add_argument("--include-hidden-topics", action="store_true")
 
 
-def run(t, c, timeout: float):
-    wanted = c.command.args["type"]
+def run(t: Transport, c: Checked, timeout: float) -> Output:
+    wanted = c.parsed.args["type"]
     names = [name for name, types in t.graph("topic") if wanted in types.split(", ")]
-    if "count_topics" in c.command.flags:
+    if "count_topics" in c.parsed.flags:
         return f"{len(names)}\n", names
     return "".join(f"{n}\n" for n in names), names
 

@@ -4,9 +4,15 @@ from __future__ import annotations
 
 import math
 import re
+from typing import TYPE_CHECKING
 
 from astiop.ros2.verbs.arguments import positive_int, strategy
-from astiop.ros2.verbs.base import SAMPLE, Verb
+from astiop.ros2.verbs.base import SAMPLE, Output, Verb
+
+if TYPE_CHECKING:
+    from astiop.ros2.verbs.checks import Checked
+    from astiop.ros2.verbs.transport import Transport
+
 
 WINDOWS = 2
 ROS2_WINDOW = 10000  # ros2's default --window
@@ -49,15 +55,15 @@ def windows(times: list[float], window: int | None = None) -> list[tuple[float, 
     return out
 
 
-def run(t, c, timeout: float):
-    window = c.command.options.get("window")
+def run(t: Transport, c: Checked, timeout: float) -> Output:
+    window = c.parsed.options.get("window")
     arrivals = t.samples(
-        c.command.name, c.type, lambda got: len(windows([a for a, _ in got], window)) >= WINDOWS,
+        c.named, c.interface, lambda got: len(windows([a for a, _ in got], window)) >= WINDOWS,
         timeout,
     )  # fmt: skip
     found = windows([a for a, _ in arrivals], window)[:WINDOWS]
     if not found:
-        raise VERB.nothing_came(c.command.name, timeout)
+        raise VERB.nothing_came(c.named, timeout)
     lines = []
     for rate, deltas in found:
         mean = sum(deltas) / len(deltas)

@@ -2,8 +2,14 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from astiop.ros2.verbs.arguments import strategy
-from astiop.ros2.verbs.base import Verb
+from astiop.ros2.verbs.base import Output, Verb
+
+if TYPE_CHECKING:
+    from astiop.ros2.verbs.checks import Checked
+    from astiop.ros2.verbs.transport import Transport
 
 
 def arguments(p, distro: str) -> None:
@@ -18,10 +24,10 @@ def check(cmd, catalog):
     return checked_topic(cmd, catalog)
 
 
-def run(t, c, timeout: float):
-    pubs, subs = t.endpoint_counts(c.command.name)
-    text = f"Type: {c.type}\nPublisher count: {pubs}\nSubscription count: {subs}\n"
-    return text, {"type": c.type, "publishers": pubs, "subscribers": subs}
+def run(t: Transport, c: Checked, timeout: float) -> Output:
+    pubs, subs = t.endpoint_counts(c.named)
+    text = f"Type: {c.interface}\nPublisher count: {pubs}\nSubscription count: {subs}\n"
+    return text, {"type": c.interface, "publishers": pubs, "subscribers": subs}
 
 
 VERB = Verb(("topic", "info"), arguments, run, check)

@@ -2,13 +2,20 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from astiop.ros2.verbs.arguments import (
     nonnegative_int,
     positive_float,
     qos,
     values_or_stdin,
 )
-from astiop.ros2.verbs.base import PUBLISH, Verb
+from astiop.ros2.verbs.base import PUBLISH, Output, Verb
+
+if TYPE_CHECKING:
+    from astiop.ros2.verbs.checks import Checked
+    from astiop.ros2.verbs.transport import Transport
+
 
 MAX_RATE_HZ = 50
 
@@ -70,7 +77,7 @@ def lasts(cmd) -> float:
     return (cmd.options["times"] - 1) / cmd.options.get("rate", 1.0)
 
 
-def run(t, c, timeout: float):
+def run(t: Transport, c: Checked, timeout: float) -> Output:
     return t.publish(c, timeout)
 
 
