@@ -259,7 +259,7 @@ class RobotGateway:
             result.executed = True
             result.provenance = provenance(cmd, checked.kind, self.catalog)
             name_role(cmd.name, result, self.profile)
-            if VERBS[cmd.key].means == TAKE:  # one message: its age is known
+            if VERBS[cmd.key].runs_as == TAKE:  # one message: its age is known
                 date_reading(cmd.name, result, self.catalog, self.backend.robot_time())
         except BackendError as exc:
             result.executed = True

@@ -34,7 +34,7 @@ def test_the_emulated_ros2_over_dds_runs_every_verb():
     require_ros()
     from astiop.robot_programs.emulated_cli.dds import DdsRos2
 
-    unserved = [v.name for k, v in VERBS.items() if k not in DdsRos2.VERBS and v.means != "query"]
+    unserved = [v.name for k, v in VERBS.items() if k not in DdsRos2.VERBS and v.runs_as != "query"]
     assert not unserved, unserved
 
 

@@ -23,7 +23,7 @@ def test_each_verb_is_the_module_named_for_it_and_the_grammar_accepts_exactly_th
     for (noun, sub), verb in VERBS.items():
         module = importlib.import_module(f"astiop.ros2.verbs.{noun}_{sub}")
         assert module.VERB is verb and verb.name == f"{noun} {sub}"
-        assert (verb.enough is None) == (verb.means != "sample"), verb.name
+        assert (verb.output_complete is None) == (verb.runs_as != "sample"), verb.name
 
 
 def test_the_simulator_gives_every_verb_what_it_runs_on():

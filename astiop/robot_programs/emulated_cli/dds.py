@@ -134,7 +134,7 @@ class DdsRos2(TopicVerbs, CallVerbs, ServesVerbs):
         args = call.request.get("args", {})
         key = (args.get("command"), args.get("verb"))
         handler = self.verb_handler(key)
-        if handler is None and key in VERBS and VERBS[key].means == QUERY:
+        if handler is None and key in VERBS and VERBS[key].runs_as == QUERY:
             handler = functools.partial(run_query, self, argv=call.request.get("argv", []))
         code = 1
         try:

@@ -45,6 +45,6 @@ def run_verb(robot, call: Call, argv: list[str]) -> int:
         call.err(f"{exc}\n")
         return 1
     call.out(text)
-    if VERBS[checked.command.key].means == SAMPLE:
+    if VERBS[checked.command.key].runs_as == SAMPLE:
         call.wait(3600.0)
     return 0

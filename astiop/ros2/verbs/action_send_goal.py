@@ -43,7 +43,7 @@ VERB = Verb(
     arguments,
     run,
     check,
-    means=GOAL,
+    runs_as=GOAL,
     example="ros2 action send_goal /navigate_to_pose nav2_msgs/action/NavigateToPose "
     '"{pose: {header: {frame_id: map}, pose: {position: {x: 5.0, y: 3.0}}}}" --feedback',
     values_from="goal",

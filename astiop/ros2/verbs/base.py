@@ -36,17 +36,17 @@ class Verb:
     arguments: Callable[[Any, str], None]  # (argparse subparser, distro): as ros2cli declares it
     run: Callable[[Any, Any, float], Output]  # (Transport, Checked, timeout): in process
     check: Callable[[Any, Any], Any] = _valid  # (Ros2Command, Catalog) -> Checked
-    means: str = QUERY
+    runs_as: str = QUERY  # how the CLI transport runs it: QUERY, TAKE, SAMPLE, ...
     example: str = ""  # shown with a parse error
     options: Mapping[str, str] = field(default_factory=dict)  # argparse dest -> astiop's option
     values_from: str = ""  # the argparse dest holding YAML values (pub, call, send_goal)
     normalize: Callable[[dict, dict], None] | None = None  # (argparse namespace, options)
     measures: bool = False  # what it prints the robot measured now (provenance)
-    lasts: Callable[[Any], float] | None = None  # (Ros2Command) -> s it runs by its arguments
+    duration: Callable[[Any], float] | None = None  # (Ros2Command) -> s it runs by its arguments
     # a SAMPLE verb's output read as ros2 prints it: enough of it yet, and its values
-    enough: Callable[[str], bool] | None = None
-    read: Callable[[str], Any] | None = None
-    none_came: str = ""  # a SAMPLE verb's words when nothing came: "no rate"
+    output_complete: Callable[[str], bool] | None = None
+    parse_output: Callable[[str], Any] | None = None
+    when_silent: str = ""  # a SAMPLE verb's words when nothing came: "no rate"
 
     @property
     def name(self) -> str:
@@ -54,5 +54,5 @@ class Verb:
 
     def nothing_came(self, topic: str, timeout: float) -> BackendError:
         return BackendError(
-            f"{topic} is not being published ({self.none_came} within {timeout:g} s)"
+            f"{topic} is not being published ({self.when_silent} within {timeout:g} s)"
         )

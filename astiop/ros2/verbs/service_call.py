@@ -47,7 +47,7 @@ VERB = Verb(
     arguments,
     run,
     check,
-    means=CALL,
+    runs_as=CALL,
     example="ros2 service call /goto_position astiop_msgs/srv/GotoPosition \"{name: 'shipping'}\"",
     values_from="values",
 )

@@ -65,7 +65,7 @@ VERB = Verb(
     arguments,
     run,
     check,
-    means=TAKE,
+    runs_as=TAKE,
     example="ros2 topic echo /battery_status sensor_msgs/msg/BatteryState --once",
     normalize=normalize,
     measures=True,

@@ -86,9 +86,9 @@ VERB = Verb(
     arguments,
     run,
     check,
-    means=PUBLISH,
+    runs_as=PUBLISH,
     example='ros2 topic pub --once /cmd_vel geometry_msgs/msg/Twist "{linear: {x: 0.2}}"',
     values_from="values",
     normalize=normalize,
-    lasts=lasts,
+    duration=lasts,
 )

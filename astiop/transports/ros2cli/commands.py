@@ -57,16 +57,16 @@ class CliCommands:
     def _execute(self, checked: Checked, timeout: float) -> tuple[str, Any]:
         verb = VERBS[command_of(checked).key]
         means: dict[str, Means] = {TAKE: self._echo, SAMPLE: self._sample, GOAL: self._send_goal}
-        return means.get(verb.means, self._once)(checked, sent_argv(checked), timeout)
+        return means.get(verb.runs_as, self._once)(checked, sent_argv(checked), timeout)
 
     def _once(self, checked: Checked, argv: list[str], timeout: float) -> tuple[str, Any]:
         """A verb ros2 ends by itself: a query, a publish, a service call."""
         cmd = command_of(checked)
         verb = VERBS[cmd.key]
-        if verb.lasts is not None:  # never stop what validation allowed to run this long
-            timeout += verb.lasts(cmd)
+        if verb.duration is not None:  # never stop what validation allowed to run this long
+            timeout += verb.duration(cmd)
         run = self._run(argv, timeout)
-        calls = verb.means == CALL
+        calls = verb.runs_as == CALL
         if calls and waited_for_service(run.out):
             raise BackendError(f"service {cmd.name} is not available (waited {timeout:g} s)")
         if run.stopped:
@@ -105,10 +105,10 @@ class CliCommands:
         """A verb ros2 runs until stopped (hz, bw): read until the verb has enough of it."""
         cmd = command_of(checked)
         verb = VERBS[cmd.key]
-        if verb.read is None:
+        if verb.parse_output is None:
             raise BackendError(f"ros2 {verb.name}: astiop does not read what it prints")
-        run = self._run(argv, timeout, until=verb.enough)
-        values = verb.read(run.out)
+        run = self._run(argv, timeout, until=verb.output_complete)
+        values = verb.parse_output(run.out)
         if values is None:
             raise verb.nothing_came(cmd.name or "", timeout)
         return run.out, values
