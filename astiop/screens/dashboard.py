@@ -22,6 +22,7 @@ from astiop.screens.base import ConsoleScreen
 from astiop.screens.messages import RobotStateSampled, TurnFinished
 from astiop.screens.panel_text import show_text
 from astiop.transports.state import RobotState, TopicStat
+from astiop.widgets.camera_view import CameraView
 from astiop.widgets.gauges import BatteryGauge
 from astiop.widgets.live_table import LiveTable
 from astiop.widgets.map_view import Place, WarehouseMapView
@@ -125,10 +126,14 @@ class DashboardScreen(ConsoleScreen):
                 yield MissionPanel(id="mission", classes="panel")
                 yield Static(id="robot", classes="panel")
                 yield BatteryGauge(id="battery", classes="panel")
+                yield CameraView(self.services.gateway.camera, self._robot_clock, id="camera")
                 yield Static(id="agent", classes="panel")
                 yield LiveTable(id="topics", cursor_type="none")
                 yield Static(id="services", classes="panel")
         yield Footer()
+
+    def _robot_clock(self) -> float:
+        return self.app.robot_state.t
 
     def on_mount(self) -> None:
         self.reach = ""

@@ -16,6 +16,7 @@ import numpy as np
 from astiop.sim import lidar
 from astiop.sim.battery import Battery
 from astiop.sim.body import ASTIBOT_BODY, Body
+from astiop.sim.camera import ASTIBOT_CAMERA, Camera, CameraSpec
 from astiop.sim.commands import CommandsMixin, Teleop
 from astiop.sim.controller import ControllerGains, tracking_error
 from astiop.sim.conveyor import Conveyor
@@ -65,11 +66,12 @@ class Simulator(NavigationMixin, CommandsMixin, SteppingMixin):
         lock: threading.RLock | None = None,
         dock: str = "charging_dock",
         name: str = "robot",
+        camera: CameraSpec | None = ASTIBOT_CAMERA,
     ):
         """`body`, `gains`, `battery` and `lidar_spec` make another robot in the same
         warehouse (a TurtleBot3); `params` is the body's wheels when `body` is the ASTIbot's.
         `world` and `lock` make it one robot of a fleet (`sim/fleet.py` steps them all);
-        `dock` is the station it charges at."""
+        `dock` is the station it charges at; `camera` None: the robot has none."""
         self.map = warehouse or default_map()
         self.name = name
         self.dock_name = dock
@@ -116,6 +118,7 @@ class Simulator(NavigationMixin, CommandsMixin, SteppingMixin):
         self.scan_ranges = np.full(self.lidar_spec.beams, np.inf)
         self.scan_stamp = 0.0
         self.detected: list[DetectedObstacle] = []
+        self.camera = Camera(camera) if camera is not None else None
         self.lidar_ms: collections.deque[float] = collections.deque(maxlen=2000)
         self.plan_ms: list[float] = []
         self._events: collections.deque[Event] = collections.deque(maxlen=500)
@@ -175,6 +178,14 @@ class Simulator(NavigationMixin, CommandsMixin, SteppingMixin):
             pose = (p.x, p.y, wrap_angle(self.body.angle))
             self._pose_at = (self.world.steps, pose)
         return pose
+
+    def camera_image(self) -> tuple[float, np.ndarray] | None:
+        """The camera's frame of this period: (its time, RGB pixels (height, width, 3)); None
+        without a camera. Rendered once per frame, under the lock: the world holds still."""
+        if self.camera is None:
+            return None
+        with self.lock:
+            return self.camera.frame(self.world, self.body, self.t)
 
     def _dock(self):
         """The dock station, looked up once per map and dock name (`docked()` is 20 Hz)."""

@@ -12,6 +12,7 @@ from typing import Any, Union
 from astiop.ros2.catalog import Catalog
 from astiop.ros2.validation import Checked, always_allowed
 from astiop.transports.errors import BackendError  # noqa: F401 - its home for every caller
+from astiop.transports.images import ImageMessage, image_message
 from astiop.transports.inflight import InFlight
 from astiop.transports.state import OccupancyGrid, RobotEvent, RobotState, TopicStat
 from astiop.warehouse import WarehouseMap
@@ -204,6 +205,14 @@ class RobotBackend(ABC):
 
     @abstractmethod
     def map_geometry(self) -> MapGeometry: ...
+
+    def image(self, name: str) -> ImageMessage | None:
+        """The latest message on the image topic `name` (its pixels as bytes), or None when
+        none came; ValueError when it is no image. By default from `messages()`."""
+        msg = self.messages([name]).get(name)
+        if msg is None:
+            return None
+        return image_message(name, msg, self.message_times([name]).get(name))
 
     def read_map(self, timeout_s: float) -> MapGeometry:
         """The robot's map, read now if it has not been (a one-shot command never started the

@@ -15,6 +15,7 @@ from astiop.ros2.profile import ProfileSpec
 from astiop.transports import live_robot
 from astiop.transports.base import RobotBackend
 from astiop.transports.event_log import Contact, EstopWork, EventLog
+from astiop.transports.images import ImageMessage, image_message
 from astiop.transports.inflight import InFlight, Job
 from astiop.transports.live_catalog import GraphLists, describe_graph
 from astiop.transports.live_robot import MOVING, without_finished_plan
@@ -23,7 +24,7 @@ from astiop.transports.rclpy.estop import RclpyEstop
 from astiop.transports.rclpy.graph import read_lists, read_params
 from astiop.transports.rclpy.lock_hold import LockHold
 from astiop.transports.rclpy.node import ros_process
-from astiop.transports.rclpy.state_watches import RclpyStateWatches
+from astiop.transports.rclpy.state_watches import IMAGE_TYPES, RclpyStateWatches
 from astiop.transports.rclpy.teleop import RclpyTeleop
 from astiop.transports.rclpy.verbs import RclpyVerbs
 from astiop.transports.rclpy.watch import TopicWatch, watch
@@ -283,6 +284,8 @@ class RclpyBackend(RclpyEstop, RclpyTeleop, RclpyStateWatches, RclpyVerbs, Robot
         out = {}
         for name, w in self._watches.items():
             spec = self.catalog.topics.get(name)
+            if w.type in IMAGE_TYPES:
+                continue  # no state is made of a frame: never decoded here
             period = 1.0 / spec.rate_hz if spec and spec.rate_hz else math.inf
             if w.age(now) <= max(3 * period, SILENT_S):
                 msg = w.latest()
@@ -326,6 +329,15 @@ class RclpyBackend(RclpyEstop, RclpyTeleop, RclpyStateWatches, RclpyVerbs, Robot
             if received is not None:
                 out[n] = received - self.t0
         return out
+
+    def image(self, name: str) -> ImageMessage | None:
+        """A camera's latest frame as it came (no dict of its pixels); watched while asked."""
+        self._want(name)
+        w = self._watches.get(name)
+        received = w.received() if w else None
+        if w is None or received is None:
+            return None
+        return image_message(name, w.latest_object(), received - self.t0)
 
     def events_since(self, seq: int) -> list[RobotEvent]:
         return self.events.since(seq)

@@ -8,11 +8,14 @@ import time
 from typing import TYPE_CHECKING, Any, Protocol
 
 from astiop.ros2.catalog import Catalog
+from astiop.ros2.roles import COMPRESSED_IMAGE, IMAGE
 from astiop.transports.rclpy.node import RosProcess
-from astiop.transports.rclpy.watch import TopicWatch, watch, watch_transforms
+from astiop.transports.rclpy.watch import TopicWatch, image_watch, watch, watch_transforms
 from astiop.transports.state import GOAL_STATUS, goal_status_topic
 
 SCAN_TYPES = frozenset({"sensor_msgs/msg/LaserScan", "sensor_msgs/msg/PointCloud2"})
+# A camera's frames are watched only while something shows them (the console's camera view)
+IMAGE_TYPES = frozenset({IMAGE, COMPRESSED_IMAGE})
 # Watched only while wanted: /odom at 50 Hz was most of the console's rclpy cost, and what the
 # state takes from it, /robot_status (speed) and /robot_pose (pose) carry too. Wanted while this
 # process drives, while the robot moves (its status says so), and while a reader (a recording)
@@ -55,11 +58,18 @@ class RclpyStateWatches(_Host):
         if self._closed.is_set():
             return  # a refresh that outlived close(): no watch the process would keep
         map_name = self._name("map")
-        for name in self.catalog.state_topics() + ([map_name] if map_name else []):
+        names = self.catalog.state_topics() + ([map_name] if map_name else [])
+        names += [n for n in self._wanted if n not in names and self._is_wanted(n)]
+        for name in names:
             spec = self.catalog.topics.get(name)
             if spec is None or name in self._watches or (name == map_name and self._map_watch):
                 continue
             if name == self._name("odometry") and not self._is_wanted(name):
+                continue
+            if spec.type in IMAGE_TYPES:
+                if self.proc.node.get_publishers_info_by_topic(name):
+                    w = image_watch(self.proc, name, spec.type)
+                    self._watches = {**self._watches, **({name: w} if w else {})}
                 continue
             if self._light_skips(name, spec.type):
                 continue
@@ -90,13 +100,17 @@ class RclpyStateWatches(_Host):
     def _want(self, name: str) -> None:
         """Keep an on-demand topic watched for WANTED_S from now (the graph thread subscribes it:
         never the caller, who may be the executor's callback or a key press)."""
-        if name == self._name("odometry"):
+        spec = self.catalog.topics.get(name)
+        if name == self._name("odometry") or (spec is not None and spec.type in IMAGE_TYPES):
             self._wanted[name] = time.monotonic() + WANTED_S
             if name not in self._watches:
                 self._poke.set()
 
     def _is_wanted(self, name: str) -> bool:
         profile = self.catalog.profile
+        spec = self.catalog.topics.get(name)
+        if spec is not None and spec.type in IMAGE_TYPES:
+            return time.monotonic() < self._wanted.get(name, 0.0)
         if profile and (profile.name("pose") == name or not profile.has("status")):
             return True  # the robot's pose or speed has no other source
         return time.monotonic() < self._wanted.get(name, 0.0)
@@ -112,7 +126,8 @@ class RclpyStateWatches(_Host):
     def _drop_unwanted(self) -> None:
         with self._watch_lock:
             scans = [n for n, w in self._watches.items() if self._light_skips(n, w.type)]
-            for name in [self._name("odometry"), *scans]:
+            images = [n for n, w in self._watches.items() if w.type in IMAGE_TYPES]
+            for name in [self._name("odometry"), *scans, *images]:
                 w = self._watches.get(name)
                 if w is not None and not self._is_wanted(name):
                     self._watches = {n: v for n, v in self._watches.items() if n != name}
