@@ -95,7 +95,7 @@ def test_the_image_message_fields():
     png = sm.compressed_image(at, pixels)
     from PIL import Image
 
-    assert png["format"] == "png"
+    assert png["format"] == "rgb8; png compressed rgb8"
     assert np.array_equal(np.asarray(Image.open(io.BytesIO(png["data"])).convert("RGB")), pixels)
 
 

@@ -266,8 +266,9 @@ def image(t: float, pixels: np.ndarray, frame: str = "camera") -> dict:
 
 
 def compressed_image(t: float, pixels: np.ndarray, frame: str = "camera") -> dict:
-    """sensor_msgs/msg/CompressedImage: the frame as PNG (lossless, and flat colours pack well;
-    `format` one of the message's own "jpeg, png, tiff")."""
+    """sensor_msgs/msg/CompressedImage: the frame as PNG (lossless, and flat colours pack well),
+    `format` as compressed_image_transport writes it ("ORIG_PIXFMT; CODEC compressed
+    COMPRESSED_PIXFMT", the message's own comment)."""
     import io
 
     from PIL import Image as PILImage
@@ -276,4 +277,4 @@ def compressed_image(t: float, pixels: np.ndarray, frame: str = "camera") -> dic
     PILImage.fromarray(np.ascontiguousarray(pixels, dtype=np.uint8), "RGB").save(
         out, "PNG", compress_level=1
     )
-    return {"header": stamp(t, frame), "format": "png", "data": out.getvalue()}
+    return {"header": stamp(t, frame), "format": "rgb8; png compressed rgb8", "data": out.getvalue()}
