@@ -41,17 +41,17 @@ ASTIBOT_CAMERA = CameraSpec()
 # what each thing looks like: (colour, height in m)
 LOOKS: dict[str, tuple[RGB, float]] = {
     "wall": ((196, 196, 188), 3.0),
-    "shelf": ((52, 100, 176), 2.4),  # pallet racking's blue uprights
+    "shelf": ((176, 104, 16), 2.4),  # pallet racking, the map's racks' colour
     "pillar": ((232, 196, 40), 3.0),
     "station:charging_dock": ((40, 190, 70), 0.8),
     "station:cps_storage": ((214, 40, 40), 1.0),
     "station:assembly_station": ((150, 90, 200), 1.0),
     "station:shipping": ((238, 140, 30), 1.0),
     "station": ((120, 160, 160), 1.0),  # any other station
-    "pallet": ((164, 116, 64), 1.1),  # loaded
+    "pallet": ((214, 178, 120), 1.1),  # loaded, light wood
     "person": ((255, 132, 0), 1.75),  # a hi-vis vest
     "forklift": ((245, 200, 0), 2.1),
-    "box": ((196, 156, 104), 0.6),
+    "box": ((150, 112, 70), 0.6),
     "robot": ((84, 88, 110), 0.7),
 }
 FLOOR: RGB = (118, 112, 100)
