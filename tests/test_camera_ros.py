@@ -23,12 +23,17 @@ def test_the_sim_node_publishes_its_camera_and_the_console_reads_it(tmp_path):
 
     with sim_node(speed=1.0), ros_client("camera_viewer") as client:
         raw = client.collect(Image, "/camera/image_raw", qos_profile_sensor_data)
-        png = client.collect(CompressedImage, "/camera/image_raw/compressed", qos_profile_sensor_data)
+        png = client.collect(
+            CompressedImage, "/camera/image_raw/compressed", qos_profile_sensor_data
+        )
         assert until(lambda: len(raw) >= 6 and png, 30), (len(raw), len(png))
         _, msg = raw[-1]
         assert (msg.height, msg.width, msg.encoding, msg.step) == (120, 160, "rgb8", 480)
         assert len(msg.data) == 120 * 160 * 3 and msg.header.frame_id == "camera"
-        assert png[-1][1].format == "rgb8; png compressed rgb8" and bytes(png[-1][1].data[1:4]) == b"PNG"
+        assert (
+            png[-1][1].format == "rgb8; png compressed rgb8"
+            and bytes(png[-1][1].data[1:4]) == b"PNG"
+        )
         times = [t for t, _ in raw[-6:]]
         rate = (len(times) - 1) / (times[-1] - times[0])
         assert 3.0 < rate < 7.0, rate  # 5 Hz

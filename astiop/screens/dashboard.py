@@ -132,8 +132,9 @@ class DashboardScreen(ConsoleScreen):
                 yield Static(id="services", classes="panel")
         yield Footer()
 
-    def _robot_clock(self) -> float:
-        return self.app.robot_state.t
+    def _robot_clock(self) -> float | None:
+        """The robot's clock as last sampled: a camera frame's age is measured on it."""
+        return getattr(self, "_robot_t", None)
 
     def on_mount(self) -> None:
         self.reach = ""
@@ -248,6 +249,7 @@ class DashboardScreen(ConsoleScreen):
         self._topic_rows = rows
 
     def show_state(self, st: RobotState) -> None:
+        self._robot_t = st.t
         view = self.query_one(WarehouseMapView)
         view.set_geometry(self.services.gateway.map_geometry())
         view.show(st)

@@ -82,6 +82,7 @@ class Camera:
         self._static: tuple[np.ndarray, np.ndarray] | None = None  # per static edge
         self._static_of: World | None = None
         self._held: tuple[float, np.ndarray] | None = None
+        self._view: tuple | None = None
 
     def _floor_and_ceiling(self) -> np.ndarray:
         s = self.spec
@@ -112,9 +113,13 @@ class Camera:
         x, y = body.position  # type: ignore[attr-defined]
         theta = float(body.angle)  # type: ignore[attr-defined]
         a, b, owners = world.edges(seen_by=body)  # type: ignore[arg-type]
-        colours, heights = self._looks(world, owners)
-        pixels = self.render((x, y, theta), a, b, colours, heights)
-        self._held = (at, pixels)
+        view = (x, y, theta, id(a), len(a))  # a robot alone whose world did not change
+        if held is not None and view == self._view:
+            pixels = held[1]  # nothing moved: the same picture (a docked robot's, mostly)
+        else:
+            colours, heights = self._looks(world, owners)
+            pixels = self.render((x, y, theta), a, b, colours, heights)
+        self._held, self._view = (at, pixels), view
         return self._held
 
     def _looks(self, world: World, owners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -277,4 +277,8 @@ def compressed_image(t: float, pixels: np.ndarray, frame: str = "camera") -> dic
     PILImage.fromarray(np.ascontiguousarray(pixels, dtype=np.uint8), "RGB").save(
         out, "PNG", compress_level=1
     )
-    return {"header": stamp(t, frame), "format": "rgb8; png compressed rgb8", "data": out.getvalue()}
+    return {
+        "header": stamp(t, frame),
+        "format": "rgb8; png compressed rgb8",
+        "data": out.getvalue(),
+    }

@@ -12,6 +12,7 @@ from rich.color import Color
 from rich.segment import Segment
 from rich.style import Style
 from textual import work
+from textual.geometry import Region
 from textual.strip import Strip
 from textual.widget import Widget
 
@@ -103,6 +104,7 @@ class CameraView(Widget):
         self._strips: list[Strip] = []
         self._drawn_for: tuple | None = None
         self._reading = False
+        self._digest: tuple | None = None
 
     def on_mount(self) -> None:
         self.set_interval(1.0 / self._hz, self.read_frame)
@@ -126,14 +128,20 @@ class CameraView(Widget):
 
     def show(self, reading: CameraReading) -> None:
         self._reading = False
-        self.reading = reading
-        self.refresh()
+        frame = reading.frame
+        digest = None if frame is None else (frame.pixels.shape, hash(frame.pixels.tobytes()))
+        same = digest is not None and digest == self._digest
+        self.reading, self._digest = reading, digest
+        if same:  # the same picture (a robot standing still): only its age is drawn again
+            self.refresh(Region(0, 0, self.size.width, 1))
+        else:
+            self.refresh()
 
     def _image_strips(self) -> list[Strip]:
         frame: CameraFrame | None = self.reading.frame
         if frame is None:
             return []
-        key = (id(frame.pixels), self.size.width, self.size.height)
+        key = (self._digest, self.size.width, self.size.height)
         if key != self._drawn_for:  # a new frame, or a new size: drawn once
             cols, rows = fit(frame.width, frame.height, self.size.width, self.size.height - 1)
             self._strips = half_blocks(frame.pixels, cols, rows) if cols and rows else []
@@ -143,9 +151,12 @@ class CameraView(Widget):
     def render_line(self, y: int) -> Strip:
         base, width = self.rich_style, self.size.width
         if y == 0:
-            return caption(self.reading, self._clock()).apply_style(base).extend_cell_length(
-                width, base
-            ).crop(0, width)
+            return (
+                caption(self.reading, self._clock())
+                .apply_style(base)
+                .extend_cell_length(width, base)
+                .crop(0, width)
+            )
         strips = self._image_strips()
         if y - 1 < len(strips):
             return strips[y - 1].extend_cell_length(width, base)
