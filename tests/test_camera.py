@@ -188,3 +188,27 @@ async def test_the_dashboard_says_no_camera_on_a_robot_without_one(tmp_path):
         view = app.screen.query_one(CameraView)
         assert "".join(s.text for s in view.render_line(0)).startswith("camera no camera")
         assert all(c[0] == " " for row in _cells(view) for c in row)
+
+
+def test_a_session_keeps_the_camera_once_a_second_and_replays_it(tmp_path):
+    """The recording keeps the camera's PNG frames (its compressed topic), at most one a second
+    of robot time; the replay's camera reads them as the live robot's."""
+    from astiop.recording.reader import Recording
+    from astiop.robot.gateway import RobotGateway
+    from astiop.robot.safety import SafetyPolicy
+    from astiop.transports.replay.backend import open_replay
+    from tests.recordings import record_trip
+
+    path = record_trip(tmp_path)
+    recording = Recording(path)
+    counts = recording.counts()
+    seconds = (recording.end_ns - recording.start_ns) / 1e9
+    assert "/camera/image_raw" not in counts
+    assert seconds - 1 <= counts["/camera/image_raw/compressed"] <= seconds + 1, (counts, seconds)
+    backend = open_replay(path, paused=True)
+    backend.playback.seek(seconds / 2)
+    reading = read_camera(RobotGateway(backend, SafetyPolicy()))
+    frame = reading.frame
+    assert frame is not None, reading.note
+    assert frame.topic == "/camera/image_raw/compressed" and frame.pixels.shape == (120, 160, 3)
+    assert frame.encoding == "rgb8; png compressed rgb8"

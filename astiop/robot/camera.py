@@ -101,6 +101,6 @@ def read_camera(gateway: RobotGateway) -> CameraReading:
     if msg is None:
         return CameraReading(None, f"no frame yet on {name}")
     try:
-        return CameraReading(CameraFrame(name, decode(msg), msg.encoding, msg.at))
+        return CameraReading(CameraFrame(msg.topic, decode(msg), msg.encoding, msg.at))
     except ImageError as exc:
         return CameraReading(None, str(exc))
