@@ -212,3 +212,24 @@ def test_a_session_keeps_the_camera_once_a_second_and_replays_it(tmp_path):
     assert frame is not None, reading.note
     assert frame.topic == "/camera/image_raw/compressed" and frame.pixels.shape == (120, 160, 3)
     assert frame.encoding == "rgb8; png compressed rgb8"
+
+
+async def test_asked_about_the_camera_the_simulators_robot_says_its_frame_never_its_pixels(
+    tmp_path,
+):
+    from astiop.agent.models.specs import open_endpoint
+    from astiop.agent.turn import Agent
+    from astiop.robot.gateway import RobotGateway
+    from astiop.robot.safety import SafetyPolicy
+
+    store = Store(tmp_path / "a.db")
+    sim = Simulator(seed=0, start=DOCK_FACING)
+    sim.step(0.3)
+    gateway = RobotGateway(SimBackend(sim, store), SafetyPolicy())
+    agent = Agent(gateway, open_endpoint("rules"), store, confirm=lambda _c: True)
+    r = await agent.turn("what does the camera see?")
+    assert [c.command for c in r.commands] == ["ros2 topic echo /camera/image_raw --once"]
+    assert "camera image 160 x 120 px, rgb8, 57600 bytes" in r.answer, r.answer
+    assert r.commands[0].values["data_bytes"] == 57600 and "data" not in r.commands[0].values
+    out = r.commands[0].output  # as ros2 topic echo prints it: the first 128 values, then '...'
+    assert "!!binary" not in out and out.count("\n- ") == 129 and "- '...'" in out

@@ -13,6 +13,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import pymunk
 
 from astiop.sim.world import ROBOT_OWNER, World
 
@@ -104,15 +105,15 @@ class Camera:
             self._static, self._static_of = (colours, heights), world
         return self._static
 
-    def frame(self, world: World, body: object, t: float) -> tuple[float, np.ndarray]:
+    def frame(self, world: World, body: pymunk.Body, t: float) -> tuple[float, np.ndarray]:
         """The frame of the period `t` falls in: (its time, RGB pixels (height, width, 3))."""
         at = math.floor(t * self.spec.rate_hz + 1e-9) / self.spec.rate_hz
         held = self._held
         if held is not None and held[0] == at:
             return held
-        x, y = body.position  # type: ignore[attr-defined]
-        theta = float(body.angle)  # type: ignore[attr-defined]
-        a, b, owners = world.edges(seen_by=body)  # type: ignore[arg-type]
+        x, y = body.position
+        theta = float(body.angle)
+        a, b, owners = world.edges(seen_by=body)
         view = (x, y, theta, id(a), len(a))  # a robot alone whose world did not change
         if held is not None and view == self._view:
             pixels = held[1]  # nothing moved: the same picture (a docked robot's, mostly)
