@@ -17,6 +17,7 @@ from textual.widgets import DataTable, Footer, Header, Static
 
 from astiop.agent.models.probe import probe
 from astiop.bounded import escape_controls
+from astiop.robot.camera import CameraReading
 from astiop.screens import mission_commands
 from astiop.screens.base import ConsoleScreen
 from astiop.screens.messages import RobotStateSampled, TurnFinished
@@ -126,11 +127,14 @@ class DashboardScreen(ConsoleScreen):
                 yield MissionPanel(id="mission", classes="panel")
                 yield Static(id="robot", classes="panel")
                 yield BatteryGauge(id="battery", classes="panel")
-                yield CameraView(self.services.gateway.camera, self._robot_clock, id="camera")
+                yield CameraView(self._camera, self._robot_clock, id="camera")
                 yield Static(id="agent", classes="panel")
                 yield LiveTable(id="topics", cursor_type="none")
                 yield Static(id="services", classes="panel")
         yield Footer()
+
+    def _camera(self) -> CameraReading:
+        return self.services.gateway.camera()  # the current robot's: a fleet's may change
 
     def _robot_clock(self) -> float | None:
         """The robot's clock as last sampled: a camera frame's age is measured on it."""
