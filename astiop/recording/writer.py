@@ -28,6 +28,7 @@ from astiop.recording import missions
 from astiop.recording.schemas import JSON_SCHEMAS, ros2msg
 
 FLUSH_S = 2.0
+CAMERA_PERIOD_S = 1.0  # a camera's frames kept at most once a second: what a session file bears
 POLL_HZ = 20.0
 STOP_WAIT_S = 5.0  # for the thread's last poll; the file is finished either way
 MAX_NOTICES = 5  # different failures said per recording; the same one is said once
@@ -103,6 +104,7 @@ class SessionRecorder:
         self._on_error = on_error
         self._said: set[str] = set()
         self._event_seq: dict[str, int] = {}  # per robot (its namespace): the last event seen
+        self._camera_at: dict[str, float] = {}  # per robot: when its camera was last read
         for ns, gw in self._robots() if gateway else ():
             self._event_seq[ns] = gw.state().event_seq
         # The agent's turns: those after _turns_after, and those seen running (a turn ends when
@@ -226,6 +228,10 @@ class SessionRecorder:
             self._event_seq[ns] = gateway.state().event_seq
         now = gateway.state().t
         names = gateway.catalog.recorded_topics()
+        camera = camera_topic(gateway.catalog)
+        if camera and now - self._camera_at.get(ns, -CAMERA_PERIOD_S) >= CAMERA_PERIOD_S:
+            self._camera_at[ns] = now  # its frame read and kept once a period, not each poll
+            names = [*names, camera]
         times = gateway.message_times(names)  # published, or received on a robot
         messages = gateway.messages(names)
         return gateway, now, messages, times, gateway.events_since(self._event_seq[ns]), ns
@@ -317,3 +323,16 @@ def _finite_floats(value: Any) -> Any:
 
 def default_path(data_dir: Path) -> Path:
     return data_dir / "sessions" / (time.strftime("%Y%m%d-%H%M%S") + ".mcap")
+
+
+def camera_topic(catalog) -> str | None:
+    """The topic a recording keeps of the robot's camera: its compressed frames where the robot
+    publishes them (image_transport's `<camera>/compressed`), else the camera's own."""
+    profile = catalog.profile
+    name = profile.name("camera") if profile is not None else None
+    if name is None or profile.kind("camera") != "topic":
+        return None
+    compressed = catalog.topics.get(name + "/compressed")
+    if compressed is not None and compressed.type == "sensor_msgs/msg/CompressedImage":
+        return compressed.name
+    return name

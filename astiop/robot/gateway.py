@@ -13,6 +13,7 @@ import time
 from collections.abc import Callable, Iterable
 from typing import Any
 
+from astiop.robot.camera import CameraReading, read_camera
 from astiop.robot.command_journal import CommandJournal
 from astiop.robot.estop_latch import ESTOP_REASON, EstopLatch
 from astiop.robot.graph_reading import GraphReading
@@ -157,6 +158,10 @@ class RobotGateway:
 
     def topic_stats(self) -> list[TopicStat]:
         return self.backend.topic_stats()
+
+    def camera(self) -> CameraReading:
+        """The camera role's latest frame, decoded, or why there is none."""
+        return read_camera(self)
 
     def map_geometry(self) -> MapGeometry:
         return self.backend.map_geometry()

@@ -187,6 +187,24 @@ _TOPICS = [
         role="state",
     ),
     TopicSpec(
+        "/camera/image_raw",
+        "sensor_msgs/msg/Image",
+        5,
+        "/camera_driver",
+        "",
+        "the front camera: 160 x 120 px, rgb8",
+        qos="sensor_data",
+    ),
+    TopicSpec(
+        "/camera/image_raw/compressed",
+        "sensor_msgs/msg/CompressedImage",
+        5,
+        "/camera_driver",
+        "",
+        "the front camera's frames as PNG",
+        qos="sensor_data",
+    ),
+    TopicSpec(
         "/tf",
         "tf2_msgs/msg/TFMessage",
         50,
@@ -287,6 +305,7 @@ _ACTIONS = [
 _NODES = (
     "/astibot_base",
     "/lidar_driver",
+    "/camera_driver",
     "/battery_monitor",
     "/navigator",
     "/obstacle_detector",
@@ -306,14 +325,18 @@ _PARAMS = [
 ]
 
 
-def astibot_catalog() -> Catalog:
+CAMERA_TOPICS = ("/camera/image_raw", "/camera/image_raw/compressed")
+
+
+def astibot_catalog(*, camera: bool = True) -> Catalog:
+    """`camera` False: an ASTIbot without its camera (its topics and driver absent)."""
     from astiop.ros2.profile import match_profile
 
     cat = Catalog(
-        topics={t.name: t for t in _TOPICS},
+        topics={t.name: t for t in _TOPICS if camera or t.name not in CAMERA_TOPICS},
         services={s.name: s for s in _SERVICES},
         actions={a.name: a for a in _ACTIONS},
-        nodes=_NODES,
+        nodes=_NODES if camera else tuple(n for n in _NODES if n != "/camera_driver"),
         params={(p.node, p.name): p for p in _PARAMS},
     )
     cat.profile = match_profile(cat)

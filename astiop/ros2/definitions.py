@@ -82,6 +82,16 @@ float32 range_max
 float32[] ranges
 float32[] intensities
 """,
+    "sensor_msgs/msg/Image": """\
+std_msgs/Header header
+uint32 height
+uint32 width
+string encoding
+uint8 is_bigendian
+uint32 step
+uint8[] data
+""",
+    "sensor_msgs/msg/CompressedImage": "std_msgs/Header header\nstring format\nuint8[] data\n",
     "sensor_msgs/msg/BatteryState": """\
 uint8 POWER_SUPPLY_STATUS_UNKNOWN = 0
 uint8 POWER_SUPPLY_STATUS_CHARGING = 1

@@ -18,6 +18,8 @@ def _prepare(value: Any, no_arr: bool, truncate: int | None, no_str: bool = Fals
     # sequences cut at the truncate length with '...', --no-str shows only a string's length
     if isinstance(value, dict):
         return {k: _prepare(v, no_arr, truncate, no_str) for k, v in value.items()}
+    if isinstance(value, bytes | bytearray):  # uint8[] kept as bytes (the simulator's pixels)
+        value = list(value)  # as rclpy's message reads: a list of ints
     if isinstance(value, str):
         if no_str:
             return f"<string length: <{len(value)}>>"

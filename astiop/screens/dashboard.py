@@ -17,12 +17,14 @@ from textual.widgets import DataTable, Footer, Header, Static
 
 from astiop.agent.models.probe import probe
 from astiop.bounded import escape_controls
+from astiop.robot.camera import CameraReading
 from astiop.screens import mission_commands
 from astiop.screens.base import ConsoleScreen
 from astiop.screens.map_actions import MapActions
 from astiop.screens.messages import RobotStateSampled, TurnFinished
 from astiop.screens.panel_text import show_text
 from astiop.transports.state import RobotState, TopicStat
+from astiop.widgets.camera_view import CameraView
 from astiop.widgets.gauges import BatteryGauge
 from astiop.widgets.live_table import LiveTable
 from astiop.widgets.map_view import Place, WarehouseMapView
@@ -126,10 +128,18 @@ class DashboardScreen(ConsoleScreen):
                 yield MissionPanel(id="mission", classes="panel")
                 yield Static(id="robot", classes="panel")
                 yield BatteryGauge(id="battery", classes="panel")
+                yield CameraView(self._camera, self._robot_clock, id="camera")
                 yield Static(id="agent", classes="panel")
                 yield LiveTable(id="topics", cursor_type="none")
                 yield Static(id="services", classes="panel")
         yield Footer()
+
+    def _camera(self) -> CameraReading:
+        return self.services.gateway.camera()  # the current robot's: a fleet's may change
+
+    def _robot_clock(self) -> float | None:
+        """The robot's clock as last sampled: a camera frame's age is measured on it."""
+        return getattr(self, "_robot_t", None)
 
     def on_mount(self) -> None:
         self.map_actions = MapActions(self.app, self._show_places)
@@ -256,6 +266,7 @@ class DashboardScreen(ConsoleScreen):
         self._topic_rows = rows
 
     def show_state(self, st: RobotState) -> None:
+        self._robot_t = st.t
         view = self.query_one(WarehouseMapView)
         view.set_geometry(self.services.gateway.map_geometry())
         view.set_fleet(self.map_actions.others())  # a fleet's, at its watch's pace

@@ -249,3 +249,36 @@ def occupancy_grid(warehouse) -> dict:
         },
         "data": cells.ravel().tolist(),
     }
+
+
+def image(t: float, pixels: np.ndarray, frame: str = "camera") -> dict:
+    """sensor_msgs/msg/Image of RGB pixels (height, width, 3): rgb8, rows top to bottom."""
+    height, width = pixels.shape[:2]
+    return {
+        "header": stamp(t, frame),
+        "height": height,
+        "width": width,
+        "encoding": "rgb8",
+        "is_bigendian": 0,
+        "step": width * 3,
+        "data": np.ascontiguousarray(pixels, dtype=np.uint8).tobytes(),
+    }
+
+
+def compressed_image(t: float, pixels: np.ndarray, frame: str = "camera") -> dict:
+    """sensor_msgs/msg/CompressedImage: the frame as PNG (lossless, and flat colours pack well),
+    `format` as compressed_image_transport writes it ("ORIG_PIXFMT; CODEC compressed
+    COMPRESSED_PIXFMT", the message's own comment)."""
+    import io
+
+    from PIL import Image as PILImage
+
+    out = io.BytesIO()
+    PILImage.fromarray(np.ascontiguousarray(pixels, dtype=np.uint8), "RGB").save(
+        out, "PNG", compress_level=1
+    )
+    return {
+        "header": stamp(t, frame),
+        "format": "rgb8; png compressed rgb8",
+        "data": out.getvalue(),
+    }

@@ -18,6 +18,7 @@ from astiop.sim import lidar
 from astiop.sim.base import Base, Pose
 from astiop.sim.battery import Battery, LipoBattery
 from astiop.sim.body import ASTIBOT_BODY, Body
+from astiop.sim.camera import ASTIBOT_CAMERA, Camera, CameraSpec
 from astiop.sim.clock import Clock, SimEvents
 from astiop.sim.commands import TELEOP_TIMEOUT_S, SimCommands
 from astiop.sim.controller import ControllerGains
@@ -112,11 +113,12 @@ class Simulator:
         lock: threading.RLock | None = None,
         dock: str = "charging_dock",
         name: str = "robot",
+        camera: CameraSpec | None = ASTIBOT_CAMERA,
     ):
         """`body`, `gains`, `battery` and `lidar_spec` make another robot in the same
         warehouse (a TurtleBot3); `params` is the body's wheels when `body` is the ASTIbot's.
         `world` and `lock` make it one robot of a fleet (`sim/fleet.py` steps them all);
-        `dock` is the station it charges at."""
+        `dock` is the station it charges at; `camera` None: the robot has none."""
         self.map = warehouse or default_map()
         self.name = name
         self.dock_name = dock
@@ -158,6 +160,7 @@ class Simulator:
             conveyor=self.conveyor, events=self.events, physics_hz=physics_hz,
             lidar_enabled=lidar_enabled, in_fleet=self.in_fleet,
         )  # fmt: skip
+        self.camera = Camera(camera) if camera is not None else None
         if self.lidar_enabled:
             self.scanner.scan()
 
@@ -249,6 +252,14 @@ class Simulator:
     @property
     def pose(self) -> Pose:
         return self.base.pose
+
+    def camera_image(self) -> tuple[float, np.ndarray] | None:
+        """The camera's frame of this period: (its time, RGB pixels (height, width, 3)); None
+        without a camera. Rendered once per frame, under the lock: the world holds still."""
+        if self.camera is None:
+            return None
+        with self.lock:
+            return self.camera.frame(self.world, self.body, self.t)
 
     def docked(self) -> bool:
         return self.navigation.docked()

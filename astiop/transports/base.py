@@ -14,6 +14,7 @@ from astiop.ros2.catalog import Catalog
 from astiop.ros2.grammar import Ros2Command
 from astiop.ros2.validation import Checked, always_allowed
 from astiop.transports.errors import BackendError as BackendError  # raised by every transport
+from astiop.transports.images import ImageMessage, image_message
 from astiop.transports.inflight import InFlight, Job
 from astiop.transports.state import OccupancyGrid, RobotEvent, RobotState, TopicStat
 from astiop.warehouse import WarehouseMap
@@ -258,6 +259,14 @@ class RobotBackend(ABC):
     def map_geometry(self) -> MapGeometry:
         """Returns: the map as known now (never read here): the warehouse, the robot's /map,
         or None."""
+
+    def image(self, name: str) -> ImageMessage | None:
+        """The latest message on the image topic `name` (its pixels as bytes), or None when
+        none came; ValueError when it is no image. By default from `messages()`."""
+        msg = self.messages([name]).get(name)
+        if msg is None:
+            return None
+        return image_message(name, msg, self.message_times([name]).get(name))
 
     def read_map(self, timeout_s: float) -> MapGeometry:
         """The robot's map, read now if it has not been (a one-shot command never started the

@@ -351,26 +351,19 @@ def test_the_profile_and_the_doctor_read_the_robots_roles(tmp_path):
 
 
 def test_a_camera_is_a_role_read_as_its_size_and_encoding_never_its_pixels(robot_gateway):
-    """The ASTIbot with a camera added on its graph (sensor_msgs/Image on /camera/image_raw):
-    the camera role is found, a question about it reads it, the answer says the image's size
-    and encoding, and what is kept of the read holds no pixels."""
+    """The ASTIbot's camera (sensor_msgs/Image on /camera/image_raw, `astiop sim node`'s): the
+    camera role is found, a question about it reads it, the answer says the image's size and
+    encoding, and what is kept of the read holds no pixels."""
     import asyncio
-
-    from sensor_msgs.msg import Image
 
     from astiop.agent.models.specs import open_endpoint
     from astiop.agent.turn import Agent
-    from tests.ros import ros_client
 
-    with ros_client("camera_driver") as client:
-        pub = client.node.create_publisher(Image, "/camera/image_raw", 10)
-        frame = Image(height=3, width=4, encoding="rgb8", step=12, data=bytes(range(36)))
-        client.node.create_timer(0.1, lambda: pub.publish(frame))
-        gateway = robot_gateway
-        assert until(lambda: gateway.profile.name("camera") == "/camera/image_raw", 30)
-        assert "camera" not in gateway.profile.missing()
-        agent = Agent(gateway, open_endpoint("rules"), gateway.store, confirm=YES)
-        r = asyncio.run(agent.turn("what does the camera see?"))
-        assert [c.command for c in r.commands] == ["ros2 topic echo /camera/image_raw --once"]
-        assert "camera image 4 x 3 px, rgb8, 36 bytes" in r.answer, r.answer
-        assert "data" not in r.commands[0].values and r.commands[0].values["data_bytes"] == 36
+    gateway = robot_gateway
+    assert until(lambda: gateway.profile.name("camera") == "/camera/image_raw", 30)
+    assert "camera" not in gateway.profile.missing()
+    agent = Agent(gateway, open_endpoint("rules"), gateway.store, confirm=YES)
+    r = asyncio.run(agent.turn("what does the camera see?"))
+    assert [c.command for c in r.commands] == ["ros2 topic echo /camera/image_raw --once"]
+    assert "camera image 160 x 120 px, rgb8, 57600 bytes" in r.answer, r.answer
+    assert "data" not in r.commands[0].values and r.commands[0].values["data_bytes"] == 57600

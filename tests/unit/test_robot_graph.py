@@ -37,6 +37,8 @@ VALID = [
     "ros2 topic echo /conveyor/status --once",
     "ros2 topic echo /tf --once",
     "ros2 topic echo /tf_static --once",
+    "ros2 topic echo /camera/image_raw --once --no-arr",
+    "ros2 topic hz /camera/image_raw/compressed",
     "ros2 topic info /plan",
     'ros2 topic pub --once /cmd_vel geometry_msgs/msg/Twist "{linear: {x: 0.2}}"',
     "ros2 topic pub -r 10 -t 5 /cmd_vel geometry_msgs/Twist '{angular: {z: 0.3}}'",

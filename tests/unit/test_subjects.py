@@ -96,7 +96,7 @@ async def test_the_graph_is_listed(store):
 
 async def test_who_publishes_a_topic_is_read_from_each_nodes_info(store):
     _, r = await ask("which node publishes the scan?", store)
-    assert r.answer == "[rules] /lidar_driver publishes /scan (from the info of 7 nodes)."
+    assert r.answer == "[rules] /lidar_driver publishes /scan (from the info of 8 nodes)."
 
 
 async def test_a_topics_type_is_its_own(store):
@@ -118,7 +118,7 @@ async def test_another_components_current_is_said_missing_not_the_batterys(store
 
 
 async def test_a_robot_without_a_camera_says_so_and_is_missing_nothing(store):
-    sim, r = await ask("what is the camera showing?", store)
+    sim, r = await ask("what is the camera showing?", store, Simulator(seed=3, camera=None))
     assert r.commands == [] and "publishes no camera image" in r.answer
     assert agent_on(sim, store).gateway.profile.missing() == ["map"]
 

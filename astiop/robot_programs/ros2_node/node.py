@@ -28,7 +28,7 @@ from astiop.robot_programs.ros2_common import (
     goal_refusal,
     stamped,
 )
-from astiop.ros2.catalog import astibot_catalog
+from astiop.ros2.catalog import CAMERA_TOPICS
 from astiop.ros2.message_objects import interface_class, to_dict, to_message
 from astiop.sim import messages as sm
 from astiop.sim.simulator import GoalError, Simulator
@@ -68,7 +68,7 @@ class SimRobotNodes(RobotNodes):
         self.backend = SimBackend(
             self.sim, self.store, realtime=True, speed=speed, stepped_elsewhere=sim is not None
         )
-        self.catalog = astibot_catalog()
+        self.catalog = self.backend.catalog  # the ASTIbot's, its camera's if the sim has one
         self.limits = {
             "max_linear_speed": self.catalog.params[("/astibot_base", "max_linear_speed")].value,
             "max_angular_speed": self.catalog.params[("/astibot_base", "max_angular_speed")].value,
@@ -126,6 +126,8 @@ class SimRobotNodes(RobotNodes):
         self._publishers[name] = pub
 
         def send() -> None:
+            if name in CAMERA_TOPICS and not pub.get_subscription_count():
+                return  # a frame nobody reads is not rendered (a fleet's robots, each 5 Hz)
             message = self._message(name)
             if message is not None:
                 now = self.nodes[node].get_clock().now().to_msg()

@@ -18,13 +18,14 @@ from astiop.transports import live_robot
 from astiop.transports.base import RobotBackend
 from astiop.transports.event_log import Contact, EventLog
 from astiop.transports.goal_ends import GoalEnds, status_list
+from astiop.transports.images import ImageMessage, image_message
 from astiop.transports.inflight import InFlight
 from astiop.transports.live_catalog import GraphLists, LiveGraph, describe_graph
 from astiop.transports.live_robot import MOVING, without_finished_plan
 from astiop.transports.rclpy.estop import RclpyEstop
 from astiop.transports.rclpy.graph import read_lists, read_params
 from astiop.transports.rclpy.node import ros_process
-from astiop.transports.rclpy.state_watches import RclpyStateWatches
+from astiop.transports.rclpy.state_watches import IMAGE_TYPES, RclpyStateWatches
 from astiop.transports.rclpy.teleop import RclpyTeleop
 from astiop.transports.rclpy.verbs import RclpyVerbs
 from astiop.transports.state import (
@@ -282,6 +283,8 @@ class RclpyBackend(RobotBackend):
         out = {}
         for name, w in self._watching.watches.items():
             spec = self.catalog.topics.get(name)
+            if w.type in IMAGE_TYPES:
+                continue  # no state is made of a frame: never decoded here
             period = 1.0 / spec.rate_hz if spec and spec.rate_hz else math.inf
             if w.age(now) <= max(3 * period, SILENT_S):
                 msg = w.latest()
@@ -325,6 +328,15 @@ class RclpyBackend(RobotBackend):
             if received is not None:
                 out[n] = received - self.t0
         return out
+
+    def image(self, name: str) -> ImageMessage | None:
+        """A camera's latest frame as it came (no dict of its pixels); watched while asked."""
+        self._watching.want(name)
+        w = self._watching.watches.get(name)
+        received = w.received() if w else None
+        if w is None or received is None:
+            return None
+        return image_message(name, w.latest_object(), received - self.t0)
 
     def events_since(self, seq: int) -> list[RobotEvent]:
         return self.events.since(seq)

@@ -8,12 +8,15 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from astiop.ros2.roles import COMPRESSED_IMAGE, IMAGE
 from astiop.transports.live_catalog import LiveGraph
 from astiop.transports.rclpy.node import RosProcess
-from astiop.transports.rclpy.watch import TopicWatch, watch, watch_transforms
+from astiop.transports.rclpy.watch import TopicWatch, image_watch, watch, watch_transforms
 from astiop.transports.state import GOAL_STATUS, goal_status_topic
 
 SCAN_TYPES = frozenset({"sensor_msgs/msg/LaserScan", "sensor_msgs/msg/PointCloud2"})
+# A camera's frames are watched only while something shows them (the console's camera view)
+IMAGE_TYPES = frozenset({IMAGE, COMPRESSED_IMAGE})
 # Watched only while wanted: /odom at 50 Hz was most of the console's rclpy cost, and what the
 # state takes from it, /robot_status (speed) and /robot_pose (pose) carry too. Wanted while this
 # process drives, while the robot moves (its status says so), and while a reader (a recording)
@@ -57,11 +60,18 @@ class RclpyStateWatches:
             return  # a refresh that outlived close(): no watch the process would keep
         catalog, name_of = self.live.catalog, self.live.name
         map_name = name_of("map")
-        for name in catalog.state_topics() + ([map_name] if map_name else []):
+        names = catalog.state_topics() + ([map_name] if map_name else [])
+        names += [n for n in self._wanted if n not in names and self._is_wanted(n)]
+        for name in names:
             spec = catalog.topics.get(name)
             if spec is None or name in self.watches or (name == map_name and self.map_watch):
                 continue
             if name == name_of("odometry") and not self._is_wanted(name):
+                continue
+            if spec.type in IMAGE_TYPES:
+                if self.proc.node.get_publishers_info_by_topic(name):
+                    image = image_watch(self.proc, name, spec.type)
+                    self.watches = {**self.watches, **({name: image} if image else {})}
                 continue
             if self._light_skips(name, spec.type):
                 continue
@@ -99,13 +109,17 @@ class RclpyStateWatches:
     def want(self, name: str) -> None:
         """Keep an on-demand topic watched for WANTED_S from now (the graph thread subscribes it:
         never the caller, who may be the executor's callback or a key press)."""
-        if name == self.live.name("odometry"):
+        spec = self.live.catalog.topics.get(name)
+        if name == self.live.name("odometry") or (spec is not None and spec.type in IMAGE_TYPES):
             self._wanted[name] = time.monotonic() + WANTED_S
             if name not in self.watches:
                 self.poke.set()
 
     def _is_wanted(self, name: str) -> bool:
         profile = self.live.catalog.profile
+        spec = self.live.catalog.topics.get(name)
+        if spec is not None and spec.type in IMAGE_TYPES:
+            return time.monotonic() < self._wanted.get(name, 0.0)
         if profile and (profile.name("pose") == name or not profile.has("status")):
             return True  # the robot's pose or speed has no other source
         return time.monotonic() < self._wanted.get(name, 0.0)
@@ -121,7 +135,8 @@ class RclpyStateWatches:
     def drop_unwanted(self) -> None:
         with self._lock:
             scans = [n for n, w in self.watches.items() if self._light_skips(n, w.type)]
-            for name in [self.live.name("odometry"), *scans]:
+            images = [n for n, w in self.watches.items() if w.type in IMAGE_TYPES]
+            for name in [self.live.name("odometry"), *scans, *images]:
                 w = self.watches.get(name)
                 if w is not None and not self._is_wanted(name):
                     self.watches = {n: v for n, v in self.watches.items() if n != name}

@@ -170,6 +170,15 @@ def watch(
         return None
 
 
+def image_watch(proc: RosProcess, name: str, type_: str) -> TopicWatch | None:
+    """A camera's watch, handed each frame by the executor (a few a second): the last frame
+    kept serialized, depth 10 (a polled watch's 50 frames queued would be megabytes)."""
+    try:
+        return TopicWatch(proc, name, type_)
+    except MessageTypeError:
+        return None
+
+
 class TransformWatch(TopicWatch):
     """/tf or /tf_static: each message folded into the latest transform per (parent, child) as
     it is taken (one /tf message holds a few of the tree's transforms, each publisher its own);

@@ -212,6 +212,13 @@ class ReplayBackend(RobotBackend):
     def messages(self, names) -> dict[str, dict[str, Any]]:
         return self.recording.latest(names, self.playback.now_ns())
 
+    def image(self, name: str):
+        """A recording keeps a camera's compressed frames where the robot sent them
+        (recording/writer.py `camera_topic`): read in place of the camera's own topic."""
+        if name not in self.recording.channels and name + "/compressed" in self.recording.channels:
+            name += "/compressed"
+        return super().image(name)
+
     def message_times(self, names) -> dict[str, float]:
         t_ns = self.playback.now_ns()
         times = {}

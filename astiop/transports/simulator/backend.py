@@ -7,7 +7,7 @@ import time
 from collections import deque
 from typing import Any
 
-from astiop.ros2.catalog import Catalog, astibot_catalog
+from astiop.ros2.catalog import CAMERA_TOPICS, Catalog, astibot_catalog
 from astiop.ros2.interfaces import default_value
 from astiop.ros2.validation import Checked
 from astiop.ros2.verbs import VERBS
@@ -43,7 +43,7 @@ class SimBackend(RobotBackend):
         self.realtime = realtime or stepped_elsewhere
         own = realtime and not stepped_elsewhere
         self._runner = SimRunner(sim, speed=speed) if own else None
-        self.catalog: Catalog = astibot_catalog()
+        self.catalog: Catalog = astibot_catalog(camera=sim.camera is not None)
         self.params = {k: p.value for k, p in self.catalog.params.items()}
         self.inflight = InFlight()
         self.last_twist: dict | None = None
@@ -261,6 +261,12 @@ class SimBackend(RobotBackend):
         }
         if name == "/scan":
             return sm.laser_scan(s, self.sim.lidar_spec)
+        if name in CAMERA_TOPICS:  # rendered once per frame, only when read
+            frame = self.sim.camera_image()
+            if frame is None:
+                raise BackendError(f"no {name}: the robot has no camera")
+            build = sm.image if name == CAMERA_TOPICS[0] else sm.compressed_image
+            return build(*frame)
         if name == "/cmd_vel":
             return self.last_twist or default_value("geometry_msgs/msg/Twist")
         return builders[name](s)

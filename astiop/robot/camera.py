@@ -1,0 +1,106 @@
+"""The robot's camera as the console shows it: the camera role's latest frame, decoded to RGB
+pixels, or one line saying why there is none (no camera, no frame yet, an encoding astiop
+cannot read: nothing is shown rather than garbage)."""
+
+from __future__ import annotations
+
+import io
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from astiop.transports.images import ImageMessage
+
+if TYPE_CHECKING:
+    from astiop.robot.gateway import RobotGateway
+
+# Image encodings read (sensor_msgs/image_encodings.hpp): channels, and the RGB order of them
+RAW_ENCODINGS: dict[str, tuple[int, tuple[int, ...]]] = {
+    "rgb8": (3, (0, 1, 2)),
+    "bgr8": (3, (2, 1, 0)),
+    "rgba8": (4, (0, 1, 2)),
+    "bgra8": (4, (2, 1, 0)),
+    "mono8": (1, (0, 0, 0)),
+    "8uc1": (1, (0, 0, 0)),
+    "8uc3": (3, (2, 1, 0)),  # OpenCV's order
+}
+MAX_SIDE_PX = 8192
+
+
+class ImageError(ValueError):
+    """A frame astiop cannot read: its reason names the encoding or the fault."""
+
+
+@dataclass(frozen=True)
+class CameraFrame:
+    topic: str
+    pixels: np.ndarray  # (height, width, 3) uint8, RGB, top row first
+    encoding: str  # as the robot said it: "rgb8", "png", "jpeg"...
+    at: float | None  # when it came, on the robot's clock (`RobotState.t`)
+
+    @property
+    def width(self) -> int:
+        return int(self.pixels.shape[1])
+
+    @property
+    def height(self) -> int:
+        return int(self.pixels.shape[0])
+
+
+@dataclass(frozen=True)
+class CameraReading:
+    frame: CameraFrame | None
+    note: str = ""  # why there is no frame, or what is wrong with the last one
+
+
+def decode(msg: ImageMessage) -> np.ndarray:
+    """RGB pixels (height, width, 3) of a frame; ImageError when it cannot be read."""
+    if msg.compressed:
+        return _decompress(msg)
+    w, h, enc = msg.width, msg.height, msg.encoding.lower()
+    if enc not in RAW_ENCODINGS:
+        raise ImageError(f"{msg.topic}: images in '{msg.encoding}' cannot be shown")
+    channels, order = RAW_ENCODINGS[enc]
+    if not (0 < w <= MAX_SIDE_PX and 0 < h <= MAX_SIDE_PX):
+        raise ImageError(f"{msg.topic}: a {w} x {h} image cannot be shown")
+    step = msg.step or w * channels
+    if step < w * channels or len(msg.data) < step * h:
+        raise ImageError(
+            f"{msg.topic}: {len(msg.data)} bytes do not hold {h} rows of {step} ({msg.encoding})"
+        )
+    rows = np.frombuffer(msg.data, dtype=np.uint8, count=step * h).reshape(h, step)
+    pixels = rows[:, : w * channels].reshape(h, w, channels)
+    return pixels[:, :, list(order)] if order != (0, 1, 2) or channels != 3 else pixels
+
+
+def _decompress(msg: ImageMessage) -> np.ndarray:
+    from PIL import Image as PILImage  # a compressed frame only
+
+    try:
+        with PILImage.open(io.BytesIO(msg.data)) as img:
+            if img.width > MAX_SIDE_PX or img.height > MAX_SIDE_PX:
+                raise ImageError(f"{msg.topic}: a {img.width} x {img.height} image is too large")
+            return np.asarray(img.convert("RGB"))
+    except (OSError, SyntaxError, ValueError) as exc:
+        if isinstance(exc, ImageError):
+            raise
+        fmt = msg.encoding or "format not said"
+        raise ImageError(f"{msg.topic}: a compressed image ({fmt}) that cannot be read") from None
+
+
+def read_camera(gateway: RobotGateway) -> CameraReading:
+    """The current robot's camera frame, through its camera role."""
+    name = gateway.profile.name("camera")
+    if name is None or gateway.profile.kind("camera") != "topic":
+        return CameraReading(None, "no camera")
+    try:
+        msg = gateway.backend.image(name)
+    except ValueError as exc:
+        return CameraReading(None, str(exc))
+    if msg is None:
+        return CameraReading(None, f"no frame yet on {name}")
+    try:
+        return CameraReading(CameraFrame(msg.topic, decode(msg), msg.encoding, msg.at))
+    except ImageError as exc:
+        return CameraReading(None, str(exc))

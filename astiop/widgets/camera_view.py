@@ -1,0 +1,163 @@
+"""The current robot's camera: its latest frame as half-block cells (▀, the upper pixel the
+foreground, the lower the background: two pixels a cell, in any terminal and in the browser),
+with its topic, size, encoding and age as every reading's age is shown."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+from rich.color import Color
+from rich.segment import Segment
+from rich.style import Style
+from textual import work
+from textual.geometry import Region
+from textual.strip import Strip
+from textual.widget import Widget
+
+from astiop.robot.camera import CameraFrame, CameraReading
+
+HALF = "▀"
+CAPTION = Style(bold=True)
+DIM = Style(dim=True)
+
+
+def fit(width: int, height: int, cols: int, rows: int) -> tuple[int, int]:
+    """The most cells (cols, rows) a width x height image fills at its aspect, two pixels a
+    cell high."""
+    if width <= 0 or height <= 0 or cols <= 0 or rows <= 0:
+        return 0, 0
+    c = cols
+    r = math.ceil(c * height / width / 2)
+    if r > rows:
+        r = rows
+        c = max(1, round(2 * r * width / height))
+    return min(c, cols), r
+
+
+_COLOURS: dict[int, Color] = {}  # by 0xRRGGBB, each channel cut to 5 bits: at most 32,768
+_STYLES: dict[int, Style] = {}  # by (upper << 24) | lower
+MAX_STYLES = 65_536  # a camera's new colour pairs each frame: forgotten past this many
+
+
+def _colour(rgb: int) -> Color:
+    colour = _COLOURS.get(rgb)
+    if colour is None:
+        colour = _COLOURS[rgb] = Color.from_rgb(rgb >> 16, (rgb >> 8) & 255, rgb & 255)
+    return colour
+
+
+def half_blocks(pixels: np.ndarray, cols: int, rows: int) -> list[Strip]:
+    """`pixels` (h, w, 3) sampled to cols x 2*rows (nearest), a strip per row of cells; a run
+    of equal cells is one segment. Colours keep 5 bits a channel (what a terminal's cell
+    shows of a camera), so a frame's styles are mostly made already."""
+    h, w = pixels.shape[:2]
+    ys = np.minimum(((np.arange(2 * rows) + 0.5) * h / (2 * rows)).astype(int), h - 1)
+    xs = np.minimum(((np.arange(cols) + 0.5) * w / cols).astype(int), w - 1)
+    small = (pixels[ys][:, xs] & 0xF8).astype(np.int64)
+    rgb = (small[..., 0] << 16) | (small[..., 1] << 8) | small[..., 2]  # (2 rows, cols)
+    keys = (rgb[0::2] << 24) | rgb[1::2]
+    if len(_STYLES) > MAX_STYLES:
+        _STYLES.clear()
+    change = np.ones(keys.shape, dtype=bool)
+    change[:, 1:] = keys[:, 1:] != keys[:, :-1]
+    strips = []
+    for row, starts in zip(keys.tolist(), (np.flatnonzero(c).tolist() for c in change)):
+        segments = []
+        for i, start in enumerate(starts):
+            key = row[start]
+            style = _STYLES.get(key)
+            if style is None:
+                style = _STYLES[key] = Style.from_color(_colour(key >> 24), _colour(key & 0xFFFFFF))
+            end = starts[i + 1] if i + 1 < len(starts) else cols
+            segments.append(Segment(HALF * (end - start), style))
+        strips.append(Strip(segments, cols))
+    return strips
+
+
+def caption(reading: CameraReading, now: float | None) -> Strip:
+    frame = reading.frame
+    if frame is None:
+        return Strip([Segment("camera ", CAPTION), Segment(reading.note or "no camera", DIM)])
+    age = "age unknown" if frame.at is None or now is None else f"{max(0.0, now - frame.at):.1f}s"
+    text = f"{frame.topic} {frame.width}×{frame.height} {frame.encoding}"
+    return Strip([Segment("camera ", CAPTION), Segment(age + " "), Segment(text, DIM)])
+
+
+class CameraView(Widget):
+    """Reads the camera through `read` (the gateway's) in a thread at `hz` while its screen is
+    shown; `clock` is the robot's clock as last sampled (`RobotState.t`), for the frame's age."""
+
+    DEFAULT_CSS = "CameraView { height: 13; border: round $primary-darken-2; padding: 0 1; }"
+
+    def __init__(
+        self,
+        read: Callable[[], CameraReading],
+        clock: Callable[[], float | None],
+        hz: float = 5.0,
+        **kw,
+    ):
+        super().__init__(**kw)
+        self._read, self._clock, self._hz = read, clock, hz
+        self.reading = CameraReading(None, "reading…")
+        self._strips: list[Strip] = []
+        self._drawn_for: tuple | None = None
+        self._reading = False
+        self._digest: tuple | None = None
+
+    def on_mount(self) -> None:
+        self.set_interval(1.0 / self._hz, self.read_frame)
+        self.read_frame()
+
+    def read_frame(self) -> None:
+        """One read at a time (a slow robot is not asked again meanwhile), and only while the
+        screen is shown."""
+        if self._reading or not self.screen.is_current:
+            return
+        self._reading = True
+        self._read_in_thread()
+
+    @work(thread=True, group="camera", exit_on_error=False)
+    def _read_in_thread(self) -> None:
+        try:
+            reading = self._read()
+        except Exception as exc:  # noqa: BLE001 - said in the view, the next read may do
+            reading = CameraReading(None, f"the camera could not be read: {exc}")
+        self.app.call_from_thread(self.show, reading)
+
+    def show(self, reading: CameraReading) -> None:
+        self._reading = False
+        frame = reading.frame
+        digest = None if frame is None else (frame.pixels.shape, hash(frame.pixels.tobytes()))
+        same = digest is not None and digest == self._digest
+        self.reading, self._digest = reading, digest
+        if same:  # the same picture (a robot standing still): only its age is drawn again
+            self.refresh(Region(0, 0, self.size.width, 1))
+        else:
+            self.refresh()
+
+    def _image_strips(self) -> list[Strip]:
+        frame: CameraFrame | None = self.reading.frame
+        if frame is None:
+            return []
+        key = (self._digest, self.size.width, self.size.height)
+        if key != self._drawn_for:  # a new frame, or a new size: drawn once
+            cols, rows = fit(frame.width, frame.height, self.size.width, self.size.height - 1)
+            self._strips = half_blocks(frame.pixels, cols, rows) if cols and rows else []
+            self._drawn_for = key
+        return self._strips
+
+    def render_line(self, y: int) -> Strip:
+        base, width = self.rich_style, self.size.width
+        if y == 0:
+            return (
+                caption(self.reading, self._clock())
+                .apply_style(base)
+                .extend_cell_length(width, base)
+                .crop(0, width)
+            )
+        strips = self._image_strips()
+        if y - 1 < len(strips):
+            return strips[y - 1].extend_cell_length(width, base)
+        return Strip.blank(width, base)
