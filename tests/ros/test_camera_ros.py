@@ -59,9 +59,9 @@ def test_the_sim_node_publishes_its_camera_and_the_console_reads_it(tmp_path):
             r, g, b = (int(v) for v in frame.pixels[60, 80])
             assert g > 1.5 * max(r, b), (r, g, b)
             backend = gateway.backend
-            assert "/camera/image_raw" in backend._watches
+            assert "/camera/image_raw" in backend._watching.watches
             time.sleep(3.5)  # not asked for WANTED_S and a graph read: no longer watched
-            assert until(lambda: "/camera/image_raw" not in backend._watches, 5)
+            assert until(lambda: "/camera/image_raw" not in backend._watching.watches, 5)
         finally:
             gateway.close()
             store.close()
