@@ -18,7 +18,7 @@ import functools
 import os
 import socket
 import threading
-from typing import Any
+from typing import Any, ClassVar
 
 import rclpy
 import yaml
@@ -31,10 +31,10 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
 from astiop.robot_programs.emulated_cli.call import Call, Interrupted
-from astiop.robot_programs.emulated_cli.dds_calls import CallVerbs
-from astiop.robot_programs.emulated_cli.dds_query import run_query
-from astiop.robot_programs.emulated_cli.dds_topics import TopicVerbs
-from astiop.robot_programs.emulated_cli.verb_table import ServesVerbs, runs
+from astiop.robot_programs.emulated_cli.dds_calls import DdsCalls
+from astiop.robot_programs.emulated_cli.dds_query import DdsGraph, Pairs, run_query
+from astiop.robot_programs.emulated_cli.dds_topics import DdsTopics
+from astiop.robot_programs.emulated_cli.verb_table import VerbKey, VerbTable, runs, served
 from astiop.ros2.definitions import DEFINITIONS
 from astiop.ros2.interfaces import interface_show
 from astiop.ros2.printing import (
@@ -46,7 +46,7 @@ from astiop.ros2.printing import (
 )
 from astiop.ros2.verbs import VERBS
 from astiop.ros2.verbs.base import QUERY
-from astiop.transports.rclpy.graph import full_name, hidden, node_sections, read_params
+from astiop.transports.rclpy.graph import full_name, node_sections, read_params
 from astiop.transports.rclpy.verbs import PARAM_FIELDS
 
 NODE_NAME = "_ros2cli_daemon_emulated"  # hidden, as the daemon's node is
@@ -107,12 +107,28 @@ class DdsNode:
             rclpy.shutdown(context=self.context)
 
 
-class DdsRos2(TopicVerbs, CallVerbs, ServesVerbs):
+def print_listing(call: Call, pairs: Pairs, a: dict, count_flag: str) -> int:
+    """A `... list` verb's lines: each name, its types with -t, the count alone with -c."""
+    flags = {k for k in ("show_types", count_flag) if a.get(k)}
+    call.out(list_text([(n, ", ".join(t)) for n, t in pairs], flags)[0])
+    return 0
+
+
+class DdsRos2:
+    """The server: the graph, node, interface, param and daemon verbs itself, the topic I/O
+    and the calls by helpers on the same node, all found through one VerbTable."""
+
+    VERBS: ClassVar[frozenset[VerbKey]]  # every verb it runs, known without a node
+
     def __init__(self, distro: str):
         self.distro = distro
         self.daemon_running = True
         self.ros = DdsNode()
         self.node = self.ros.node
+        self.graph = DdsGraph(self.node)
+        self.topic_verbs = DdsTopics(self.node, self.graph, distro)
+        self.call_verbs = DdsCalls(self.node)
+        self.verbs = VerbTable(self, self.topic_verbs, self.call_verbs)
 
     # -- serving ----------------------------------------------------------------------------
     def serve(self, path: str) -> None:
@@ -133,9 +149,10 @@ class DdsRos2(TopicVerbs, CallVerbs, ServesVerbs):
         call = Call(conn)
         args = call.request.get("args", {})
         key = (args.get("command"), args.get("verb"))
-        handler = self.verb_handler(key)
+        handler = self.verbs.handler(key)
         if handler is None and key in VERBS and VERBS[key].runs_as == QUERY:
-            handler = functools.partial(run_query, self, argv=call.request.get("argv", []))
+            argv = call.request.get("argv", [])
+            handler = functools.partial(run_query, self.graph, self.distro, argv=argv)
         code = 1
         try:
             if handler is None:
@@ -155,49 +172,29 @@ class DdsRos2(TopicVerbs, CallVerbs, ServesVerbs):
         call.finish(code)
 
     # -- the graph --------------------------------------------------------------------------
-    def _topics(self, include_hidden: bool) -> list[tuple[str, list[str]]]:
-        pairs = self.node.get_topic_names_and_types()
-        return [(n, list(t)) for n, t in pairs if include_hidden or not hidden(n)]
-
-    def _services(self, include_hidden: bool) -> list[tuple[str, list[str]]]:
-        pairs = self.node.get_service_names_and_types()
-        return [(n, list(t)) for n, t in pairs if include_hidden or not hidden(n)]
-
-    def _nodes(self, include_hidden: bool) -> list[str]:
-        return sorted(
-            full_name(ns, n) for n, ns in self.node.get_node_names_and_namespaces()
-            if include_hidden or not n.startswith("_")
-        )  # fmt: skip
-
-    @staticmethod
-    def _print_listing(call: Call, pairs, a: dict, count_flag: str) -> int:
-        flags = {k for k in ("show_types", count_flag) if a.get(k)}
-        call.out(list_text([(n, ", ".join(t)) for n, t in pairs], flags)[0])
-        return 0
-
     @runs("topic list")
     def _topic_list(self, call: Call, a: dict):
         if a.get("verbose"):
             return "the emulated ros2 does not print topic list --verbose"
-        pairs = self._topics(a.get("include_hidden_topics"))
-        return self._print_listing(call, pairs, a, "count_topics")
+        pairs = self.graph.topics(a.get("include_hidden_topics"))
+        return print_listing(call, pairs, a, "count_topics")
 
     @runs("service list")
     def _service_list(self, call: Call, a: dict):
-        pairs = self._services(a.get("include_hidden_services"))
-        return self._print_listing(call, pairs, a, "count_services")
+        pairs = self.graph.services(a.get("include_hidden_services"))
+        return print_listing(call, pairs, a, "count_services")
 
     @runs("action list")
     def _action_list(self, call: Call, a: dict):
         pairs = get_action_names_and_types(self.node)
-        return self._print_listing(call, pairs, a, "count_actions")
+        return print_listing(call, pairs, a, "count_actions")
 
     @runs("topic type", "service type")
     def _type(self, call: Call, a: dict):
         if a["command"] == "topic":
-            pairs, name = self._topics(a.get("include_hidden_topics")), a["topic_name"]
+            pairs, name = self.graph.topics(a.get("include_hidden_topics")), a["topic_name"]
         else:
-            pairs, name = self._services(a.get("include_hidden_services")), a["service_name"]
+            pairs, name = self.graph.services(a.get("include_hidden_services")), a["service_name"]
         for n, types in pairs:
             if n == name:
                 call.out("".join(f"{t}\n" for t in types))
@@ -207,7 +204,7 @@ class DdsRos2(TopicVerbs, CallVerbs, ServesVerbs):
     @runs("topic info")
     def _topic_info(self, call: Call, a: dict):
         name = a["topic_name"]
-        types = dict(self._topics(True)).get(name)
+        types = dict(self.graph.topics(True)).get(name)
         if types is None:
             return f"Unknown topic '{name}'"
         end = "\n\n" if a.get("verbose") else "\n"
@@ -239,7 +236,7 @@ class DdsRos2(TopicVerbs, CallVerbs, ServesVerbs):
 
     @runs("node list")
     def _node_list(self, call: Call, a: dict):
-        nodes = self._nodes(a.get("all"))
+        nodes = self.graph.nodes(a.get("all"))
         if a.get("count_nodes"):
             call.out(f"{len(nodes)}\n")
         elif nodes:
@@ -249,7 +246,7 @@ class DdsRos2(TopicVerbs, CallVerbs, ServesVerbs):
     @runs("node info")
     def _node_info(self, call: Call, a: dict):
         target = a["node_name"]
-        if target not in self._nodes(True):
+        if target not in self.graph.nodes(True):
             return f"Unable to find node '{target}'"
         info = node_sections(self.node, target, a.get("include_hidden"))
         call.out(node_info_text(target, info))
@@ -275,11 +272,11 @@ class DdsRos2(TopicVerbs, CallVerbs, ServesVerbs):
     # -- parameters, through each node's parameter services ----------------------------------
     @runs("param list")
     def _param_list(self, call: Call, a: dict):
-        nodes = self._nodes(a.get("include_hidden_nodes"))
+        nodes = self.graph.nodes(a.get("include_hidden_nodes"))
         named = a.get("node_name")
         if named and named not in nodes:
             return "Node not found"
-        served = {n for n, _ in self._services(True)}
+        served = {n for n, _ in self.graph.services(True)}
         asked = [n for n in ([named] if named else nodes) if f"{n}/list_parameters" in served]
         read = read_params(self.ros, asked, 5.0)
         params = [(*key.split(" ", 1), type_) for key, type_ in read]
@@ -289,7 +286,7 @@ class DdsRos2(TopicVerbs, CallVerbs, ServesVerbs):
         return 0
 
     def _param_call(self, a: dict, service: str, srv: Any, request: Any) -> Any:
-        if a["node_name"] not in self._nodes(a.get("include_hidden_nodes")):
+        if a["node_name"] not in self.graph.nodes(a.get("include_hidden_nodes")):
             raise RuntimeError("Node not found")
         try:
             return self.ros.call(srv, f"{a['node_name']}/{service}", request, 10.0)
@@ -353,6 +350,9 @@ class DdsRos2(TopicVerbs, CallVerbs, ServesVerbs):
         return 0
 
 
+DdsRos2.VERBS = served((DdsRos2, DdsTopics, DdsCalls))
+
+
 def parameter_value(text: str) -> Any:
     """ros2param/api get_parameter_value: the YAML value's type, else a string."""
     from rcl_interfaces.msg import ParameterValue
@@ -361,7 +361,7 @@ def parameter_value(text: str) -> Any:
         value = yaml.safe_load(text)
     except yaml.YAMLError:
         value = text
-    kinds = ((bool, 1), (int, 2), (float, 3))
+    kinds: tuple[tuple[type, int], ...] = ((bool, 1), (int, 2), (float, 3))
     for py, kind in kinds:
         if isinstance(value, py):
             return ParameterValue(type=kind, **{PARAM_FIELDS[kind]: value})

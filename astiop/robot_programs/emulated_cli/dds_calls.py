@@ -36,8 +36,12 @@ def _done(future: Any, call: Call) -> Any:
     return future.result()
 
 
-class CallVerbs:
-    """Mixed into DdsRos2: uses its node."""
+class DdsCalls:
+    """`ros2 service call` and `ros2 action send_goal` on one rclpy node: each call's client is
+    its own, destroyed when the call ends."""
+
+    def __init__(self, node: Any):
+        self.node = node
 
     @runs("service call")
     def _service_call(self, call: Call, a: dict):

@@ -21,6 +21,7 @@ from rclpy.qos import (
 
 from astiop.robot_programs.emulated_cli.call import Call
 from astiop.robot_programs.emulated_cli.dds_fields import load_class, set_message_fields
+from astiop.robot_programs.emulated_cli.dds_query import DdsGraph
 from astiop.robot_programs.emulated_cli.verb_table import runs
 from astiop.ros2.message_objects import plain
 from astiop.ros2.printing import echo_yaml
@@ -48,8 +49,15 @@ def qos_from(a: dict, default: str) -> QoSProfile:
     return profile
 
 
-class TopicVerbs:
-    """Mixed into DdsRos2: uses its node and its graph reads."""
+class DdsTopics:
+    """`ros2 topic echo|hz|bw|pub` on one rclpy node: each call's subscription or publisher is
+    its own, destroyed when the call ends. `graph` is the node's view of the graph; `distro`
+    decides how pub fills a message (`auto` and `now` stamps: not on humble)."""
+
+    def __init__(self, node: Any, graph: DdsGraph, distro: str):
+        self.node = node
+        self.graph = graph
+        self.distro = distro
 
     def _echo_qos(self, call: Call, a: dict) -> QoSProfile:
         if any(a.get(k) is not None for k in QOS_FLAGS):
@@ -86,7 +94,7 @@ class TopicVerbs:
             if cls is None:
                 raise RuntimeError("The passed message type is invalid")
             return cls
-        types = dict(self._topics(True)).get(name)
+        types = dict(self.graph.topics(True)).get(name)
         if not types:
             call.out(f"WARNING: topic [{name}] does not appear to be published yet\n")
             raise RuntimeError("Could not determine the type for the passed topic")
@@ -147,7 +155,7 @@ class TopicVerbs:
             return "the emulated ros2 does not run topic hz --filter"
         name = a["topic_name"]
         warned = False
-        while not (types := dict(self._topics(True)).get(name)):
+        while not (types := dict(self.graph.topics(True)).get(name)):
             if not warned:  # get_msg_class(blocking=True)
                 call.out(f"WARNING: topic [{name}] does not appear to be published yet\n")
                 warned = True
@@ -182,7 +190,7 @@ class TopicVerbs:
         from astiop.ros2.verbs.topic_bw import report_text
 
         name = a["topic_name"]
-        while not (types := dict(self._topics(True)).get(name)):
+        while not (types := dict(self.graph.topics(True)).get(name)):
             call.wait(0.1)  # get_msg_class(blocking=True), silently (bw.py)
         cls = load_class(types[0], "msg")
         got: list[tuple[float, int]] = []

@@ -7,7 +7,6 @@ blocking until the goal ends (SIGINT cancels it), a call to a service nobody ser
 
 from __future__ import annotations
 
-import collections
 import contextlib
 import functools
 import json
@@ -21,7 +20,8 @@ from pathlib import Path
 import yaml
 
 from astiop.robot_programs.emulated_cli.call import Call, Interrupted
-from astiop.robot_programs.emulated_cli.topics import HIDDEN_TOPICS, TopicVerbs
+from astiop.robot_programs.emulated_cli.topics import HIDDEN_TOPICS, RobotTopics, listing
+from astiop.robot_programs.emulated_cli.verb_table import VerbTable, runs
 from astiop.robot_programs.emulated_cli.verbs import run_verb
 from astiop.ros2.catalog import astibot_catalog
 from astiop.ros2.definitions import DEFINITIONS
@@ -35,7 +35,6 @@ from astiop.ros2.printing import (
 )
 from astiop.ros2.verbs import VERBS
 from astiop.ros2.verbs.param_get import WORDS
-from astiop.sim import messages as sm
 from astiop.sim.simulator import GoalError, Simulator
 from astiop.store import LocationError, Store
 from astiop.transports.simulator.backend import SimBackend
@@ -44,7 +43,11 @@ from astiop.transports.state import yaw_of
 MAP_TYPE = "nav_msgs/msg/OccupancyGrid"
 
 
-class EmulatedRobot(TopicVerbs):
+class EmulatedRobot:
+    """The simulated robot behind the emulated `ros2`: the service, action, node, interface,
+    param and daemon verbs itself, the topic verbs by `RobotTopics`, any other verb as astiop
+    runs it in process (verbs.py)."""
+
     def __init__(
         self,
         folder: Path,
@@ -65,9 +68,8 @@ class EmulatedRobot(TopicVerbs):
         self.catalog = astibot_catalog()
         for node in self.catalog.nodes:  # every ROS 2 node declares it
             self.backend.params.setdefault((node, "use_sim_time"), False)
-        self.cmd_vel_log: collections.deque = collections.deque(maxlen=2000)
-        self._twist_seq = 0
-        self._map_msg = sm.occupancy_grid(self.sim.map)
+        self.topic_verbs = RobotTopics(self.backend, self.catalog, self.topics)
+        self.verbs = VerbTable(self, self.topic_verbs)
 
     # -- the graph ---------------------------------------------------------------------------
     def topics(self) -> dict[str, str]:
@@ -104,11 +106,11 @@ class EmulatedRobot(TopicVerbs):
         call = Call(conn)
         req = call.request
         if req.get("op") == "cmd_vel_log":  # for measurements: when each Twist arrived
-            call.out(json.dumps(list(self.cmd_vel_log)))
+            call.out(json.dumps(list(self.topic_verbs.cmd_vel_log)))
             call.finish(0)
             return
         args = req.get("args", {})
-        handler = getattr(self, f"_{args.get('command')}_{args.get('verb')}", None)
+        handler = self.verbs.handler((args.get("command"), args.get("verb")))
         if handler is None and (args.get("command"), args.get("verb")) in VERBS:
             handler = functools.partial(self._verb, argv=req.get("argv", []))
         if (args.get("command"), args.get("verb")) in SPAWN_DAEMON and not args.get("no_daemon"):
@@ -130,9 +132,11 @@ class EmulatedRobot(TopicVerbs):
         return run_verb(self, call, argv)
 
     # -- service ----------------------------------------------------------------------------
+    @runs("service list")
     def _service_list(self, call: Call, a: dict) -> int:
-        return self._listing(call, self.services(), a.get("show_types"), a.get("count_services"))
+        return listing(call, self.services(), a.get("show_types"), a.get("count_services"))
 
+    @runs("service type")
     def _service_type(self, call: Call, a: dict) -> int:
         t = self.services().get(a["service_name"])
         if t is None:
@@ -141,6 +145,7 @@ class EmulatedRobot(TopicVerbs):
         call.out(t + "\n")
         return 0
 
+    @runs("service call")
     def _service_call(self, call: Call, a: dict) -> int:
         name, type_ = a["service_name"], a["service_type"]
         if type_ not in DEFINITIONS:
@@ -165,9 +170,11 @@ class EmulatedRobot(TopicVerbs):
         return 0
 
     # -- action -----------------------------------------------------------------------------
+    @runs("action list")
     def _action_list(self, call: Call, a: dict) -> int:
-        return self._listing(call, self.actions(), a.get("show_types"), a.get("count_actions"))
+        return listing(call, self.actions(), a.get("show_types"), a.get("count_actions"))
 
+    @runs("action info")
     def _action_info(self, call: Call, a: dict) -> int:
         name = a["action_name"]
         if name not in self.actions():
@@ -177,6 +184,7 @@ class EmulatedRobot(TopicVerbs):
         call.out(f"Action: {name}\nAction clients: 0\nAction servers: 1\n    {node}\n")
         return 0
 
+    @runs("action send_goal")
     def _action_send_goal(self, call: Call, a: dict) -> int:
         name, type_ = a["action_name"], a["action_type"]
         text = a.get("stdin_values") if a.get("stdin") else a.get("goal", "{}")
@@ -231,6 +239,7 @@ class EmulatedRobot(TopicVerbs):
         return 0
 
     # -- node, interface, param, daemon ------------------------------------------------------
+    @runs("node list")
     def _node_list(self, call: Call, a: dict) -> int:
         nodes = sorted(self.catalog.nodes)
         if a.get("count_nodes"):
@@ -239,6 +248,7 @@ class EmulatedRobot(TopicVerbs):
             call.out("\n".join(nodes) + "\n")
         return 0
 
+    @runs("node info")
     def _node_info(self, call: Call, a: dict) -> int:
         name = a["node_name"]
         if name not in self.catalog.nodes:
@@ -251,6 +261,7 @@ class EmulatedRobot(TopicVerbs):
         call.out("\n".join(lines) + "\n")
         return 0
 
+    @runs("interface show")
     def _interface_show(self, call: Call, a: dict) -> int:
         t = a["type"]
         if t not in DEFINITIONS:
@@ -263,12 +274,14 @@ class EmulatedRobot(TopicVerbs):
         call.out(interface_show(t))
         return 0
 
+    @runs("interface list")
     def _interface_list(self, call: Call, a: dict) -> int:
         call.out(
             interface_list_text(list(DEFINITIONS), {k for k in INTERFACE_FLAGS if a.get(k)})[0]
         )
         return 0
 
+    @runs("param list")
     def _param_list(self, call: Call, a: dict) -> int:
         node_name = a.get("node_name")
         if node_name and node_name not in self.catalog.nodes:
@@ -280,6 +293,7 @@ class EmulatedRobot(TopicVerbs):
         call.out(param_list_text(params, node_name, flags, options)[0])
         return 0
 
+    @runs("param get")
     def _param_get(self, call: Call, a: dict) -> int:
         key = (a["node_name"], a["parameter_name"])
         if a["node_name"] not in self.catalog.nodes:
@@ -292,6 +306,7 @@ class EmulatedRobot(TopicVerbs):
         call.out(f"{WORDS[type(value)]} value is: {value}\n")
         return 0
 
+    @runs("param set")
     def _param_set(self, call: Call, a: dict) -> int:
         key = (a["node_name"], a["parameter_name"])
         if a["node_name"] not in self.catalog.nodes:
@@ -311,17 +326,20 @@ class EmulatedRobot(TopicVerbs):
         return 0
 
     # The messages of ros2cli/verb/daemon/{start,status,stop}.py, humble and jazzy alike.
+    @runs("daemon start")
     def _daemon_start(self, call: Call, a: dict) -> int:
         started, self.daemon_running = not self.daemon_running, True
         call.out("The daemon has been started\n" if started else "The daemon is already running\n")
         return 0
 
+    @runs("daemon status")
     def _daemon_status(self, call: Call, a: dict) -> int:
         call.out(
             "The daemon is running\n" if self.daemon_running else "The daemon is not running\n"
         )
         return 0
 
+    @runs("daemon stop")
     def _daemon_stop(self, call: Call, a: dict) -> int:
         stopped, self.daemon_running = self.daemon_running, False
         call.out("The daemon has been stopped\n" if stopped else "The daemon is not running\n")

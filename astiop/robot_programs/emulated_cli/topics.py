@@ -2,17 +2,24 @@
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import math
 import time
+from collections.abc import Callable, Iterator
+from typing import Any
 
 import numpy as np
 import yaml
 
 from astiop.robot_programs.emulated_cli.call import Call
+from astiop.robot_programs.emulated_cli.verb_table import runs
+from astiop.ros2.catalog import Catalog
 from astiop.ros2.interfaces import InterfaceError, fill, python_repr
 from astiop.ros2.printing import echo_yaml, list_text
+from astiop.sim import messages as sm
 from astiop.transports.base import BackendError
+from astiop.transports.simulator.backend import SimBackend
 
 HIDDEN_TOPICS = {
     "/parameter_events": "rcl_interfaces/msg/ParameterEvent",
@@ -20,19 +27,33 @@ HIDDEN_TOPICS = {
 }
 
 
-class TopicVerbs:
-    """Mixed into EmulatedRobot: uses its backend, clock and graph."""
+def listing(call: Call, names: dict[str, str], types: bool | None, count: bool | None) -> int:
+    """A `... list` verb's lines: each name, its type with -t, the count alone with -c."""
+    flags = {"show_types"} if types else set()
+    call.out(list_text(list(names.items()), flags | ({"count_topics"} if count else set()))[0])
+    return 0
 
-    # -- topic ------------------------------------------------------------------------------
-    @staticmethod
-    def _listing(call: Call, names: dict[str, str], types: bool, count: bool) -> int:
-        flags = {"show_types"} if types else set()
-        call.out(list_text(list(names.items()), flags | ({"count_topics"} if count else set()))[0])
-        return 0
 
+class RobotTopics:
+    """The topic verbs on the simulated robot: what it publishes, at its rates on its clock
+    (`backend.sim`), and /cmd_vel driving it. `topics` is the robot's graph as `topic list`
+    prints it; `catalog` says who publishes and subscribes each topic, and how often. It keeps
+    each Twist received, with when it came (`cmd_vel_log`, for measurements)."""
+
+    def __init__(self, backend: SimBackend, catalog: Catalog, topics: Callable[[], dict[str, str]]):
+        self.backend = backend
+        self.sim = backend.sim
+        self.catalog = catalog
+        self.topics = topics
+        self.cmd_vel_log: collections.deque = collections.deque(maxlen=2000)
+        self._twist_seq = 0
+        self._map_msg = sm.occupancy_grid(self.sim.map)
+
+    @runs("topic list")
     def _topic_list(self, call: Call, a: dict) -> int:
-        return self._listing(call, self.topics(), a.get("show_types"), a.get("count_topics"))
+        return listing(call, self.topics(), a.get("show_types"), a.get("count_topics"))
 
+    @runs("topic type")
     def _topic_type(self, call: Call, a: dict) -> int:
         t = self.topics().get(a["topic_name"])
         if t is None:  # nothing printed (ros2topic/verb/type.py)
@@ -40,6 +61,7 @@ class TopicVerbs:
         call.out(t + "\n")
         return 0
 
+    @runs("topic info")
     def _topic_info(self, call: Call, a: dict) -> int:
         name = a["topic_name"]
         t = self.topics().get(name)
@@ -60,6 +82,7 @@ class TopicVerbs:
             msg = {**msg, "status": [{**st, "level": chr(st["level"])} for st in msg["status"]]}
         return msg
 
+    @runs("topic echo")
     def _topic_echo(self, call: Call, a: dict) -> int:
         name = a["topic_name"]
         t = self.topics().get(name)
@@ -83,7 +106,7 @@ class TopicVerbs:
                 return 0
         return 0
 
-    def _publications(self, name: str, call: Call, deadline: float):
+    def _publications(self, name: str, call: Call, deadline: float) -> Iterator[Any]:
         """Messages as the robot publishes them, at its rate, on its clock."""
         spec = self.catalog.topics.get(name)
         rate = spec.rate_hz if spec else 0.0
@@ -113,6 +136,7 @@ class TopicVerbs:
                     continue
                 yield self._message(name)
 
+    @runs("topic hz")
     def _topic_hz(self, call: Call, a: dict) -> int:
         name = a["topic_name"]
         spec = self.catalog.topics.get(name)
@@ -133,6 +157,7 @@ class TopicVerbs:
         call.wait(1e9)
         return 0
 
+    @runs("topic pub")
     def _topic_pub(self, call: Call, a: dict) -> int:
         name, type_ = a["topic_name"], a["message_type"]
         text = a.get("stdin_values") if a.get("stdin") else a.get("values", "{}")
