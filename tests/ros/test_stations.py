@@ -219,7 +219,10 @@ def test_a_release_after_a_press_is_never_undone_by_the_press_and_all_agree(tmp_
             store.close()
             assert not _robot_holds(client), (delay, said, released.stdout)
             out = _run(station, "exec", "--dry-run", "ros2 service call /undock " + TRIGGER)
-            assert out.returncode == 0 and out.stdout.startswith("valid"), (delay, out.stdout)
+            # (Fast DDS prints its own errors to stdout: a shared-memory port another process
+            # held is one line before astiop's)
+            said = out.stdout.splitlines()
+            assert out.returncode == 0 and any(s.startswith("valid") for s in said), (delay, said)
 
 
 @pytest.mark.slow
