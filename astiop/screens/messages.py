@@ -1,6 +1,9 @@
-"""What travels between the app, its screens and widgets: the robot's state and the agent's turn."""
+"""What travels between the app, its screens and widgets: the robot's state and the agent's turn
+(dataclasses: Textual's Message initialises itself in `__post_init__`)."""
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 from textual.message import Message
 
@@ -8,16 +11,13 @@ from astiop.agent.result import TurnResult
 from astiop.transports.state import RobotEvent, RobotState, TopicStat
 
 
+@dataclass
 class RobotStateSampled(Message, bubble=False):
     """The robot's latest state, sampled off the UI thread at ~10 Hz."""
 
-    def __init__(
-        self, state: RobotState, events: list[RobotEvent], stats: list[TopicStat] | None = None
-    ):
-        super().__init__()
-        self.state = state
-        self.events = events
-        self.stats = stats  # every second or so; None in between
+    state: RobotState
+    events: list[RobotEvent]
+    stats: list[TopicStat] | None = None  # every second or so; None in between
 
     def can_replace(self, message: Message) -> bool:
         # Textual asks the older message whether the newer `message` may supersede it: a burst
@@ -25,33 +25,31 @@ class RobotStateSampled(Message, bubble=False):
         return isinstance(message, RobotStateSampled) and not self.events and self.stats is None
 
 
+@dataclass
 class AlertsFired(Message, bubble=False):
     """Alerts this console's watches wrote first (rows of the store's alerts)."""
 
-    def __init__(self, alerts: list[dict]):
-        super().__init__()
-        self.alerts = alerts
+    alerts: list[dict]
 
 
+@dataclass
 class TurnFinished(Message, bubble=False):
-    def __init__(self, result: TurnResult, model: str):
-        super().__init__()
-        self.result = result
-        self.model = model
+    """A chat turn's result, with the model that answered."""
+
+    result: TurnResult
+    model: str
 
 
+@dataclass
 class GoalEnded(Message, bubble=False):
     """How the goal a turn started ended: a follow-up line tied to that turn."""
 
-    def __init__(self, result: TurnResult, text: str):
-        super().__init__()
-        self.result = result
-        self.text = text
+    result: TurnResult
+    text: str
 
 
+@dataclass
 class CurrentRobotChanged(Message, bubble=False):
     """The console acts on another robot of the fleet from now (the Fleet screen's enter)."""
 
-    def __init__(self, name: str):
-        super().__init__()
-        self.name = name
+    name: str
