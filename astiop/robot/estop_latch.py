@@ -15,7 +15,7 @@ from astiop.robot.safety import always_allowed
 from astiop.robot.station_latch import Act, StationLatch
 from astiop.ros2.validation import Checked
 from astiop.store import Store
-from astiop.transports.base import RobotBackend
+from astiop.transports.base import RobotTransport
 
 log = logging.getLogger("astiop.robot")
 HELD_FOR_ALL = (
@@ -32,7 +32,7 @@ class EstopLatch:
 
     def __init__(
         self,
-        backend: RobotBackend,
+        backend: RobotTransport,
         store: Store | None,
         *,
         who: str,

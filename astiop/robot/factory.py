@@ -9,7 +9,7 @@ from astiop.robot.safety import SafetyPolicy
 from astiop.ros2.profile_types import Profile, ProfileSpec
 from astiop.sim.simulator import Simulator
 from astiop.store import Store
-from astiop.transports.base import RobotBackend
+from astiop.transports.base import RobotTransport
 
 
 def make_safety(
@@ -103,7 +103,7 @@ def make_robot_gateway(
     if settings.robot.backend == "ros2":
         transport, why = ros2_transport(settings)
         fixed = profile_spec(settings)
-        backend: RobotBackend
+        backend: RobotTransport
         if transport == "rclpy":
             from astiop.transports.rclpy.backend import RclpyBackend
 
@@ -141,7 +141,7 @@ def make_robot_gateway(
     )
 
 
-def _named_robot_found(settings: Settings, backend: RobotBackend) -> None:
+def _named_robot_found(settings: Settings, backend: RobotTransport) -> None:
     """A fleet found on the graph (--fleet auto): the robot --robot-name names must be on it,
     or nothing is sent, latched or stored for it (BackendError). Heard of until discovery is
     over: a robot's participant may come seconds after another's."""
@@ -169,7 +169,7 @@ def _named_robot_found(settings: Settings, backend: RobotBackend) -> None:
         )
 
 
-def robot_lease(ns: str, store: Store, who: str, backend: RobotBackend) -> Lease:
+def robot_lease(ns: str, store: Store, who: str, backend: RobotTransport) -> Lease:
     """The lease of the ROS 2 robot under namespace `ns` on this process's domain, announced on
     the robot's graph where the transport can."""
     import os

@@ -30,7 +30,7 @@ from astiop.ros2.validation import Checked, validate
 from astiop.ros2.verbs import VERBS
 from astiop.ros2.verbs.base import TAKE
 from astiop.store import Store
-from astiop.transports.base import BackendError, Execution, MapGeometry, RobotBackend
+from astiop.transports.base import BackendError, Execution, MapGeometry, RobotTransport
 from astiop.transports.playback import Playback, PlaysBack
 from astiop.transports.state import RobotEvent, RobotState, TopicStat
 
@@ -41,7 +41,7 @@ log = logging.getLogger("astiop.robot")
 class RobotGateway:
     def __init__(
         self,
-        backend: RobotBackend,
+        backend: RobotTransport,
         safety: SafetyPolicy | None = None,
         timeout_s: float = 10.0,
         *,

@@ -11,7 +11,7 @@ from astiop.ros2.profile import match_profile
 from astiop.ros2.profile_types import Profile
 from astiop.ros2.validation import Checked, validate
 from astiop.store import Store
-from astiop.transports.base import RobotBackend
+from astiop.transports.base import RobotTransport
 
 SETTLED_S = 2.0  # a robot graph unchanged this long has been read whole
 
@@ -22,7 +22,7 @@ class GraphReading:
     and how long a read may wait."""
 
     def __init__(
-        self, backend: RobotBackend, safety: SafetyPolicy, store: Store | None, timeout_s: float
+        self, backend: RobotTransport, safety: SafetyPolicy, store: Store | None, timeout_s: float
     ):
         self.backend = backend
         self.safety = safety

@@ -101,9 +101,11 @@ def actuating(inflight: InFlight, checked: Checked) -> AbstractContextManager[Jo
     return inflight.running(cmd.display(), cmd.name or "")
 
 
-class RobotBackend(ABC):
-    """The base of every backend: what the gateway and the app read, with the defaults of a live
-    robot whose graph does not change. Each backend overrides what it has."""
+class RobotTransport(ABC):
+    """The contract every transport's backend keeps (SimBackend, RclpyBackend, Ros2Backend,
+    ReplayBackend): what the gateway and the app read, with the defaults of a live robot whose
+    graph does not change. Each backend overrides what it has. (A verb runs on its backend's
+    `verbs`, which keep ros2/verbs/transport.py's `Transport`.)"""
 
     name: str  # sim | ros2 | replay
     catalog: Catalog

@@ -42,7 +42,7 @@ class EventLog:
 
 class EstopWork:
     """What the last E-STOP started in the background, and the failures it said, for a process
-    about to exit (`RobotBackend.settle_estop`)."""
+    about to exit (`RobotTransport.settle_estop`)."""
 
     def __init__(self, events: EventLog):
         self.events = events

@@ -15,7 +15,7 @@ from astiop.ros2.message_objects import to_dict
 from astiop.ros2.profile import ProfileSpec
 from astiop.ros2.validation import Checked
 from astiop.transports import live_robot
-from astiop.transports.base import RobotBackend
+from astiop.transports.base import RobotTransport
 from astiop.transports.event_log import Contact, EventLog
 from astiop.transports.goal_ends import GoalEnds, status_list
 from astiop.transports.images import ImageMessage, image_message
@@ -49,7 +49,7 @@ SILENT_S = 3.0  # a state topic's last message older than this is no longer the 
 MOVING_SPEED = 0.005  # m/s: /robot_status's speed above this is a robot that moves
 
 
-class RclpyBackend(RobotBackend):
+class RclpyBackend(RobotTransport):
     name = "ros2"
     refresh_every_s = 0.0  # the graph is this process's discovery cache: reading it is free
 

@@ -14,7 +14,7 @@ from typing import Any
 from astiop.recording.reader import Recording, RobotView
 from astiop.ros2.catalog import Catalog, astibot_catalog
 from astiop.ros2.validation import Checked
-from astiop.transports.base import BackendError, RobotBackend
+from astiop.transports.base import BackendError, RobotTransport
 from astiop.transports.inflight import InFlight
 from astiop.transports.live_catalog import describe_graph, nothing_listed
 from astiop.transports.state import (
@@ -109,7 +109,7 @@ def recorded_catalog(recording: Recording) -> Catalog:
     return describe_graph(lists)
 
 
-class ReplayBackend(RobotBackend):
+class ReplayBackend(RobotTransport):
     name = "replay"
     runs_commands = drives = False
     read_only = READ_ONLY

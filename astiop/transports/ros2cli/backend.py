@@ -18,7 +18,7 @@ from astiop.ros2.profile import ProfileSpec
 from astiop.ros2.transforms import STALE_S, TransformTable
 from astiop.ros2.validation import Checked
 from astiop.transports import live_robot
-from astiop.transports.base import BackendError, RobotBackend
+from astiop.transports.base import BackendError, RobotTransport
 from astiop.transports.event_log import Contact, EventLog
 from astiop.transports.inflight import InFlight, Job
 from astiop.transports.live_catalog import LiveGraph, nothing_listed
@@ -47,7 +47,7 @@ DISCOVERY_YOUNG_S = 10.0  # a process this young may not have the whole robot in
 NO_GOAL_AFTER_S = 5.0  # a latched goal status echoed this long and none came: no goal yet
 
 
-class Ros2Backend(RobotBackend):
+class Ros2Backend(RobotTransport):
     name = "ros2"
 
     def __init__(

@@ -16,13 +16,13 @@ from astiop.sim import messages as sm
 from astiop.sim.runner import SimRunner
 from astiop.sim.simulator import GoalError, Simulator
 from astiop.store import LocationError, Store
-from astiop.transports.base import BackendError, RobotBackend, command_of
+from astiop.transports.base import BackendError, RobotTransport, command_of
 from astiop.transports.inflight import InFlight
 from astiop.transports.simulator.verbs import SimVerbs
 from astiop.transports.state import RobotEvent, RobotState, TopicStat, from_messages
 
 
-class SimBackend(RobotBackend):
+class SimBackend(RobotTransport):
     name = "sim"
 
     def __init__(
