@@ -11,7 +11,6 @@ import logging
 import threading
 import time
 from collections.abc import Callable, Iterable
-from typing import Any
 
 from astiop.robot.camera import CameraReading, read_camera
 from astiop.robot.command_journal import CommandJournal
@@ -22,7 +21,6 @@ from astiop.robot.provenance import date_reading, name_role, provenance
 from astiop.robot.safety import Review, SafetyPolicy
 from astiop.robot.station_latch import Act, StationLatch
 from astiop.ros2.catalog import Catalog
-from astiop.ros2.command import Ros2Command
 from astiop.ros2.fleet_names import robot_under
 from astiop.ros2.profile_types import Profile
 from astiop.ros2.render import STAMPED
@@ -270,7 +268,8 @@ class RobotGateway:
             result.executed = True
             result.error = str(exc)
             result.output = f"error: {exc}\n"
-        self._adopt_speed_limits(cmd, checked.message, result)
+        if not result.error:
+            self.safety.adopt_robot_limit(cmd, checked.message)
         result.duration_s = time.perf_counter() - t0
         return result
 
@@ -334,18 +333,6 @@ class RobotGateway:
                     self._leases[other] = self.lease_of(other)
                 lease = self._leases[other]
         return lease.refusal(checked) if lease is not None else None
-
-    def _adopt_speed_limits(
-        self, cmd: Ros2Command, message: dict[str, Any] | None, result: Execution
-    ) -> None:
-        """A `param set` of the robot's own speed limit that went through becomes safety's
-        clamp too (the robot's limit is the one it enforces; safety must not allow more)."""
-        if result.error or cmd.key != ("param", "set") or message is None:
-            return
-        if cmd.args["param"] == "max_linear_speed":
-            self.safety.max_linear = message["value"]
-        elif cmd.args["param"] == "max_angular_speed":
-            self.safety.max_angular = message["value"]
 
     # -- the E-STOP (robot/estop_latch.py) ---------------------------------------------------
     @property

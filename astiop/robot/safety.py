@@ -5,7 +5,9 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
+from typing import Any
 
+from astiop.ros2.command import Ros2Command
 from astiop.ros2.render import POSE_STAMPED  # a goal on a navigator's goal topic
 from astiop.ros2.validation import Checked, always_allowed
 from astiop.warehouse import GEOFENCE_MARGIN, fence_text, inside_fence
@@ -54,6 +56,16 @@ class SafetyPolicy:
     # (x, y, theta), read only for a velocity command while there are zones
     zones: Callable[[], list[MapZone]] | None = None
     where: Callable[[], tuple[float, float, float] | None] | None = None
+
+    def adopt_robot_limit(self, cmd: Ros2Command, message: dict[str, Any] | None) -> None:
+        """A `param set` of the robot's own speed limit that went through becomes this clamp
+        too (the robot's limit is the one it enforces; safety must not allow more)."""
+        if cmd.key != ("param", "set") or message is None:
+            return
+        if cmd.args["param"] == "max_linear_speed":
+            self.max_linear = message["value"]
+        elif cmd.args["param"] == "max_angular_speed":
+            self.max_angular = message["value"]
 
     def _zones(self) -> list[MapZone]:
         return self.zones() if self.zones is not None else []
