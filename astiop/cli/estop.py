@@ -108,6 +108,7 @@ def _release_gateway(st):
         fail(f"the robot was not reached to release its own stop: {exc}", code=1)
 
 
+LEAVE_S = 2.0  # the rclpy close before exit: longer, and the exit goes on without it
 ROBOT_GONE_S = 60.0  # a keeper whose robot left the graph this long has nothing to hold
 
 
@@ -202,7 +203,7 @@ def _press(st, ns: str) -> None:
     """`astiop estop`: the robot told first, then the robot's graph, then the database; a
     database that cannot be written never delays nor prevents the stop."""
     from astiop import estop_sql
-    from astiop.robot.factory import make_robot_gateway
+    from astiop.robot.factory import leave_the_graph, make_robot_gateway
     from astiop.transports.base import BackendError
 
     at = estop_sql.pressed_at()  # every step of this press is this one press
@@ -228,8 +229,9 @@ def _press(st, ns: str) -> None:
     released = pressed is not None and pressed.press is not None and not pressed.engaged
     on_graph = pressed is not None and pressed.on_graph
     gateway.close()
-    # all said and sent: no interpreter teardown (rclpy's, DDS's threads) between the stop and
-    # the shell that waits for it
+    # all said and sent: its peers told it left (bounded), then no interpreter teardown (rclpy's,
+    # DDS's threads) between the stop and the shell that waits for it
+    leave_the_graph(LEAVE_S)
     Ending.at_once = True
     for failure in failures:
         typer.echo(f"astiop: {failure}", err=True)

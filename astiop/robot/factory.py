@@ -179,3 +179,16 @@ def robot_lease(ns: str, store: Store, who: str, backend: RobotTransport) -> Lea
     key = lease_key(ns, os.environ.get("ROS_DOMAIN_ID", "0"))
     name = ns.strip("/") or "the robot"
     return Lease(store, key, name, who, channel=lambda: backend.control_channel(ns))
+
+
+def leave_the_graph(timeout_s: float) -> bool:
+    """This process's rclpy node and context closed now, if it has one (a command that ends
+    without Python's teardown would leave its endpoints in every peer's graph until its DDS
+    lease runs out: a stale /cmd_vel publisher of another type, for 20 s); False if the close
+    did not end within `timeout_s`."""
+    import sys
+
+    node = sys.modules.get("astiop.transports.rclpy.node")
+    if node is None:
+        return True
+    return node.close_shared(timeout_s)
