@@ -81,7 +81,9 @@ class AstiopCollector(Collector):
         )
         volts = GaugeMetricFamily("astiop_robot_battery_volts", "Battery voltage", labels=labels)
         speed = GaugeMetricFamily(
-            "astiop_robot_speed_mps", "Planar speed from the robot's odometry", labels=labels
+            "astiop_robot_speed_mps",
+            "Planar speed the robot reports (odometry, else its status)",
+            labels=labels,
         )
         state = GaugeMetricFamily(
             "astiop_robot_state", "1 for the robot's current state", labels=["robot", "state"]

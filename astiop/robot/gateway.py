@@ -275,8 +275,17 @@ class RobotGateway:
 
     def cancel_goals(self) -> None:
         """Cancel the goals this process sent and that run (a mission's cancel on a Nav2 robot,
-        whose navigation drives on through a zero velocity)."""
+        whose navigation drives on through a zero velocity), journaled as the operator's: a
+        goal cancelled here is no one else's (the built-in alerts read the journal)."""
         self.backend.cancel_goals()
+        if self.store is not None:
+            try:
+                self.store.add_command(
+                    None, command="cancel the goals this station sent", valid=1, executed=1,
+                    kind="actuate",
+                )  # fmt: skip
+            except Exception as exc:  # noqa: BLE001 - said; the cancel itself went out
+                self._say_store_error(f"the cancel was not journaled: {exc}")
 
     def drive(self, vx: float, vy: float, wz: float) -> Execution:
         """Teleop: the key press is the operator's consent; safety still clamps and holds.

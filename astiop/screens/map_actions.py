@@ -18,7 +18,7 @@ from textual.widgets.option_list import Option
 from astiop.screens import control
 from astiop.screens.base import services_of
 from astiop.screens.modals import FormModal
-from astiop.store import LocationError
+from astiop.store import LocationError, StoreError
 from astiop.transports.state import OccupancyGrid
 from astiop.warehouse import WarehouseMap
 from astiop.widgets.map_view import FleetRobot, WarehouseMapView
@@ -124,7 +124,7 @@ class MapActions:
             store = services_of(app).store
             try:
                 loc = store.add_location(values["name"].strip(), x, y, 0.0, values["description"])
-            except LocationError as exc:
+            except (LocationError, StoreError) as exc:
                 app.notify(str(exc), severity="error", markup=False)
                 return
             app.notify(f"saved {loc.name} at ({loc.x:.2f}, {loc.y:.2f})", markup=False)
@@ -160,7 +160,7 @@ class MapActions:
             store = services_of(app).store
             try:
                 zone = store.add_zone(values["name"].strip(), kind, corners, speed)
-            except ZoneError as exc:
+            except (ZoneError, StoreError) as exc:
                 app.notify(str(exc), severity="error", markup=False)
                 return
             app.notify(f"added the {zone.words} ({len(zone.corners)} corners)", markup=False)

@@ -114,8 +114,11 @@ class Camera:
         x, y = body.position
         theta = float(body.angle)
         a, b, owners = world.edges(seen_by=body)
-        view = (x, y, theta, id(a), len(a))  # a robot alone whose world did not change
-        if held is not None and view == self._view:
+        # the same pose and the very same edges array (kept, so its id is never another's): a
+        # world that did not change
+        view = (x, y, theta, a)
+        last = self._view
+        if held is not None and last is not None and last[:3] == view[:3] and last[3] is a:
             pixels = held[1]  # nothing moved: the same picture (a docked robot's, mostly)
         else:
             colours, heights = self._looks(world, owners)

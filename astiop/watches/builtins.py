@@ -226,8 +226,7 @@ class BuiltinAlerts:
         by = self.pressed_by() if self.pressed_by is not None else ""
         if by:
             return by
-        latch = self.store.robot_latch(self.robot) if self.robot else self.store.estop_latch()
-        return (latch or {}).get("by") or ""
+        return (self.store.estop_latch() or {}).get("by") or ""
 
     # -- a goal's end --------------------------------------------------------------------------
     def _goal_ended(self, event: RobotEvent, state: RobotState) -> None:
@@ -242,9 +241,11 @@ class BuiltinAlerts:
         key = f"goal:{goal_id}" if goal_id else f"goal@{time.time():.0f}#{event.seq}"
         kind = "goal_aborted" if how == "aborted" else "goal_canceled"
         words = "aborted" if how == "aborted" else "cancelled by someone else"
-        self.alerts.fire(
-            self._name(key), kind, f"goal {words}{f': {why}' if why else ''}", why or None
-        )
+        name = self._name(key)
+        # a simulator numbers its goals anew in each run: a goal of this number said a while
+        # ago was another goal (said just now, by another process, it is this one)
+        self.alerts.cleared(name, settled=True)
+        self.alerts.fire(name, kind, f"goal {words}{f': {why}' if why else ''}", why or None)
 
     def _operators_cancel(self, why: str, state: RobotState) -> bool:
         """A cancel astiop's operator made: the E-STOP (its own alert), a new goal in place of

@@ -32,12 +32,17 @@ def battery_low(gateway: RobotGateway, configured: float | None) -> float:
 
 
 def pressed_by(gateway: RobotGateway) -> str:
-    """Who pressed the E-STOP, as the robot's graph says it (never waits: '' until heard)."""
+    """Who pressed the E-STOP, as the robot's graph says it (never waits: '' until heard), else
+    as the database latched it: the robot's own latch (a fleet's, by its namespace), or every
+    robot's."""
     latch = gateway.station_latch
-    if latch is None or not latch.wait_ready(0) or not latch.engaged:
+    if latch is not None and latch.wait_ready(0) and latch.engaged and latch.press is not None:
+        return latch.press.words
+    store = gateway.store
+    if store is None:
         return ""
-    press = latch.press
-    return press.words if press is not None else ""
+    own = store.robot_latch(gateway.latch_key) if gateway.latch_key else None
+    return str((own or store.estop_latch() or {}).get("by") or "")
 
 
 def make_evaluator(gateway: RobotGateway, store, settings, robot: str = "") -> Evaluator:
@@ -161,11 +166,11 @@ class FleetWatching(threading.Thread):
     def run(self) -> None:
         while not self.halt.wait(self.period):
             for name, gateway in list(self.gateways().items()):
-                if name not in self._each:
-                    ev = make_evaluator(gateway, self.store, self.settings, name)
-                    self._each[name] = (Watching(gateway, ev), gateway.state().event_seq)
-                watching, seq = self._each[name]
-                try:
+                try:  # one robot not read never ends the others' watching
+                    if name not in self._each:
+                        ev = make_evaluator(gateway, self.store, self.settings, name)
+                        self._each[name] = (Watching(gateway, ev), gateway.state().event_seq)
+                    watching, seq = self._each[name]
                     state, events = gateway.state(), gateway.events_since(seq)
                 except Exception:  # noqa: BLE001 - its Fleet row says it is not read
                     continue

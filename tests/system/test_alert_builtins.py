@@ -226,3 +226,17 @@ def test_another_clients_nav2_goal_that_aborts_is_said_once_and_ours_is_not():
     said = [e.message for e in events.since(0)]
     assert said == ["goal aaaa1111 aborted (another client's goal)"]
     assert goal_end(events.since(0)[0]) == ("aborted", "another client's goal", "aaaa1111")
+
+
+def test_a_goal_number_said_again_later_is_another_goal(store, monkeypatch):
+    """A simulator numbers its goals anew in each run: goal 3 aborted a while after an earlier
+    goal 3 aborted is a new alert, not the old one said again."""
+    import astiop.store.watches as store_watches
+
+    ev = Evaluator(store)
+    assert kinds(ev.step(_state(), now=0, events=[_goal(1, "goal 3 aborted: blocked")])) == [
+        "goal_aborted"
+    ]
+    monkeypatch.setattr(store_watches, "SETTLE_S", 0.0)  # the first alert is old enough now
+    again = ev.step(_state(), now=1, events=[_goal(2, "goal 3 aborted: blocked again")])
+    assert kinds(again) == ["goal_aborted"] and again[0]["message"].endswith("blocked again")

@@ -42,7 +42,7 @@ class RclpyStateWatches:
         self.proc = proc
         self.live = live
         self._closed = closed
-        self._on_status = on_status  # each /robot_status, as it comes (events)
+        self._on_status = on_status  # each /robot_status and goal status list, as it comes
         self._on_map = on_map
         self.watches: dict[str, TopicWatch] = {}  # replaced, never changed: read unlocked
         self.map_watch: TopicWatch | None = None
@@ -61,7 +61,7 @@ class RclpyStateWatches:
         catalog, name_of = self.live.catalog, self.live.name
         map_name = name_of("map")
         names = catalog.state_topics() + ([map_name] if map_name else [])
-        names += [n for n in self._wanted if n not in names and self._is_wanted(n)]
+        names += [n for n in list(self._wanted) if n not in names and self._is_wanted(n)]
         for name in names:
             spec = catalog.topics.get(name)
             if spec is None or name in self.watches or (name == map_name and self.map_watch):
