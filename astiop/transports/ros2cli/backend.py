@@ -20,6 +20,7 @@ from astiop.ros2.validation import Checked
 from astiop.transports import live_robot
 from astiop.transports.base import BackendError, RobotTransport
 from astiop.transports.event_log import Contact, EventLog
+from astiop.transports.images import ImageMessage
 from astiop.transports.inflight import InFlight, Job
 from astiop.transports.live_catalog import LiveGraph, nothing_listed
 from astiop.transports.live_robot import without_finished_plan
@@ -236,6 +237,10 @@ class Ros2Backend(RobotTransport):
     def message_times(self, names) -> dict[str, float]:
         with self._lock:
             return {name: self._received[name] for name in names if name in self._received}
+
+    def image(self, name: str) -> ImageMessage | None:
+        """Never: a frame through `ros2 topic echo` is megabytes of text a second."""
+        raise ValueError(f"{name}: the ros2 CLI transport reads no camera frames (rclpy does)")
 
     def events_since(self, seq: int) -> list[RobotEvent]:
         return self.events.since(seq)
