@@ -15,10 +15,9 @@ import threading
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any
-from wsgiref.simple_server import WSGIRequestHandler, make_server
+from wsgiref.simple_server import WSGIRequestHandler, WSGIServer, make_server
 
 from prometheus_client import CollectorRegistry, make_wsgi_app
-from prometheus_client.exposition import ThreadingWSGIServer
 from prometheus_client.metrics_core import (
     CounterMetricFamily,
     GaugeMetricFamily,
@@ -159,6 +158,8 @@ class AstiopCollector(Collector):
 
 
 class _Quiet(WSGIRequestHandler):
+    timeout = 10  # a client that connects and says nothing holds the one thread no longer
+
     def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 - the base's name
         """A scrape every few seconds is not news."""
 
@@ -179,7 +180,7 @@ def _guarded(app: Callable, token: str | None) -> Callable:
     return guarded
 
 
-class _ServerV6(ThreadingWSGIServer):
+class _ServerV6(WSGIServer):
     address_family = socket.AF_INET6
 
 
@@ -190,7 +191,8 @@ class MetricsServer:
         registry = CollectorRegistry()
         registry.register(collector)
         app = _guarded(make_wsgi_app(registry), token)
-        server = _ServerV6 if ":" in host else ThreadingWSGIServer
+        # one scrape at a time on one thread: one store connection, kept (a scrape takes ms)
+        server = _ServerV6 if ":" in host else WSGIServer
         self.httpd = make_server(host, port, app, server, handler_class=_Quiet)
         self.port = self.httpd.server_port
         shown = f"[{host}]" if ":" in host else host
