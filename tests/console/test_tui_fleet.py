@@ -240,6 +240,10 @@ def test_a_robot_not_reached_is_its_own_red_row_and_its_stop_a_failure(tmp_path)
         assert rows["far"].error == "not reached: no route to /far"
         assert rows["near"].state == "idle" and not rows["near"].error
         failures = watch.estop_all()
+        # the robot's own /stop is called on the transport's thread: it holds a moment later
+        deadline = time.monotonic() + 10
+        while not fleet.robots[0].e_stopped and time.monotonic() < deadline:
+            time.sleep(0.05)
         assert failures["near"] == [] and fleet.robots[0].e_stopped
         assert failures["far"] == ["not reached: no connection to it"]
     finally:
