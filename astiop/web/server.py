@@ -238,10 +238,18 @@ class WebServer:
         if self.opening >= self.config.max_consoles:
             return await self._refuse(request)
         self.opening += 1  # taken before any await: a burst of tabs cannot all pass the check
+        freed = False
+
+        def free() -> None:  # once, as soon as the console has ended (before its socket closes)
+            nonlocal freed
+            if not freed:
+                freed = True
+                self.opening -= 1
+
         try:
-            return await self._console_for(request)
+            return await self._console_for(request, free)
         finally:
-            self.opening -= 1
+            free()
 
     async def _refuse(self, request: web.Request) -> web.StreamResponse:
         """A tab over the limit: told so in one line on its terminal, then closed."""
@@ -257,7 +265,9 @@ class WebServer:
             await socket.close(code=1013, message=said[:120].encode())  # 1013: try again later
         return socket
 
-    async def _console_for(self, request: web.Request) -> web.StreamResponse:
+    async def _console_for(
+        self, request: web.Request, free: Callable[[], None]
+    ) -> web.StreamResponse:
         socket = web.WebSocketResponse(heartbeat=15, max_msg_size=MAX_MESSAGE)
         await socket.prepare(request)
         width = _bounded_int(request.query.get("width"), 80, 20, 500)
@@ -284,7 +294,8 @@ class WebServer:
         finally:
             await console.end()
             self.consoles.discard(console)
-            log.info("console %s ended (%d open)", console.pid, len(self.consoles))
+            free()
+            log.info("console %s ended (%d open)", console.pid, self.opening)
             with contextlib.suppress(Exception):
                 await socket.close()
         return socket

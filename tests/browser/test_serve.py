@@ -245,6 +245,10 @@ async def test_max_consoles_holds_under_a_burst_of_tabs(tmp_path):
             assert len(consoles_of(server.pid)) == 2
             await kept[0].close()
             wait_until(lambda: len(consoles_of(server.pid)) == 1, what="a console to end")
+            wait_until(  # the server frees the place once it has seen the console end
+                lambda: "ended (1 open)" in server.log_path.read_text(errors="replace"),
+                what="the server to free its place",
+            )
             again = await http.ws_connect(url)
             await read_until(again, Terminal(), r"Dashboard")  # its place was freed
             assert len(consoles_of(server.pid)) == 2
