@@ -17,6 +17,12 @@ header .robot { flex: 1; font-family: monospace; font-size: 15px; }
 #estop:active { background: #8b0000; }
 #latch { font-family: monospace; font-size: 15px; }
 #latch.engaged { background: #c8102e; color: #fff; padding: 3px 8px; border-radius: 4px; }
+#bell { font-family: monospace; font-size: 14px; position: relative; }
+#bell summary { cursor: pointer; list-style: none; padding: 3px 8px; border-radius: 4px; }
+#bell.open summary { background: #b36b00; color: #fff; }
+#bell.new summary { outline: 3px solid #ffd24d; }
+#bell ul { position: absolute; right: 0; top: 30px; z-index: 6; background: #12232d;
+  margin: 0; padding: 8px 12px 8px 24px; width: 460px; border: 1px solid #3a5566; }
 #terminal { flex: 1; min-height: 0; overflow: hidden; }
 #ended { display: none; position: absolute; bottom: 0; left: 0; right: 0; padding: 24px;
   text-align: center; background: #0c181f; font-size: 18px; z-index: 5; }
@@ -75,8 +81,35 @@ window.addEventListener("keydown", (e) => {
 window.addEventListener("beforeunload", (e) => {
   if (!document.body.classList.contains("-closed")) { e.preventDefault(); e.returnValue = ""; }
 });
+// the bell: open alerts, no sound; a new one is outlined and counted in the tab's title
+const bell = document.getElementById("bell");
+let seen = -1;
+async function ring() {
+  try {
+    const r = await fetch("alerts", {cache: "no-store"});
+    const body = await r.json();
+    bell.querySelector("summary").textContent = "alerts: " + body.open + " open";
+    bell.classList.toggle("open", body.open > 0);
+    if (seen >= 0 && body.newest > seen) bell.classList.add("new");
+    if (body.open === 0) bell.classList.remove("new");
+    seen = body.newest;
+    const list = bell.querySelector("ul");
+    list.replaceChildren(...body.alerts.map((text) => {
+      const li = document.createElement("li"); li.textContent = text; return li; }));
+    if (body.open > body.alerts.length) {
+      const li = document.createElement("li");
+      li.textContent = "… and " + (body.open - body.alerts.length) + " more: F8 in the console";
+      list.append(li);
+    }
+    document.title = (body.open ? "(" + body.open + ") " : "") + baseTitle;
+  } catch (e) { bell.querySelector("summary").textContent = "alerts: ?"; }
+}
+const baseTitle = document.title;
+bell.addEventListener("toggle", () => bell.classList.remove("new"));
 refresh();
+ring();
 setInterval(refresh, 1000);
+setInterval(ring, 500);
 """
 
 
@@ -89,6 +122,8 @@ def console_page(robot: str, static_url: str, font_size: int) -> str:
 <style>{_STYLE}</style></head>
 <body>
 <header><span class="robot">astiop · robot: {escape(robot)}</span>
+<details id="bell" title="Open alerts (acknowledged on the Alerts screen, F8)">
+<summary>alerts</summary><ul></ul></details>
 <span id="latch"></span>
 <button id="estop" type="button" title="Stop the robot and latch the E-STOP (ctrl+e)">E-STOP</button>
 </header>

@@ -30,6 +30,7 @@ from astiop.web.access import (
 )
 from astiop.web.consoles import ConsoleProcess
 from astiop.web.pages import console_page, login_page
+from astiop.web.store_reads import StoreReads
 
 log = logging.getLogger("astiop.serve")
 ESTOP_S = 60.0  # for `astiop estop` to reach the robot (its own timeouts are shorter)
@@ -62,8 +63,7 @@ class WebServer:
         self.access = Access(config.token)
         self.consoles: set[ConsoleProcess] = set()
         self.downloads = DownloadManager()
-        self._db = ThreadPoolExecutor(1, thread_name_prefix="astiop-serve-db")
-        self._store = None  # made on the executor's thread, used only there
+        self.reads = StoreReads(config.db)
         self._estop_lock = asyncio.Lock()
         self._stopper = ThreadPoolExecutor(1, thread_name_prefix="astiop-serve-estop")
         self.spare: ConsoleProcess | None = None
@@ -159,24 +159,17 @@ class WebServer:
 
     # --- the E-STOP button --------------------------------------------------------------------
 
-    def _latch(self, who: str | None) -> dict:
-        """On the database's own thread: latch (who given) and read the latch."""
-        if self._store is None:
-            from astiop.store import Store
-
-            self._store = Store(self.config.db)
-        if who is not None:
-            self._store.latch_estop(who)
-        return self._store.estop_latch() or {}
-
-    async def _read_latch(self, who: str | None = None) -> dict:
-        return await asyncio.get_running_loop().run_in_executor(self._db, self._latch, who)
-
     async def estop_state(self, request: web.Request) -> web.Response:
         if not self._allowed(request):
             raise web.HTTPUnauthorized(text="log in first")
-        latch = await self._read_latch()
+        latch = await self.reads.latch()
         return web.json_response(_latch_said(latch), headers=_NO_STORE)
+
+    async def alerts(self, request: web.Request) -> web.Response:
+        """The bell: the open alerts, read by the page every half second."""
+        if not self._allowed(request):
+            raise web.HTTPUnauthorized(text="log in first")
+        return web.json_response(await self.reads.alerts(), headers=_NO_STORE)
 
     async def estop(self, request: web.Request) -> web.Response:
         # a custom header: a page elsewhere cannot send it without this server's consent (CORS)
@@ -190,7 +183,7 @@ class WebServer:
                 self._stopper, self.config.stop_robot, who
             )
         try:  # then every process on this database; a database in trouble never holds it up
-            latch = await asyncio.wait_for(self._read_latch(who), RECORD_S)
+            latch = await asyncio.wait_for(self.reads.latch(who), RECORD_S)
             recorded = ""
         except asyncio.TimeoutError:
             latch, recorded = {}, f"not latched in the database within {RECORD_S:g} s"
@@ -318,7 +311,7 @@ class WebServer:
         ending = list(self.consoles) + ([self.spare] if self.spare is not None else [])
         self.spare = None
         await asyncio.gather(*(console.end() for console in ending))
-        self._db.shutdown(wait=False)
+        self.reads.close()
 
 
 _NO_STORE = {"Cache-Control": "no-store"}
@@ -374,6 +367,7 @@ def make_web_app(config: ServeConfig) -> tuple[web.Application, WebServer]:
             web.post("/login", server.login),
             web.get("/ws", server.websocket),
             web.get("/estop", server.estop_state),
+            web.get("/alerts", server.alerts),
             web.post("/estop", server.estop),
             web.static("/static", STATIC),
         ]
