@@ -39,6 +39,8 @@ from astiop.services import Services
 from astiop.store import Store
 from astiop.transports.state import RobotState, TopicStat
 
+log = logging.getLogger("astiop.watches")
+
 SAID_HERE = ("watch", "battery_low", "no_progress", "mission_failed", "mission_interrupted")
 STILL_HZ = 4.0  # a still robot's sampling: only its clock, scan noise and battery change
 
@@ -94,8 +96,7 @@ class AstiopApp(App):
             services.gateway, self._state_sampled, self._sampler_failed, sample_hz, last
         )
         self._motion: tuple = ()  # the last sample's motion_key
-        self._watching = _watching(services) if fleet is None else None
-        self._fleet_watching = _fleet_watching(self) if fleet is not None else None
+        self._watches = _watches(self)  # None on a replay: it happened already
 
     def on_mount(self) -> None:
         gateway = self.services.gateway
@@ -111,8 +112,8 @@ class AstiopApp(App):
         self._sampler.start()
         if self.fleet is not None:
             self.fleet.start()
-        if self._fleet_watching is not None:
-            self._fleet_watching.start()
+        if self._watches is not None:
+            self._watches.start()
         if self.services.gateway.playback is None:  # a replay moves no robot
             self._approvals.start()
         if self.record_path is not None:
@@ -149,9 +150,11 @@ class AstiopApp(App):
         try:
             self._sampler.halt.set()
             self._approvals.halt.set()
-            if self._fleet_watching is not None:
-                self._fleet_watching.halt.set()
+            if self._watches is not None:
+                self._watches.halt.set()
             self._sampler.join(2.0)
+            if self._watches is not None and self._watches.is_alive():
+                self._watches.join(2.0)  # not writing an alert as the store closes
             if self._approvals.is_alive():
                 self._approvals.join(2.0)
             if self.recording.recorder is not None:
@@ -173,9 +176,6 @@ class AstiopApp(App):
     # -- live state ---------------------------------------------------------------------
     def _state_sampled(self, state, events, stats) -> None:  # the sampler's thread
         self.post_message(RobotStateSampled(state, events, stats))
-        alerts = self._watching.step(state, events) if self._watching is not None else []
-        if alerts:
-            self.post_message(AlertsFired(alerts))
 
     def on_alerts_fired(self, msg: AlertsFired) -> None:
         for a in msg.alerts:  # the current robot's own events say contact, faults, E-STOP, goals
@@ -361,23 +361,23 @@ class _Notices(logging.Handler):
         self.app.notify(record.getMessage(), severity="error", title="robot", markup=False)
 
 
-def _watching(services: Services):
-    """The watches and built-in alerts of the console's robot, evaluated on each sample (not
-    on a replay: it happened already)."""
-    if services.gateway.playback is not None:
-        return None
-    from astiop.watches.runner import Watching, make_evaluator
-
-    ev = make_evaluator(services.gateway, services.store, services.settings)
-    return Watching(services.gateway, ev)
-
-
-def _fleet_watching(app: AstiopApp):
-    """Every fleet robot's watches and built-in alerts, on a thread of their own."""
-    from astiop.watches.runner import FleetWatching
+def _watches(app: AstiopApp):
+    """The watches and built-in alerts, on a thread of their own (none on a replay): the
+    console's robot evaluated as soon as a reading they read arrives, not at the Dashboard's
+    drawing rate; a fleet's every robot at the settings' rate."""
+    from astiop.watches.runner import FleetWatching, WatchRunner, make_evaluator
 
     s, fleet = app.services, app.fleet
-    if s.gateway.playback is not None or fleet is None:
+    if s.gateway.playback is not None:
         return None
-    fired = lambda alerts: app.post_message(AlertsFired(alerts))  # noqa: E731
-    return FleetWatching(lambda: dict(fleet.gateways), s.store, s.settings, fired)
+    if fleet is not None:
+        fired = lambda alerts: app.post_message(AlertsFired(alerts))  # noqa: E731
+        return FleetWatching(lambda: dict(fleet.gateways), s.store, s.settings, fired)
+    ev = make_evaluator(s.gateway, s.store, s.settings)
+    return WatchRunner(
+        s.gateway,
+        ev,
+        on_alert=lambda alert: app.post_message(AlertsFired([alert])),
+        report=lambda text: log.info("watches not evaluated: %s", text),
+        hz=s.settings.watches.hz,
+    )

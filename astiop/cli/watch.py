@@ -214,7 +214,7 @@ def run(
     runner = WatchRunner(
         gateway,
         ev,
-        on_alert=lambda a: _say(a, as_json),
+        on_alert=lambda a: _said_with_reaction(a, as_json),
         report=lambda text: typer.echo(f"astiop: {text}", err=True),
         hz=settings.watches.hz,
     )
@@ -227,6 +227,12 @@ def run(
         if exporter is not None:
             exporter.close()
         gateway.close()
+
+
+def _said_with_reaction(alert: dict, as_json: bool) -> None:
+    _say(alert, as_json)
+    if alert.get("reaction") and not as_json:  # JSON carries it in the alert's line
+        typer.echo(f"astiop: {alert['reaction']}", err=True)
 
 
 def alerts(

@@ -68,15 +68,19 @@ def reading_ages(gateway: RobotGateway, t: float, evaluator: Evaluator) -> dict[
     return {role: max(0.0, t - times[name]) for role, name in topics.items() if name in times}
 
 
-class WatchRunner:
+class WatchRunner(threading.Thread):
+    """One robot's watches and built-in alerts: started as a thread (a console), or `run()` on
+    the caller's (`astiop watch run`)."""
+
     def __init__(
         self,
         gateway: RobotGateway,
         evaluator: Evaluator,
-        on_alert: Callable[[dict], None],
-        report: Callable[[str], None],
+        on_alert: Callable[[dict], object],  # with its reaction's outcome, if it has one
+        report: Callable[[str], object],  # a failing read or write, once per streak
         hz: float = 10.0,
     ):
+        super().__init__(name="watches", daemon=True)
         self.gateway = gateway
         self.evaluator = evaluator
         self.on_alert = on_alert
@@ -109,11 +113,11 @@ class WatchRunner:
                     self.report(f"watching: {exc}")
                 failing = True
                 continue
-            for alert in alerts:
-                self.on_alert(alert)
+            for alert in alerts:  # this process wrote it first: its reaction is this process's
                 said = react(self.gateway, self.evaluator.store, alert, state.e_stopped)
                 if said is not None:
-                    self.report(said)
+                    alert["reaction"] = said
+                self.on_alert(alert)
 
     def _times(self) -> dict[str, float]:
         """When each topic the watches and built-in alerts read last brought a message."""
