@@ -168,7 +168,7 @@ def quiet_domain(timeout: float = 30.0) -> None:
     from astiop.ros2.catalog import astibot_catalog
 
     robots = {n.strip("/") for n in astibot_catalog().nodes}
-    robots |= {n.rsplit("/", 1)[-1] for d in ("jazzy", "humble") for n in node_names(d)}
+    robots |= {n.rsplit("/", 1)[-1] for d in ("jazzy", "humble") for n in node_names(d, "waffle")}
     leaked = robots_on_this_domain()
     for pid, _ in leaked:
         with contextlib.suppress(ProcessLookupError):

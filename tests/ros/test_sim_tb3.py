@@ -54,7 +54,7 @@ def _split(full: str) -> tuple[str, str]:
     return base, ns or "/"
 
 
-def _graph_differences(client, distro: str, ns: str) -> list[str]:
+def _graph_differences(client, distro: str, ns: str, model: str = "burger") -> list[str]:
     """Where each of the robot's nodes differs from the upstream table: a node missing, or a
     topic, service or action it lacks or has beyond the table (rclpy's own names aside). Other
     participants on the domain (a test's client, one just gone) are not the robot's."""
@@ -64,7 +64,7 @@ def _graph_differences(client, distro: str, ns: str) -> list[str]:
 
     node = client.node
     live = {(ns_.rstrip("/") + "/" + n) for n, ns_ in node.get_node_names_and_namespaces()}
-    wrong = [f"node {ns}/{n} missing" for n in node_names(distro) if f"{ns}/{n}" not in live]
+    wrong = [f"node {ns}/{n} missing" for n in node_names(distro, model) if f"{ns}/{n}" not in live]
     if wrong:
         return wrong
     readers = {
@@ -72,8 +72,8 @@ def _graph_differences(client, distro: str, ns: str) -> list[str]:
         "sub": node.get_subscriber_names_and_types_by_node,
         "srv": node.get_service_names_and_types_by_node,
     }
-    table = endpoints(distro)
-    for name in node_names(distro):
+    table = endpoints(distro, model)
+    for name in node_names(distro, model):
         base, node_ns = _split(f"{ns}/{name}")
         for kind, read in readers.items():
             want = {
@@ -110,9 +110,9 @@ def _rclpys_own(name: str) -> bool:
     )
 
 
-def _graph_matches(client, distro: str = "jazzy", ns: str = "") -> None:
-    wrong = until(lambda: not _graph_differences(client, distro, ns), 20, step=0.5)
-    assert wrong, "\n".join(_graph_differences(client, distro, ns))
+def _graph_matches(client, distro: str = "jazzy", ns: str = "", model: str = "burger") -> None:
+    wrong = until(lambda: not _graph_differences(client, distro, ns, model), 20, step=0.5)
+    assert wrong, "\n".join(_graph_differences(client, distro, ns, model))
 
 
 def _param(client, node: str, name: str):

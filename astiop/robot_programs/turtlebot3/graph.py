@@ -66,11 +66,25 @@ def lifecycle_nodes(distro: str) -> tuple[tuple[str, tuple[str, ...]], ...]:
 
 
 COSTMAPS = ("global_costmap/global_costmap", "local_costmap/local_costmap")
+CAMERA_TOPIC = "/camera/image_raw"
 
 
-def node_names(distro: str) -> tuple[str, ...]:
+def camera_node(distro: str, model: str) -> str | None:
+    """Who publishes the Waffle's camera (a burger has none), as ROBOTIS-GIT/
+    turtlebot3_simulations has it: turtlebot3_gazebo/models/turtlebot3_waffle/model.sdf's camera
+    sensor (camera_rgb_frame); on humble its gazebo_ros_camera plugin "camera_driver" (camera
+    name "camera"), on jazzy ros_gz_image's image_bridge (launch/spawn_turtlebot3.launch.py,
+    started for every model but the burger)."""
+    if model == "burger":
+        return None
+    return "image_bridge" if distro == "jazzy" else "camera_driver"
+
+
+def node_names(distro: str, model: str = "burger") -> tuple[str, ...]:
     names = ["turtlebot3_node", "diff_drive_controller", "robot_state_publisher"]
     names.append("hlds_laser_publisher")
+    if (camera := camera_node(distro, model)) is not None:
+        names.append(camera)
     for manager, managed in lifecycle_nodes(distro):
         names += [*managed, manager]
     names += COSTMAPS
@@ -99,10 +113,12 @@ def _lifecycle(node: str) -> list[Endpoint]:
     return out
 
 
-def endpoints(distro: str) -> tuple[Endpoint, ...]:
+def endpoints(distro: str, model: str = "burger") -> tuple[Endpoint, ...]:
     cmd = cmd_vel_type(distro)
     e = Endpoint
-    out = [
+    camera = camera_node(distro, model)
+    out = [e("pub", CAMERA_TOPIC, "sensor_msgs/msg/Image", camera)] if camera else []
+    out += [
         # turtlebot3_node (Sensors' qos_: KeepLast(10), reliable)
         e("sub", "/cmd_vel", cmd, "turtlebot3_node"),
         e("pub", "/battery_state", "sensor_msgs/msg/BatteryState", "turtlebot3_node"),

@@ -108,7 +108,7 @@ def node_parameters(distro: str, model: str, namespace: str) -> dict[str, dict[s
     m, prefix = MODELS[model], frame_prefix(namespace)
     jazzy = distro == "jazzy"
     checker = "goal_checker" if jazzy else "general_goal_checker"
-    params: dict[str, dict[str, Any]] = {n: {} for n in node_names(distro)}
+    params: dict[str, dict[str, Any]] = {n: {} for n in node_names(distro, model)}
     params["turtlebot3_node"].update({
         "wheels.separation": m.separation, "wheels.radius": m.radius,
         "enable_stamped_cmd_vel": jazzy, "opencr.id": 200, "opencr.baud_rate": 1000000,
