@@ -52,6 +52,7 @@ class CameraFrame:
 class CameraReading:
     frame: CameraFrame | None
     note: str = ""  # why there is no frame, or what is wrong with the last one
+    absent: bool = False  # none will come: the robot has no camera, or this transport reads none
 
 
 def decode(msg: ImageMessage) -> np.ndarray:
@@ -93,11 +94,11 @@ def read_camera(gateway: RobotGateway) -> CameraReading:
     """The current robot's camera frame, through its camera role."""
     name = gateway.profile.name("camera")
     if name is None or gateway.profile.kind("camera") != "topic":
-        return CameraReading(None, "no camera")
+        return CameraReading(None, "no camera", absent=True)
     try:
         msg = gateway.backend.image(name)
     except ValueError as exc:
-        return CameraReading(None, str(exc))
+        return CameraReading(None, str(exc), absent=True)
     if msg is None:
         return CameraReading(None, f"no frame yet on {name}")
     try:

@@ -89,7 +89,10 @@ class CameraView(Widget):
     """Reads the camera through `read` (the gateway's) in a thread at `hz` while its screen is
     shown; `clock` is the robot's clock as last sampled (`RobotState.t`), for the frame's age."""
 
-    DEFAULT_CSS = "CameraView { height: 13; border: round $primary-darken-2; padding: 0 1; }"
+    DEFAULT_CSS = """
+    CameraView { height: 13; border: round $primary-darken-2; padding: 0 1; }
+    CameraView.-absent { height: 3; }
+    """
 
     def __init__(
         self,
@@ -132,6 +135,9 @@ class CameraView(Widget):
         digest = None if frame is None else (frame.pixels.shape, hash(frame.pixels.tobytes()))
         same = digest is not None and digest == self._digest
         self.reading, self._digest = reading, digest
+        # a robot with no camera keeps only the caption's line (the Dashboard's rows go to
+        # the panels below); back to its size when a frame can come
+        self.set_class(reading.absent, "-absent")
         if same:  # the same picture (a robot standing still): only its age is drawn again
             self.refresh(Region(0, 0, self.size.width, 1))
         else:
