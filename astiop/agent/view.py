@@ -8,8 +8,6 @@ from __future__ import annotations
 
 import asyncio
 import base64
-import io
-import time
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from typing import Any
@@ -19,7 +17,7 @@ from astiop.agent.models.specs import LLMEndpoint
 from astiop.agent.result import TurnResult
 from astiop.agent.summaries import summarize
 from astiop.bounded import one_line
-from astiop.robot.camera import CameraFrame
+from astiop.robot.camera import CameraFrame, age_of, png_of
 from astiop.transports.base import Execution
 
 Ask = Callable[..., Awaitable[Any]]  # the agent's one way to the model (`Agent._ask`)
@@ -50,16 +48,6 @@ class Snapshot:
 
     def data_url(self) -> str:
         return "data:image/png;base64," + base64.b64encode(self.png).decode("ascii")
-
-
-def png_of(frame: CameraFrame) -> tuple[bytes, float]:
-    """The frame's pixels as PNG bytes, and the seconds encoding took."""
-    from PIL import Image  # only when a frame is sent
-
-    t0 = time.perf_counter()
-    buf = io.BytesIO()
-    Image.fromarray(frame.pixels, "RGB").save(buf, "PNG")
-    return buf.getvalue(), time.perf_counter() - t0
 
 
 def image_messages(request: str, shot: Snapshot) -> list[dict[str, Any]]:
@@ -112,10 +100,8 @@ async def _snapshot(reads: Any) -> tuple[Snapshot | None, str]:
         frame = reading.frame
         if frame is None:
             return None, reading.note
-        now = gateway.state().t
-        age = None if frame.at is None or now is None else max(0.0, now - frame.at)
         png, encode_s = png_of(frame)
-        shot = Snapshot(frame, age, png, encode_s)
+        shot = Snapshot(frame, age_of(frame, gateway.state().t), png, encode_s)
         reads.ran.append(_frame_read(shot))
         return shot, ""
 
