@@ -235,13 +235,11 @@ class Agent:
 
     async def _answer_subjects(self, asked: list, result: TurnResult, emit) -> None:
         """A question's subject answered from the reads it takes, computed, for every model."""
-        reads = subject_answers.Reads(self.gateway)
-        texts = [  # the view only is said by a model: one that sees is shown the camera's frame
+        reads, places = subject_answers.Reads(self.gateway), self.places()
+        texts = [  # but the view: a model that sees says it from the camera's frame (`view`)
             await view.answer(result.prompt, reads, self.endpoint, self._ask, result, emit)
             if s.kind == "view"
-            else await asyncio.to_thread(
-                subject_answers.answer, s, reads, self.places(), self.store
-            )
+            else await asyncio.to_thread(subject_answers.answer, s, reads, places, self.store)
             for s in asked
         ]
         for seq, ex in enumerate(reads.ran):
