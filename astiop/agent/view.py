@@ -54,7 +54,8 @@ def image_messages(request: str, shot: Snapshot) -> list[dict[str, Any]]:
     """The question and the frame, as OpenAI's chat completions take an image: a user message
     of content parts, the image an `image_url` part holding a data: URL."""
     f = shot.frame
-    system = SYSTEM.format(width=f.width, height=f.height, age=shot.age.replace(" old", " ago"))
+    when = "at an unknown time" if shot.age_s is None else f"{shot.age_s:.1f} s ago"
+    system = SYSTEM.format(width=f.width, height=f.height, age=when)
     return [
         {"role": "system", "content": system},
         {
