@@ -339,6 +339,7 @@ def make_app(
         threads=settings.llm.threads,
         n_ctx=settings.llm.context,
         timeout_s=settings.llm.timeout_s,
+        vision=settings.llm.marks_vision(settings.llm.model),
     )
     return AstiopApp(
         Services(settings, store, gateway, endpoint),

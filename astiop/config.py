@@ -113,9 +113,17 @@ class LLMSettings(_Section):
     context: int = Field(4096, ge=512)
     max_tokens: int = Field(256, ge=16, le=8192)
     timeout_s: float = Field(120.0, gt=0, le=86400, allow_inf_nan=False)
+    # `model` takes images (OpenAI `image_url` parts, Ollama `images`): a question about the
+    # robot's view is sent the camera's frame; never for embedded, gguf or rules
+    vision: StrictBool = False
     endpoints: Annotated[list[str], NoDecode] = Field(
         default_factory=list, description="extra specs for `models`; comma-separated in a variable"
     )
+
+    def marks_vision(self, spec: str) -> bool:
+        """Whether `spec` is the model `vision` marks: the one named by `model`, not another
+        switched to later (`/model` in the console, `chat -m`)."""
+        return self.vision and spec.strip() == self.model.strip()
 
     @field_validator("endpoints", mode="before")
     @classmethod

@@ -23,6 +23,7 @@ KINDS = (
     "graph",  # what: nodes | topics | services | actions; count: how many rather than which
     "places",  # what: count | nearest | distance | between | reachable
     "activity",  # what: why_still
+    "view",  # what the robot sees: its camera's frame to a model that takes images (`view`)
     "journal",  # hours: how far back
     "capabilities",
     "outside",
@@ -74,6 +75,15 @@ _JOURNAL = _rx(
     r"|\b(?:summar(?:ise|ize|y)|recap|rundown)\b.*\b(?:did|done|last|past|today|earlier)\b"
     r"|\b(?:what|anything)\b.*\b(?:been done|was done|happened|did)\b.*\b(?:last|past|today)\b"
 )
+_VIEW = _rx(
+    r"\bwhat(?:'s| is| are)?(?: there)? (?:in front|ahead|before (?:it|the robot))\b|"
+    r"\bwhat (?:does|can|do|did) (?:the robot|the camera|it|you|the astibot|its camera) "
+    r"(?:see|look at|show)\b|\bwhat(?:'s| is) (?:the robot|it) (?:looking at|seeing|facing)\b|"
+    r"\bwhat(?:'s| is) (?:on|in) (?:the |its )?(?:camera|picture|image|view)\b|"
+    r"\b(?:describe|look at) (?:the |its |what )?(?:camera|view|scene|image|picture|frame|"
+    r"robot sees|it sees)\b|\bwhat (?:is|'s) (?:visible|in view)\b|\blook (?:ahead|around)\b"
+)
+_CAMERA_FIELD = _rx(r"\b(?:resolution|size|encoding|format|rate|hz|fps|topic|bytes|pixels)\b")
 _HOURS = _rx(r"\b(?:last|past)\s+(\d+(?:\.\d+)?|an?|one|two|three|few)?\s*(minute|hour|day)s?\b")
 _GRAPH = {
     "nodes": r"nodes?",
@@ -165,6 +175,8 @@ def subject_of(intent: Intent, places: list[str]) -> Subject | None:
         return found
     if _WHY_STILL.search(text):
         return Subject("activity", "why_still")
+    if _VIEW.search(text) and not _CAMERA_FIELD.search(text):
+        return Subject("view")
     if found := _places(text, places):
         return found
     if _TURN_SPEED.search(text):

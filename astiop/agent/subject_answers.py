@@ -22,8 +22,9 @@ CAPABILITIES = (
     "({roles}), a field of one (the battery's temperature or current, the lidar's range, "
     "the heading), its parameters (top speed, tolerances), its ROS graph (nodes, topics, "
     "services, actions), the named places (how many, the nearest, how far, between two), "
-    "why it is not moving, and what it did (astiop's journal). Ask it to go to a place or "
-    "coordinates, move a little, dock, undock, load, unload, save or list places, or stop."
+    "why it is not moving, what is in front of it, and what it did (astiop's journal). Ask "
+    "it to go to a place or coordinates, move a little, dock, undock, load, unload, save or "
+    "list places, or stop."
 )
 OUTSIDE = (
     "That is outside the robot: I answer only about this robot (its readings, parameters, "

@@ -26,6 +26,7 @@ from astiop.agent import (
     rules,
     subject,
     subject_answers,
+    view,
     warm,
     watch_turn,
 )
@@ -80,7 +81,6 @@ class Agent:
         self.mode = "rules" if endpoint.is_rules else mode
         self.max_tokens = max_tokens
         self.confirm = confirm
-        self.session = session
         self.nav_wait_s = nav_wait_s
         self.history: list[tuple[str, str]] = []
         self.fallback = fallback  # the rules answer when the model is unreachable
@@ -235,9 +235,11 @@ class Agent:
 
     async def _answer_subjects(self, asked: list, result: TurnResult, emit) -> None:
         """A question's subject answered from the reads it takes, computed, for every model."""
-        reads = subject_answers.Reads(self.gateway)
-        texts = [
-            await asyncio.to_thread(subject_answers.answer, s, reads, self.places(), self.store)
+        reads, places = subject_answers.Reads(self.gateway), self.places()
+        texts = [  # but the view: a model that sees says it from the camera's frame (`view`)
+            await view.answer(result.prompt, reads, self.endpoint, self._ask, result, emit)
+            if s.kind == "view"
+            else await asyncio.to_thread(subject_answers.answer, s, reads, places, self.store)
             for s in asked
         ]
         for seq, ex in enumerate(reads.ran):
@@ -380,7 +382,6 @@ class Agent:
                 result.started = await asyncio.to_thread(goals.started_text, self.gateway, ex)
                 result.target = goals.target_of(ex, self.places())
 
-    # -- the follow-up -------------------------------------------------------------------
     async def follow_up(self, result: TurnResult, timeout_s: float | None = None) -> str:
         """Wait for the goal the turn started to end; record and return how it ended."""
         wait = self.nav_wait_s if timeout_s is None else timeout_s

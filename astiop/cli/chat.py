@@ -96,6 +96,7 @@ def chat(
             threads=settings.llm.threads,
             n_ctx=settings.llm.context,
             timeout_s=settings.llm.timeout_s,
+            vision=settings.llm.marks_vision(model or settings.llm.model),
         )
         endpoint.launch()  # the model loads while the robot starts
     except (SpecError, EmbeddedModelError) as exc:

@@ -79,6 +79,12 @@ def main(
         "--model",
         help="LLM spec: embedded, rules, ollama:NAME, openai:NAME@URL, dmr:NAME, gguf:PATH.",
     ),
+    vision: bool = typer.Option(
+        False,
+        "--vision",
+        help="The --model takes images: a question about the robot's view is sent the camera's "
+        "frame (llm.vision).",
+    ),
     robot: str | None = typer.Option(None, "--robot", help="Robot backend: sim (default) or ros2."),
     ros2_transport: str | None = typer.Option(
         None,
@@ -128,6 +134,8 @@ def main(
         overrides["db"] = str(db)
     if model is not None:
         overrides.setdefault("llm", {})["model"] = model
+    if vision:
+        overrides.setdefault("llm", {})["vision"] = True
     if robot is not None:
         overrides.setdefault("robot", {})["backend"] = robot
     if ros2_transport is not None:

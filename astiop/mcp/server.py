@@ -43,6 +43,9 @@ DESCRIPTIONS = {
     "/battery_status.",
     "ros2_query": "Run one read-only ros2 command line (topic list/info/echo/hz, service list, "
     "interface show, param get). Lines that act on the robot are refused.",
+    "camera_frame": "The robot's current camera frame as a PNG image, with its topic, size and "
+    "age (seconds since the robot published it); one line of text when there is no camera or "
+    "no frame yet.",
     "go_to_location": "Send the robot to a named location (see list_locations). Needs the "
     "operator's approval. Returns when the goal is accepted, not when it is reached.",
     "go_to_pose": "Send the robot to x, y (m, map frame) facing theta_deg. Needs approval; "
@@ -186,7 +189,12 @@ class AstiopMCP(MCPServer):
             CALL.reset(token)
         text = ""
         if isinstance(result, CallToolResult):
-            text = "\n".join(getattr(c, "text", "") for c in result.content)
+            text = "\n".join(  # an image is kept as its kind, not its bytes
+                c.text
+                if isinstance(c, TextContent)
+                else f"[{getattr(c, 'mime_type', c.type)} image]"
+                for c in result.content
+            )
         await anyio.to_thread.run_sync(audit.finish, call, text, t0, False)
         if call.unrecorded and isinstance(result, CallToolResult):
             # its own content item: a JSON answer's item stays JSON

@@ -4,10 +4,13 @@ here before any command is built; a refusal is a `Refused` with its one-line rea
 from __future__ import annotations
 
 import asyncio
+import base64
 import math
 import re
 import threading
 import time
+
+from mcp.types import ImageContent, TextContent
 
 from astiop.agent import goals
 from astiop.agent.intent import Intent
@@ -17,6 +20,7 @@ from astiop.mcp.approval import Policy, clear, needs_approval
 from astiop.mcp.audit import CALL, AuditTrail, Call
 from astiop.mcp.mission_tools import MissionTools
 from astiop.mcp.refusals import Refused
+from astiop.robot.camera import age_of, png_of
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.safety import Review
 from astiop.ros2.render import STAMPED, goto_command
@@ -33,6 +37,7 @@ TOOL_CLASSES: dict[str, str] = {
     "list_locations": "read",
     "read_topic": "read",
     "ros2_query": "read",
+    "camera_frame": "read",
     "go_to_location": "actuate",
     "go_to_pose": "actuate",
     "move": "actuate",
@@ -124,6 +129,24 @@ class RobotTools(MissionTools):
 
     def list_locations(self) -> list[dict]:
         return [loc.as_json() for loc in self.store.list_locations()]
+
+    def camera_frame(self) -> list[ImageContent | TextContent]:
+        """The camera role's current frame as a PNG image, and a text part with its topic, size
+        and age; one line of text when there is none (no camera, no frame yet, unreadable)."""
+        gw = self.gateway
+        reading = gw.camera()
+        frame = reading.frame
+        if frame is None:
+            return [TextContent(type="text", text=reading.note)]
+        png, _ = png_of(frame)
+        age = age_of(frame, gw.state().t)
+        said = "age unknown" if age is None else f"{age:.2f} s old (robot clock)"
+        text = f"camera frame from {frame.topic}, {frame.width} x {frame.height} px, {said}"
+        data = base64.b64encode(png).decode("ascii")
+        return [
+            ImageContent(type="image", data=data, mime_type="image/png"),
+            TextContent(type="text", text=text),
+        ]
 
     def read_topic(self, topic: str) -> str:
         topic = bounded_text("topic", topic, 256)

@@ -5,6 +5,7 @@ cannot read: nothing is shown rather than garbage)."""
 from __future__ import annotations
 
 import io
+import time
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -88,6 +89,22 @@ def _decompress(msg: ImageMessage) -> np.ndarray:
             raise
         fmt = msg.encoding or "format not said"
         raise ImageError(f"{msg.topic}: a compressed image ({fmt}) that cannot be read") from None
+
+
+def png_of(frame: CameraFrame) -> tuple[bytes, float]:
+    """The frame's pixels as PNG bytes (what a model or an MCP client is sent), and the seconds
+    encoding them took."""
+    from PIL import Image as PILImage
+
+    t0 = time.perf_counter()
+    buf = io.BytesIO()
+    PILImage.fromarray(frame.pixels, "RGB").save(buf, "PNG")
+    return buf.getvalue(), time.perf_counter() - t0
+
+
+def age_of(frame: CameraFrame, now: float | None) -> float | None:
+    """The frame's age at `now` on the robot's clock (`RobotState.t`); None when unknown."""
+    return None if frame.at is None or now is None else max(0.0, now - frame.at)
 
 
 def read_camera(gateway: RobotGateway) -> CameraReading:

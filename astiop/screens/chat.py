@@ -187,7 +187,8 @@ class ChatScreen(ConsoleScreen):
 
     def switch_model(self, spec: str) -> None:
         try:
-            endpoint = open_endpoint(spec or "rules")
+            spec = spec or "rules"
+            endpoint = open_endpoint(spec, vision=self.services.settings.llm.marks_vision(spec))
         except SpecError as exc:
             self.notify(str(exc), severity="error", markup=False)
             return

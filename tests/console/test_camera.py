@@ -228,7 +228,7 @@ async def test_asked_about_the_camera_the_simulators_robot_says_its_frame_never_
     sim.step(0.3)
     gateway = RobotGateway(SimBackend(sim, store), SafetyPolicy())
     agent = Agent(gateway, open_endpoint("rules"), store, confirm=lambda _c: True)
-    r = await agent.turn("what does the camera see?")
+    r = await agent.turn("read the camera")  # "what does it see?" is the view (test_view.py)
     assert [c.command for c in r.commands] == ["ros2 topic echo /camera/image_raw --once"]
     assert "camera image 160 x 120 px, rgb8, 57600 bytes" in r.answer, r.answer
     assert r.commands[0].values["data_bytes"] == 57600 and "data" not in r.commands[0].values

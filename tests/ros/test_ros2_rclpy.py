@@ -363,7 +363,45 @@ def test_a_camera_is_a_role_read_as_its_size_and_encoding_never_its_pixels(robot
     assert until(lambda: gateway.profile.name("camera") == "/camera/image_raw", 30)
     assert "camera" not in gateway.profile.missing()
     agent = Agent(gateway, open_endpoint("rules"), gateway.store, confirm=YES)
-    r = asyncio.run(agent.turn("what does the camera see?"))
+    r = asyncio.run(agent.turn("read the camera"))  # "what does it see?": the view, below
     assert [c.command for c in r.commands] == ["ros2 topic echo /camera/image_raw --once"]
     assert "camera image 160 x 120 px, rgb8, 57600 bytes" in r.answer, r.answer
     assert "data" not in r.commands[0].values and r.commands[0].values["data_bytes"] == 57600
+
+
+def test_a_seeing_model_is_sent_the_frame_the_robot_published_over_dds(robot_gateway):
+    """`astiop sim node` publishes its camera over rclpy; a question about the view on a model
+    marked as seeing sends a scripted image-taking server that very frame (the robot stands
+    docked: every frame of its camera is the same picture)."""
+    import asyncio
+    import base64
+    import io
+
+    import numpy as np
+    from PIL import Image
+
+    from astiop.agent.models.specs import open_endpoint
+    from astiop.agent.turn import Agent
+    from tests.scripted_llm import ScriptedLLM
+
+    gateway = robot_gateway
+    assert until(lambda: gateway.camera().frame is not None, 30), gateway.camera().note
+    llm = ScriptedLLM("openai")
+    llm.default = "The green charging station fills the view."
+    try:
+        endpoint = open_endpoint(f"openai:scripted@{llm.url}", vision=True)
+        agent = Agent(gateway, endpoint, gateway.store, confirm=YES)
+        r = asyncio.run(agent.turn("what is in front of the robot?"))
+        parts = llm.requests[0]["messages"][-1]["content"]
+    finally:
+        llm.close()
+    url = next(p["image_url"]["url"] for p in parts if p["type"] == "image_url")
+    with Image.open(io.BytesIO(base64.b64decode(url.removeprefix("data:image/png;base64,")))) as im:
+        sent = np.asarray(im.convert("RGB"))
+    published = gateway.camera().frame
+    assert published is not None and published.topic == "/camera/image_raw"
+    assert sent.shape == (120, 160, 3) and np.array_equal(sent, published.pixels)
+    assert r.answer.startswith("From the camera frame "), r.answer
+    assert r.answer.endswith("(/camera/image_raw, 160 x 120 px): " + llm.default)
+    age = float(r.answer.removeprefix("From the camera frame ").split(" s old")[0])
+    assert 0.0 <= age < 2.0  # 5 Hz of robot time, read as it came

@@ -5,6 +5,7 @@ A thread that beats the console heartbeat and answers approvals stands in for th
 from __future__ import annotations
 
 import json
+import math
 import os
 import socket
 import sqlite3
@@ -492,3 +493,59 @@ def test_an_outside_agent_may_never_release_a_held_robot(store):
     finally:
         CALL.reset(token)
     assert gateway.state().state_word == "e_stopped"  # still held by its own stop
+
+
+# -- camera_frame: the frame the robot published, as MCP image content --------------------------
+class CameraNotYetUp(SimBackend):
+    """A robot whose camera driver has not published its first frame yet."""
+
+    def _last_publish(self, name: str) -> float:
+        return -math.inf if "camera" in name else super()._last_publish(name)
+
+
+def camera_server(store, sim: Simulator, backend=SimBackend) -> AstiopMCP:
+    gateway = RobotGateway(backend(sim, store), make_safety(load_settings({}), store))
+    return AstiopMCP(RobotTools(gateway, store, Policy()), read_only=True)
+
+
+async def test_camera_frame_is_the_robots_frame_as_a_png_image_with_its_age(store):
+    import base64
+    import io
+
+    import numpy as np
+    from PIL import Image
+
+    sim = Simulator(seed=0, start=(4.0, 3.0, math.pi - 0.3))  # the charging station on the left
+    sim.step(0.5)
+    async with Client(camera_server(store, sim), client_info=ME) as client:
+        assert "camera_frame" in {t.name for t in (await client.list_tools()).tools}
+        result = await client.call_tool("camera_frame", {})
+    assert not result.is_error and [c.type for c in result.content] == ["image", "text"]
+    image, text = result.content
+    assert image.mime_type == "image/png"
+    with Image.open(io.BytesIO(base64.b64decode(image.data, validate=True))) as img:
+        assert img.format == "PNG"
+        pixels = np.asarray(img.convert("RGB"))
+    assert np.array_equal(pixels, sim.camera_image()[1])  # paused: the frame it published
+    said = text.text
+    assert said.startswith("camera frame from /camera/image_raw, 160 x 120 px, ")
+    assert said.endswith(" s old (robot clock)")
+    age = float(said.split("px, ")[1].split(" s old")[0])
+    assert 0.0 <= age <= 0.2  # 5 Hz
+    with store.db.conn as conn:  # the call is in the audit trail, its text without the image
+        rows = conn.execute("SELECT prompt, answer FROM interactions").fetchall()
+    assert rows == [("camera_frame {}", f"[image/png image]\n{said}")]
+
+
+async def test_camera_frame_without_a_camera_or_a_frame_is_one_line(store):
+    async with Client(camera_server(store, Simulator(seed=0, camera=None)), client_info=ME) as c:
+        none = await c.call_tool("camera_frame", {})
+    server = camera_server(store, Simulator(seed=0), CameraNotYetUp)
+    async with Client(server, client_info=ME) as c:
+        not_yet = await c.call_tool("camera_frame", {})  # nothing published yet
+    assert [(r.is_error, [x.type for x in r.content]) for r in (none, not_yet)] == [
+        (False, ["text"]),
+        (False, ["text"]),
+    ]
+    assert none.content[0].text == "no camera"
+    assert not_yet.content[0].text == "no frame yet on /camera/image_raw"

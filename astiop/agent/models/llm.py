@@ -20,7 +20,9 @@ import httpx
 from astiop.agent.models.reply_stream import Completion, StreamState
 from astiop.bounded import one_line
 
-Messages = list[dict[str, str]]
+# a message's content is its text, or (a question sent an image) OpenAI's content parts:
+# [{"type": "text", "text": ...}, {"type": "image_url", "image_url": {"url": "data:..."}}]
+Messages = list[dict[str, Any]]
 OnToken = Callable[[str], None]
 
 
@@ -319,6 +321,18 @@ class OpenAIClient(ChatClient):
         return [ModelInfo(m.get("id", "?")) for m in data.get("data", [])]
 
 
+def _ollama_message(message: dict[str, Any]) -> dict[str, Any]:
+    """OpenAI's content parts in Ollama's native form: the text, and its images as a list of
+    base64 strings (no data: prefix)."""
+    parts = message.get("content")
+    if not isinstance(parts, list):
+        return message
+    text = "".join(p.get("text", "") for p in parts if p.get("type") == "text")
+    urls = [p["image_url"]["url"] for p in parts if p.get("type") == "image_url"]
+    images = [u.partition(";base64,")[2] or u for u in urls]
+    return {**message, "content": text, **({"images": images} if images else {})}
+
+
 class OllamaClient(ChatClient):
     """Ollama's native /api/chat: its eval counts and durations give exact tokens/s."""
 
@@ -332,7 +346,7 @@ class OllamaClient(ChatClient):
             options["repeat_penalty"] = 1.15
         body: dict[str, Any] = {
             "model": self.model,
-            "messages": messages,
+            "messages": [_ollama_message(m) for m in messages],
             "stream": True,
             "options": options,
         }

@@ -17,6 +17,7 @@ if TYPE_CHECKING:
 OLLAMA_URL = "http://localhost:11434"
 DMR_URL = "http://localhost:12434/engines/v1"
 SPEC_HELP = "rules, embedded, gguf:/path/model.gguf, ollama:NAME[@URL], openai:NAME@URL, dmr:NAME"
+SEEING_KINDS = ("ollama", "openai", "dmr")  # servers that may take images; the embedded one never
 
 
 class SpecError(ValueError):
@@ -91,8 +92,10 @@ class LLMEndpoint:
         threads: int | None = None,
         n_ctx: int = 4096,
         timeout_s: float = 120.0,
+        vision: bool = False,
     ):
         self.spec = spec
+        self.vision = vision  # the operator says this model takes images (`llm.vision`)
         self.threads = threads
         self.n_ctx = n_ctx
         self.timeout_s = timeout_s
@@ -104,6 +107,12 @@ class LLMEndpoint:
     @property
     def is_rules(self) -> bool:
         return self.spec.kind == "rules"
+
+    @property
+    def sees(self) -> bool:
+        """Whether a question about the robot's view is sent the camera's frame: a model marked
+        as taking images, on a server that can be sent them (not SmolLM2, not the rules)."""
+        return self.vision and self.spec.kind in SEEING_KINDS
 
     @property
     def local(self) -> bool:
@@ -157,6 +166,12 @@ class LLMEndpoint:
 
 
 def open_endpoint(
-    text: str, *, threads: int | None = None, n_ctx: int = 4096, timeout_s: float = 120.0
+    text: str,
+    *,
+    threads: int | None = None,
+    n_ctx: int = 4096,
+    timeout_s: float = 120.0,
+    vision: bool = False,
 ) -> LLMEndpoint:
-    return LLMEndpoint(parse_spec(text), threads=threads, n_ctx=n_ctx, timeout_s=timeout_s)
+    spec = parse_spec(text)
+    return LLMEndpoint(spec, threads=threads, n_ctx=n_ctx, timeout_s=timeout_s, vision=vision)
