@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import asyncio
 import base64
+import math
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from typing import Any
@@ -15,6 +16,7 @@ from typing import Any
 from astiop.agent.models.llm import LLMError
 from astiop.agent.models.specs import LLMEndpoint
 from astiop.agent.result import TurnResult
+from astiop.agent.roles import no_return
 from astiop.agent.summaries import summarize
 from astiop.bounded import one_line
 from astiop.robot.camera import CameraFrame, age_of, png_of
@@ -121,16 +123,58 @@ def _frame_read(shot: Snapshot) -> Execution:
     )  # fmt: skip
 
 
+FRONT_DEG = 30.0  # "in front": within this of straight ahead (about a camera's half-width)
+
+
 async def _from_lidar(reads: Any) -> str:
-    """What the lidar reports around the robot: its obstacles, else its scan's nearest return."""
+    """What the lidar reports in front of the robot: its scan's nearest return ahead, and its
+    obstacles ahead (each role the robot has, read once)."""
     profile = reads.gateway.profile
-    role = next((r for r in ("obstacles", "scan") if profile.name(r)), None)
-    if role is None:
+    said = []
+    for role in ("scan", "obstacles"):
+        name = profile.name(role)
+        if not name:
+            continue
+        ex = await asyncio.to_thread(reads.run, f"ros2 topic echo {name} --once")
+        if not ex.executed or ex.error:
+            said.append(f"its {name} could not be read ({one_line(ex.error or ex.reason, 120)})")
+            continue
+        age = "age unknown" if ex.age_s is None else f"{ex.age_s:.1f} s old"
+        ahead = in_front(role, ex.values or {})
+        said.append(f"{name} ({age}): {ahead or summarize(ex).split(chr(10), 1)[-1].strip()}")
+    if not said:
         return "the robot has no lidar reading either, so I cannot say what is in front of it."
-    name = profile.name(role)
-    ex = await asyncio.to_thread(reads.run, f"ros2 topic echo {name} --once")
-    if not ex.executed or ex.error:
-        return f"its {name} could not be read ({one_line(ex.error or ex.reason, 120)})."
-    body = summarize(ex).split("\n", 1)[-1].strip()
-    age = "age unknown" if ex.age_s is None else f"{ex.age_s:.1f} s old"
-    return f"from the lidar ({name}, {age}): {body}."
+    return "from the lidar, " + "; ".join(said) + "."
+
+
+def _ahead(bearing_rad: float) -> float | None:
+    """The bearing in degrees (-180..180], when it is in front; None otherwise."""
+    deg = math.degrees(math.atan2(math.sin(bearing_rad), math.cos(bearing_rad)))
+    return deg if abs(deg) <= FRONT_DEG else None
+
+
+def in_front(role: str, v: dict) -> str | None:
+    """What a scan or an obstacle list says of the sector ahead; None if it is neither."""
+    if role == "scan" and "ranges" in v:
+        hits = [
+            (r, bearing)
+            for i, r in enumerate(v["ranges"])
+            if not no_return(r, v)
+            and (bearing := _ahead(v["angle_min"] + i * v["angle_increment"])) is not None
+        ]
+        if not hits:
+            return f"no return within {FRONT_DEG:.0f} deg of straight ahead"
+        r, bearing = min(hits)
+        return (
+            f"the nearest return within {FRONT_DEG:.0f} deg of straight ahead is {r:.2f} m, "
+            f"at {bearing:+.0f} deg"
+        )
+    if role == "obstacles" and "obstacles" in v:
+        ahead = [o for o in v["obstacles"] if _ahead(o["bearing"]) is not None]
+        elsewhere = len(v["obstacles"]) - len(ahead)
+        rest = f" ({elsewhere} elsewhere)" if elsewhere else ""
+        if not ahead:
+            return f"no obstacle ahead{rest}"
+        items = ", ".join(f"{o['kind']} at {o['distance']:.1f} m" for o in ahead[:5])
+        return f"{len(ahead)} obstacle(s) ahead: {items}{rest}"
+    return None

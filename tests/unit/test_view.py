@@ -8,6 +8,7 @@ from __future__ import annotations
 import base64
 import io
 import math
+import re
 
 import numpy as np
 import pytest
@@ -134,10 +135,15 @@ async def test_a_model_that_cannot_see_says_so_and_answers_from_the_lidar(llm, s
     sim = started(Simulator(seed=0, start=DOCK_LEFT))
     for spec, vision in ((f"openai:scripted@{llm.url}", False), ("rules", True)):
         result = await agent_on(sim, store, spec, vision).turn("what is in front of the robot?")
-        assert result.answer.removeprefix("[rules] ").startswith(
-            "This model cannot see images; from the lidar (/obstacles, "
-        ), result.answer
-        assert [c.command for c in result.commands] == ["ros2 topic echo /obstacles --once"]
+        answer = result.answer.removeprefix("[rules] ")
+        assert answer.startswith("This model cannot see images; from the lidar, /scan ("), answer
+        nearest = float(re.search(r"straight ahead is (\d+\.\d+) m", answer)[1])
+        assert abs(nearest - _nearest_ahead(sim)) < 0.01  # the scan's own, in front
+        assert "; /obstacles (" in answer and "no obstacle ahead" in answer
+        assert [c.command for c in result.commands] == [
+            "ros2 topic echo /scan --once",
+            "ros2 topic echo /obstacles --once",
+        ]
     assert llm.requests == []  # no model was asked, no view made up
 
 
@@ -153,7 +159,7 @@ async def test_a_server_that_refuses_the_image_is_said_and_the_lidar_answers(llm
     sim = started(Simulator(seed=0, start=DOCK_LEFT))
     result = await agent_on(sim, store, f"openai:scripted@{llm.url}", True).turn("what's ahead?")
     assert result.answer.startswith("The model could not look at the camera frame (")
-    assert "HTTP 500" in result.answer and "; from the lidar (/obstacles, " in result.answer
+    assert "HTTP 500" in result.answer and "; from the lidar, /scan (" in result.answer
 
 
 def test_vision_marks_the_configured_model_only_and_never_the_embedded_one():
@@ -162,3 +168,16 @@ def test_vision_marks_the_configured_model_only_and_never_the_embedded_one():
     assert open_endpoint("ollama:gemma3", vision=True).sees
     assert not open_endpoint("embedded", vision=True).sees
     assert not open_endpoint("rules", vision=True).sees
+
+
+def _nearest_ahead(sim) -> float:
+    """The simulator's own scan: its nearest return within 30 deg of straight ahead."""
+    from astiop.sim import messages as sm
+
+    v = sm.laser_scan(sim.snapshot(), sim.lidar_spec)
+    return min(
+        r
+        for i, r in enumerate(v["ranges"])
+        if v["range_min"] <= r <= v["range_max"]
+        and abs(math.degrees(v["angle_min"] + i * v["angle_increment"])) <= 30
+    )
