@@ -258,13 +258,14 @@ class AstiopApp(App):
         cmd = goto_command(name)
         self.run_worker(lambda: self._goto(cmd), thread=True, group="goto", exit_on_error=False)
 
-    def goto_point(self, x: float, y: float) -> None:
-        """Drive to a point of the map (a click): the command the rules plan for a typed "go to
-        x, y" on this robot, then the same path as a named place's."""
+    def goto_point(self, x: float, y: float, theta: float | None = None) -> None:
+        """Drive to a point of the map (a click; a drag gives `theta`): the command the rules
+        plan for a typed "go to x, y" on this robot, then the same path as a named place's."""
         from astiop.agent.intent import Intent
         from astiop.agent.rules import command_for
 
-        cmd = command_for(Intent("navigate", xy=(x, y)), self.services.gateway.profile)
+        goal = Intent("navigate", xy=(x, y), theta=theta)
+        cmd = command_for(goal, self.services.gateway.profile)
         if cmd is None:
             self.notify("this robot has no way to take a goal", severity="error")
             return

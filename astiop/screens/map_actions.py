@@ -46,15 +46,16 @@ class PointMenuModal(ModalScreen[str | None]):
 
     BINDINGS = [Binding("escape", "dismiss(None)", "Cancel")]
 
-    def __init__(self, robot: str, x: float, y: float):
+    def __init__(self, robot: str, x: float, y: float, theta: float | None = None):
         super().__init__()
-        self.robot, self.x, self.y = robot, x, y
+        self.robot, self.x, self.y, self.theta = robot, x, y, theta
 
     def compose(self) -> ComposeResult:
+        facing = "" if self.theta is None else f", facing {math.degrees(self.theta):.0f}°"
         with Vertical(id="modal-box"):
-            yield Label(f"The point ({self.x:.2f}, {self.y:.2f}) m", classes="panel-title")
+            yield Label(f"The point ({self.x:.2f}, {self.y:.2f}) m{facing}", classes="panel-title")
             yield OptionList(
-                Option(f"Send {self.robot} here ({self.x:.2f}, {self.y:.2f})", id="send"),
+                Option(f"Send {self.robot} here ({self.x:.2f}, {self.y:.2f}){facing}", id="send"),
                 Option("Save this point as…", id="save"),
                 id="point-menu",
             )
@@ -102,16 +103,18 @@ class MapActions:
                        severity="error", markup=False)  # fmt: skip
             return
 
+        theta = None if msg.theta is None else round(msg.theta, 4)
+
         def chosen(what: str | None) -> None:
             if what == "send":
-                app.goto_point(x, y)
+                app.goto_point(x, y, theta)
             elif what == "save":
-                self.save_point(x, y)
+                self.save_point(x, y, theta or 0.0)
 
-        app.push_screen(PointMenuModal(app.current_robot, x, y), chosen)
+        app.push_screen(PointMenuModal(app.current_robot, x, y, theta), chosen)
 
-    def save_point(self, x: float, y: float) -> None:
-        """Asked a name, stored as `astiop locations add NAME X Y` stores it (facing 0°)."""
+    def save_point(self, x: float, y: float, theta: float = 0.0) -> None:
+        """Asked a name, stored as `astiop locations add NAME X Y THETA` stores it."""
         app = self.app
         fields = [
             ("name", "name (letters, digits, _ or -)", ""),
@@ -123,7 +126,7 @@ class MapActions:
                 return
             store = services_of(app).store
             try:
-                loc = store.add_location(values["name"].strip(), x, y, 0.0, values["description"])
+                loc = store.add_location(values["name"].strip(), x, y, theta, values["description"])
             except (LocationError, StoreError) as exc:
                 app.notify(str(exc), severity="error", markup=False)
                 return

@@ -1,5 +1,6 @@
 """The Dashboard's map as an instrument: a click (or enter on the keyboard's cursor) on the floor
-posts `PointPicked`, on another robot of the fleet names it; the wheel, `+`/`-`, shift+arrows
+posts `PointPicked`, a drag from the point the way the robot should face gives it a heading,
+a click on another robot of the fleet names it; the wheel, `+`/`-`, shift+arrows
 and `0` zoom, pan and fit; `z` draws a zone corner by corner (`ZoneDrawn`). The drawing is
 `MapCanvas`'s; where a cell is in metres, `map_viewport`'s.
 """
@@ -40,11 +41,13 @@ class WarehouseMapView(MapCanvas):
 
     @dataclass
     class PointPicked(Message):
-        """A point chosen on the floor (metres), or another robot of the fleet (`robot`)."""
+        """A point chosen on the floor (metres), or another robot of the fleet (`robot`);
+        `theta`: the heading dragged from it (radians, the map's frame), None if only clicked."""
 
         x: float
         y: float
         robot: str | None
+        theta: float | None = None
 
     @dataclass
     class ZoneDrawn(Message):
@@ -53,15 +56,47 @@ class WarehouseMapView(MapCanvas):
     def __init__(self, geometry, **kwargs):
         super().__init__(geometry, **kwargs)
         self.steers = True  # False: no cursor on the arrows (a replay's clock has them)
+        self._pressed: tuple[int, int] | None = None  # the map cell a mouse button went down on
+        self._drag_done = False  # a drag was picked on the button's release: its click is not
 
     # -- pointing, zooming, drawing -------------------------------------------------------
+    def on_mouse_down(self, event: events.MouseDown) -> None:
+        at = event.get_content_offset(self)
+        on_map = at is not None and at.y < self._map_rows()
+        self._pressed = (at.x, at.y) if at is not None and on_map else None
+
+    def on_mouse_up(self, event: events.MouseUp) -> None:
+        """Let go away from where it was pressed: the point pressed, facing the way dragged (the
+        click that follows is not a second pick)."""
+        at = event.get_content_offset(self)
+        pressed, self._pressed = self._pressed, None
+        self._drag_done = False
+        if pressed is None or at is None or self.draft is not None:
+            return
+        if _dragged(pressed, (at.x, at.y)):
+            self._drag_done = True
+            self.cursor = pressed
+            self._say_where()
+            self._choose_heading(pressed, (at.x, at.y))
+
     def on_click(self, event: events.Click) -> None:
         at = event.get_content_offset(self)
+        if self._drag_done:
+            self._drag_done = False
+            return
         if at is None or at.y >= self._map_rows():
             return  # the border or the legend
         self.cursor = (at.x, at.y)
         self._say_where()
         self._choose_cell(at.x, at.y, corner=self.draft is not None)
+
+    def _choose_heading(self, start: tuple[int, int], end: tuple[int, int]) -> None:
+        """The point pressed, facing where the button was let go."""
+        frame = self.frame
+        x0, y0 = frame.cell_centre(*start)
+        x1, y1 = frame.cell_centre(*end)
+        p = pick(frame, *start, [])  # a drag always means the floor, never a robot there
+        self.post_message(self.PointPicked(p.x, p.y, None, math.atan2(y1 - y0, x1 - x0)))
 
     def on_mouse_scroll_up(self, event: events.MouseScrollUp) -> None:
         self._zoom_at(ZOOM_STEP, event)
@@ -192,3 +227,8 @@ class WarehouseMapView(MapCanvas):
         self.border_subtitle = said
 
     # -- the legend -----------------------------------------------------------------------
+
+
+def _dragged(a: tuple[int, int], b: tuple[int, int]) -> bool:
+    """Let go two cells or more from where it was pressed (a cell is half as wide as high)."""
+    return abs(b[0] - a[0]) >= 2 or abs(b[1] - a[1]) >= 1

@@ -104,6 +104,35 @@ async def test_sending_from_the_map_is_the_typed_goal_reviewed_confirmed_and_ref
         assert asked(app) == "" and sim_of(app).goal is before
 
 
+async def test_a_drag_from_the_point_gives_the_goal_its_heading(tmp_path):
+    """Pressed on the floor and let go three rows up: the robot is sent there facing +90°
+    (the map's north), said in the menu and the confirmation, arrived at with that heading."""
+    import math
+
+    app = console(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.pause()
+        view = _view(app)
+        col, row = view.frame.cell_of(*AISLE)
+        await pilot.mouse_down(view, offset=(col + 1, row + 1))
+        await pilot.mouse_up(view, offset=(col + 1, row + 1 - 3))
+        menu = await _menu(pilot, app)
+        assert menu.theta is not None and abs(menu.theta - math.pi / 2) < 1e-3
+        assert abs(menu.x - AISLE[0]) <= 0.5 / view.frame.s + 0.005  # the point pressed
+        assert "facing 90°" in str(menu.query_one("OptionList").get_option_at_index(0).prompt)
+        await pilot.press("enter")
+        await wait_for(pilot, lambda: asked(app) != "")
+        assert "theta: 1.5708" in asked(app)
+        await pilot.press("y")
+        await wait_for(pilot, lambda: sim_of(app).goal is not None)
+        assert abs(sim_of(app).goal.final_pose[2] - math.pi / 2) < 1e-3
+        # a plain click still asks with no heading
+        await _click_at(pilot, view, *AISLE)
+        menu = await _menu(pilot, app)
+        assert menu.theta is None
+        assert "facing" not in str(menu.query_one("OptionList").get_option_at_index(0).prompt)
+
+
 async def test_the_keyboard_alone_saves_a_point_and_draws_a_zone(tmp_path):
     app = console(tmp_path)
     async with app.run_test(size=SIZE) as pilot:
