@@ -13,7 +13,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from astiop.missions.follow import ARRIVED_M
 from astiop.transports.state import RobotState
 
 OPS: dict[str, Callable[[float, float], bool]] = {
