@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from astiop.agent.intent import resolve_place
 from astiop.watches.model import WatchError, validate
 from astiop.watches.words import watch_from_words
 
@@ -13,7 +14,11 @@ from astiop.watches.words import watch_from_words
 def kept(request: str, agent: Any) -> str | None:
     """The answer when the request is a watch (kept or not), else None."""
     try:
-        watch = watch_from_words(request, agent.robot)
+        places = agent.places()  # the store's places of the robot's map
+        watch = watch_from_words(
+            request, agent.robot, places, lambda said: resolve_place(said, list(places)),
+            (agent.robot,) if agent.robot else (),
+        )  # fmt: skip
         if watch is None:
             return None
         validate(watch, agent.gateway.profile)

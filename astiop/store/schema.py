@@ -11,7 +11,7 @@ import yaml
 
 from astiop.resources import data_path
 from astiop.store.records import StoreError
-from astiop.store.schema_watches import _migrate_v13, _migrate_v14
+from astiop.store.schema_watches import _migrate_v13, _migrate_v14, _migrate_v15
 
 SQLITE_HEADER = b"SQLite format 3\x00"
 
@@ -314,6 +314,7 @@ MIGRATIONS = [
     _migrate_v12,
     _migrate_v13,
     _migrate_v14,
+    _migrate_v15,
 ]
 SCHEMA_VERSION = len(MIGRATIONS)
 _OUR_TABLES = {

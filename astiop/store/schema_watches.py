@@ -1,4 +1,4 @@
-"""The watches' and alerts' migrations (13 and 14), apart from schema.py to keep it whole."""
+"""The watches' and alerts' migrations (13 to 15), apart from schema.py to keep it whole."""
 
 from __future__ import annotations
 
@@ -72,5 +72,18 @@ def _migrate_v14(conn: sqlite3.Connection) -> None:
         INSERT INTO watches_v14 SELECT * FROM watches;
         DROP TABLE watches;
         ALTER TABLE watches_v14 RENAME TO watches;
+        """,
+    )
+
+
+def _migrate_v15(conn: sqlite3.Connection) -> None:
+    # A watch on a named place keeps the place and its x, y on the robot's map (the robot's
+    # distance to them is compared with the arrival tolerance); other watches leave them empty.
+    _run(
+        conn,
+        """
+        ALTER TABLE watches ADD COLUMN place TEXT NOT NULL DEFAULT '';
+        ALTER TABLE watches ADD COLUMN x REAL NOT NULL DEFAULT 0;
+        ALTER TABLE watches ADD COLUMN y REAL NOT NULL DEFAULT 0;
         """,
     )

@@ -14,6 +14,7 @@ from astiop.store.connection import Connection, row_id
 SETTLE_S = 5.0
 WATCH_COLUMNS = (
     "robot", "role", "field", "op", "threshold", "unit", "duration_s", "repeat", "reaction", "said",
+    "place", "x", "y",
 )  # fmt: skip
 
 

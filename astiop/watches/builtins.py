@@ -16,7 +16,7 @@ from dataclasses import dataclass, replace
 from typing import Protocol
 
 from astiop.transports.state import RobotEvent, RobotState
-from astiop.watches.model import FIELDS, OPS, Watch
+from astiop.watches.model import FIELDS, OPS, Sample, Watch
 
 KINDS = (
     "battery_low", "fault", "contact_lost", "contact_regained", "estop", "goal_aborted",
@@ -162,7 +162,7 @@ class BuiltinAlerts:
         self._missions()
         if state.lost_s is not None:
             return  # nothing else it last said holds
-        battery = FIELDS["battery"].read(state)
+        battery = FIELDS["battery"].read(Sample(state), self.battery_low)
         if battery is not None and self.threshold is not None:
             low = self.threshold()
             if low != self.battery_low.threshold:

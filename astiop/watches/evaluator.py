@@ -12,9 +12,9 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 
 from astiop.transports.state import RobotEvent, RobotState
-from astiop.watches.builtins import KINDS, BuiltinAlerts, Edge
+from astiop.watches.builtins import KINDS, BuiltinAlerts, Edge, Progress
 from astiop.watches.builtins import compare as _compare
-from astiop.watches.model import Watch
+from astiop.watches.model import Sample, Watch
 
 RELOAD_S = 1.0  # the store's watches are read again this often (added, removed, disarmed)
 BUILTIN_KINDS = KINDS
@@ -42,6 +42,7 @@ class Evaluator:
         self._fired: list[dict] = []
         self.watches: list[Watch] = []
         self._edges: dict[str, Edge] = {}
+        self._progress = Progress()  # the no-progress watches' count, as the built-in's
         self._loaded_at = -math.inf
 
     def _name(self, what: str) -> str:
@@ -71,13 +72,18 @@ class Evaluator:
         self._fired = fired
         if self.builtins:
             self.builtin.step(state, ages, now, events)
+        stalled = None
+        if any(w.field == "no_progress" for w in self.watches):
+            stalled = self._progress.stalled_s(state, now)
+        # no goal is stalled while the E-STOP holds (the built-in alert's rule too)
+        sample = Sample(state, None if state.e_stopped or state.lost_s is not None else stalled)
         for watch in list(self.watches):
-            self._watch(watch, state, ages, now, fired)
+            self._watch(watch, sample, ages, now, fired)
         return fired
 
     # -- the operator's watches ------------------------------------------------------------
-    def _watch(self, watch: Watch, state: RobotState, ages, now: float, fired: list) -> None:
-        value = watch.spec.read(state)
+    def _watch(self, watch: Watch, sample: Sample, ages, now: float, fired: list) -> None:
+        value = watch.spec.read(sample, watch)
         if value is None:
             return
         holds, clear = _compare(watch, value)

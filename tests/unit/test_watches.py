@@ -97,7 +97,6 @@ def test_the_operators_words_become_a_typed_watch_or_a_one_line_reason():
         "what is the battery level?",
         "tell me the battery",
         "go to shipping",
-        "let me know when astibot_2 reaches shipping",
     ):
         assert watch_from_words(not_a_watch) is None, not_a_watch
     with pytest.raises(WatchError, match="in %, not 'm'"):
@@ -160,8 +159,6 @@ NOT_WATCHES = (
     "tell me the battery",
     "Can you tell me if it's charging?",
     "Visit zone B and tell me if anything is blocking.",
-    "let me know when astibot_2 reaches shipping",
-    "tell me when the conveyor is loaded",
     "go to shipping",
     "is anything within 0.5 m?",
     "how fast is the robot going?",
@@ -178,3 +175,80 @@ def test_what_is_said_as_a_watch_becomes_that_watch(said):
 @pytest.mark.parametrize("said", NOT_WATCHES)
 def test_requests_that_are_no_watch_are_planned_as_before(said):
     assert watch_from_words(said) is None
+
+
+PLACES = {"shipping": (37.6, 4.0), "charging_dock": (2.5, 3.0)}
+
+
+def test_a_place_watch_is_read_with_the_places_coordinates_and_a_named_robot():
+    w = watch_from_words(
+        "let me know when astibot_2 reaches shipping", "", PLACES, None, ("astibot_2",)
+    )
+    assert (w.field, w.place, w.x, w.y, w.robot, w.op) == (
+        "place",
+        "shipping",
+        37.6,
+        4.0,
+        "astibot_2",
+        "<=",
+    )
+    assert w.sentence() == "astibot_2 is at shipping (within 0.3 m) (once)"
+    assert (
+        watch_from_words("tell me when the robot gets to the dock", "", PLACES).place
+        == "charging_dock"
+    )
+    with pytest.raises(WatchError, match="no place called 'packing'"):
+        watch_from_words("tell me when it arrives at packing", "", PLACES)
+    with pytest.raises(WatchError, match="no robot named 'astibot_9'"):
+        watch_from_words(
+            "let me know when astibot_9 reaches shipping", "", PLACES, None, ("astibot_2",)
+        )
+
+
+def test_no_progress_and_conveyor_watches_and_what_stays_a_question():
+    w = watch_from_words("alert me if the robot has not moved for 30 s during a goal")
+    assert (w.field, w.op, w.threshold, w.duration_s) == ("no_progress", ">=", 30.0, 0.0)
+    assert watch_from_words("warn me if it is stuck for a minute").threshold == 60.0
+    c = watch_from_words("tell me when the conveyor is loaded")
+    assert (c.field, c.op, c.threshold) == ("conveyor", ">=", 1.0)
+    assert watch_from_words("tell me if the conveyor is loaded") is None  # asked, not watched
+    with pytest.raises(WatchError, match="approved when the watch is made"):
+        watch_from_words("tell me when the battery is below 20 %, then send it to the dock")
+
+
+class _NoConveyor:
+    def has(self, role):
+        return role != "conveyor"
+
+
+def test_a_robot_without_a_conveyor_keeps_no_conveyor_watch():
+    with pytest.raises(WatchError, match="this robot reports no conveyor"):
+        validate(Watch("conveyor", ">=", 1.0), _NoConveyor())
+
+
+def test_the_new_kinds_fire_from_the_evaluator_and_round_trip_the_store(store):
+    from astiop.transports.state import Conveyor, Pose2D
+
+    pid = _add(store, Watch("place", "<=", 0.3, place="shipping", x=37.6, y=4.0))
+    cid = _add(store, Watch("conveyor", ">=", 1.0))
+    assert store.watch(pid)["place"] == "shipping" and Watch.from_row(store.watch(pid)).x == 37.6
+    ev = Evaluator(store, builtins=False)
+    far = RobotState(0, pose=Pose2D(30.0, 4.0, 0.0), conveyor=Conveyor(False, 0, False, "off"))
+    assert ev.step(far, now=0) == []
+    near = RobotState(1, pose=Pose2D(37.5, 4.1, 0.0), conveyor=Conveyor(False, 0, True, "on"))
+    fired = ev.step(near, now=1)
+    assert sorted(a["watch_id"] for a in fired) == [pid, cid]
+
+
+def test_a_no_progress_watch_fires_once_the_goal_has_stalled_that_long(store):
+    from astiop.transports.state import Pose2D
+
+    _add(store, Watch("no_progress", ">=", 10.0))
+    ev = Evaluator(store, builtins=False)
+    going = Status("navigating", "auto", "shipping", "", 0.0, False, False)
+
+    def at(t):
+        return RobotState(t, pose=Pose2D(5.0, 5.0, 0.0), status=going)
+
+    assert ev.step(at(0), now=0) == [] and ev.step(at(9), now=9) == []
+    assert [a["kind"] for a in ev.step(at(10.5), now=10.5)] == ["watch"]
