@@ -112,7 +112,14 @@ def add(
         if sentence:
             if field or below is not None or above is not None:
                 fail("say the watch in words or with --field and --below/--above, not both")
-            watch = watch_from_words(sentence, _robot(st))
+            from astiop.agent.intent import resolve_place
+
+            places = {loc.name: (loc.x, loc.y) for loc in st.store.list_locations()}
+            robot = _robot(st)
+            watch = watch_from_words(
+                sentence, robot, places, lambda said: resolve_place(said, list(places)),
+                (robot,) if robot else (),
+            )  # fmt: skip
             if watch is None:
                 fail(
                     f"'{sentence}' is no watch astiop understands: say 'tell me when the battery "
