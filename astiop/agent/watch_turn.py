@@ -25,6 +25,9 @@ def kept(request: str, agent: Any) -> str | None:
     except WatchError as exc:
         return f"Not watched: {exc}; nothing was stored."
     if agent.store is None:
-        return "Not watched: watches are kept in astiop's database, and there is none here."
+        return (  # the watch understood all the same (the bench's turns have no database)
+            "Not watched: watches are kept in astiop's database, and there is none here; "
+            f"it would be: I will tell you when {watch.sentence()}."
+        )
     watch_id = agent.store.add_watch(**watch.row())
     return f"Watch {watch_id}: I will tell you when {watch.sentence()}."

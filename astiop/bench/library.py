@@ -35,6 +35,7 @@ BUILTIN = {
     "astiop-stage2": "stage2.yaml",
     "multistep": "multistep.yaml",  # stage 2: missions, scored by order (`bench.multistep`)
     "questions": "questions.yaml",  # stage 2: questions, right / declined / else (`questions`)
+    "watches": "watches.yaml",  # stage 2: watches, scored as the questions are
 }
 
 

@@ -16,7 +16,7 @@ VERDICTS = ("right", "declined", "other")
 DECLINED = re.compile(
     r"outside the robot|I don't know how|I cannot tell|cannot be computed|reports no\b|"
     r"publishes no\b|names no place|has no parameter|could not (?:list|read)|I did not run|"
-    r"knows no named places|The model could not answer",
+    r"knows no named places|The model could not answer|Not watched:(?![^\n]*it would be)",
     re.I,
 )
 

@@ -183,7 +183,7 @@ class Watch:
             return f"{s.said(self, what)}{held}"
         what = s.words if not self.robot else f"{s.words} of {self.robot}"
         verb = "is within" if self.field == "obstacle_distance" and self.op in "<=" else "is"
-        limit = f"{self.threshold:g} {s.unit}"
+        limit = f"{round(self.threshold, 3):g} {s.unit}"  # 1 km/h: 0.278 m/s
         cond = (
             f"{what} {verb} {limit}"
             if verb == "is within"

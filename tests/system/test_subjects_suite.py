@@ -20,3 +20,23 @@ def test_the_questions_suite_scores_rules_with_nothing_answered_else(tmp_path):
     comps = json.loads(out.stdout)["results"][0]["components"]
     assert comps["questions_other"] == 0, comps
     assert comps["questions_right"] + comps["questions_declined"] == len(suite.cases)
+
+
+def test_the_watches_suite_scores_rules_right_on_every_case(tmp_path):
+    """`astiop bench run --suite watches`: each watch read as said, each one that cannot be
+    kept refused in one line, each request that is no watch answered as the robot reports."""
+    import json
+    import subprocess
+    import sys
+
+    from astiop.bench.library import builtin
+
+    suite = builtin("watches")
+    assert len(suite.cases) >= 20 and sum(c.category == "not_a_watch" for c in suite.cases) >= 5
+    out = subprocess.run(
+        [sys.executable, "-m", "astiop", "--db", str(tmp_path / "b.db"), "bench", "run",
+         "--stage", "2", "--suite", "watches", "-m", "rules", "--json"],
+        capture_output=True, text=True, check=True, timeout=300,
+    )  # fmt: skip
+    comps = json.loads(out.stdout)["results"][0]["components"]
+    assert comps["questions_right"] == len(suite.cases), comps

@@ -252,3 +252,20 @@ def test_a_no_progress_watch_fires_once_the_goal_has_stalled_that_long(store):
 
     assert ev.step(at(0), now=0) == [] and ev.step(at(9), now=9) == []
     assert [a["kind"] for a in ev.step(at(10.5), now=10.5)] == ["watch"]
+
+
+def test_a_watch_answered_to_a_request_that_is_none_is_scored_something_else():
+    """The scorer can fail: "tell me the battery level" answered with a watch is not right,
+    and not an honest decline either."""
+    from astiop.agent.result import TurnResult
+    from astiop.bench import questions
+    from astiop.bench.library import builtin
+
+    case = next(c for c in builtin("watches").cases if c.id == "not02")
+    said = (
+        "Not watched: watches are kept in astiop's database, and there is none here; it would "
+        "be: I will tell you when the battery is below 85.0 % (once)."
+    )
+    assert (
+        questions.verdict(case, TurnResult("rules", "rules", case.request, answer=said)) == "other"
+    )
