@@ -120,6 +120,14 @@ def _robot_named(who: str, robot: str, robots: Sequence[str]) -> str:
     raise WatchError(f"no robot named '{who.strip()}' ({known})")
 
 
+def _names_a_robot(who: str, robots: Sequence[str]) -> bool:
+    try:
+        _robot_named(who, "", robots)
+    except WatchError:
+        return False
+    return True
+
+
 def _subject(rest: str) -> tuple[str, str]:
     """The words before the condition's verb, and the condition (for a robot named first)."""
     m = re.match(r"^(?P<who>[a-z][\w-]*(?:\s+\d+)?)'s\s+(?P<rest>.+)$", rest, re.I)
@@ -161,8 +169,13 @@ def _kinds(
     if m := _PLACE.match(body):
         if m["is"] and asked:
             return None
+        try:
+            place = _place(m["place"], places, resolve)
+        except WatchError:
+            if not _names_a_robot(m["who"], robots):
+                return None  # neither a robot nor a place ("when battery reaches 20"): no watch
+            raise
         who = _robot_named(m["who"], robot, robots)
-        place = _place(m["place"], places, resolve)
         x, y = places[place]
         return Watch("place", "<=", ARRIVED_M, robot=who, place=place, x=x, y=y)
     if m := _STUCK.match(body):

@@ -269,3 +269,17 @@ def test_a_watch_answered_to_a_request_that_is_none_is_scored_something_else():
     assert (
         questions.verdict(case, TurnResult("rules", "rules", case.request, answer=said)) == "other"
     )
+
+
+def test_words_that_name_neither_a_robot_nor_a_place_are_no_place_watch():
+    """ "when battery reaches 20" is not read as a robot called 'battery' going to a place '20':
+    it is no watch (planned as before); a robot word or a known robot still gets its line."""
+    from astiop.watches.model import WatchError
+    from astiop.watches.words import watch_from_words
+
+    places = {"shipping": (37.6, 4.0)}
+    assert watch_from_words("tell me when battery reaches 20", "", places) is None
+    with pytest.raises(WatchError, match="no place called 'packing'"):
+        watch_from_words("tell me when it arrives at packing", "", places)
+    with pytest.raises(WatchError, match="no robot named 'someone'"):
+        watch_from_words("tell me when someone arrives at shipping", "", places)
