@@ -183,7 +183,8 @@ def test_the_estop_cancels_every_nav2_goal_on_a_robot_with_no_stop_service(tmp_p
         assert action.wait_for_server(timeout_sec=15)
         goal = NavigateToPose.Goal()
         goal.pose.header.frame_id = "map"
-        goal.pose.pose.position.x, goal.pose.pose.position.y = 12.0, 4.0
+        # 24 m ahead (~27 s at 4x): a cold `astiop estop` on a loaded machine lands first
+        goal.pose.pose.position.x, goal.pose.pose.position.y = 28.0, 4.0
         goal.pose.pose.orientation.w = 1.0
         handle = client.result(action.send_goal_async(goal))
         assert handle.accepted
