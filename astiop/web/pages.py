@@ -105,6 +105,8 @@ async function ring() {
   } catch (e) { bell.querySelector("summary").textContent = "alerts: ?"; }
 }
 const baseTitle = document.title;
+// opened, the new alerts are seen: cleared on the click itself ("toggle" comes a task later)
+bell.querySelector("summary").addEventListener("click", () => bell.classList.remove("new"));
 bell.addEventListener("toggle", () => bell.classList.remove("new"));
 refresh();
 ring();

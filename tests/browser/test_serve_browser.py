@@ -199,7 +199,7 @@ async def test_the_bell_shows_each_open_alert_within_a_second(tmp_path):
                 assert shown_s < 5, shown_s  # 0.5 s polls: well under 1 s on an idle machine
                 assert "astibot: battery below 20 %" in await page.text_content("#bell ul")
                 await page.click("#bell summary")  # opened: the list, the outline gone
-                assert not await page.query_selector("#bell.new")
+                await page.wait_for_selector("#bell[open]:not(.new)", timeout=5_000)
                 await tab.shot("bell")
                 for alert in store.alerts_where(open_only=True):
                     store.acknowledge_alert(alert["id"], "test")

@@ -111,29 +111,35 @@ async def test_a_new_mission_while_one_runs_asks_whether_to_replace_it(tmp_path)
 
 async def test_the_palette_and_the_dashboard_key_pause_resume_and_cancel_a_mission(tmp_path):
     from textual.command import CommandInput, CommandList
+    from textual.screen import Screen
 
     app = console(tmp_path, settings=NO_ASKING)
     async with app.run_test(size=SIZE) as pilot:
         store = app.services.store
 
+        def titles_of(screen: Screen) -> list[str]:
+            return [c.title for c in app.get_system_commands(screen)]
+
         def titles() -> list[str]:
-            return [c.title for c in app.get_system_commands(app.screen)]
+            return titles_of(app.screen)
 
         def panel() -> str:
             return str(app.screen.query_one("#mission").render())
 
         assert not [t for t in titles() if t.startswith("Mission:")], "no mission, no command"
+        # the palette as an operator uses it: ctrl+p, the command's name, enter
+        dashboard = app.screen
+        await pilot.press("ctrl+p")
+        await wait_for(pilot, lambda: bool(app.screen.query(CommandInput)))
+        # started with the palette open (its search asks for the commands as it is typed): the
+        # first step outlasts the search and the keys on a loaded machine, the pause lands after it
         runner = MissionRunner(app.services.gateway, store)
-        # the first step lasts long enough for the palette to be opened and searched
-        steps = [Step("wait", seconds=4), Step("wait", seconds=60), Step("undock")]
+        steps = [Step("wait", seconds=10), Step("wait", seconds=60), Step("undock")]
         mid = runner.start(steps, "wait, wait, undock")
-        assert [t for t in titles() if t.startswith("Mission:")] == [
+        assert [t for t in titles_of(dashboard) if t.startswith("Mission:")] == [
             "Mission: pause",
             "Mission: cancel",
         ]
-        # the palette as an operator uses it: ctrl+p, the command's name, enter
-        await pilot.press("ctrl+p")
-        await wait_for(pilot, lambda: bool(app.screen.query(CommandInput)))
         app.screen.query_one(CommandInput).value = "Mission: pause"
 
         def hits() -> list[str]:
