@@ -70,6 +70,7 @@ class Agent:
         confirm_mission: mission_turn.ConfirmMission | None = None,
         replace_mission: mission_turn.ReplaceMission = None,
         robot: str = "",
+        confirm_reaction: watch_turn.ConfirmReaction | None = None,
     ):
         self.interpreter = Interpreter(self._ask, interpretation, interpret_tokens)
         _check_mode(endpoint, mode)
@@ -88,9 +89,9 @@ class Agent:
         self._turn_places: dict[str, tuple[float, float]] | None = None
         self.narrow_tools = narrow_tools
         self._schema_ok = True
-        self._missions = missions
-        self.confirm_mission = confirm_mission
+        self._missions, self.confirm_mission = missions, confirm_mission
         self.replace_mission = replace_mission  # a new mission while one runs: ask, or not
+        self.confirm_reaction = confirm_reaction  # a watch's reaction that moves the robot
         self.robot = robot  # its name in a fleet
 
     @property
@@ -106,8 +107,7 @@ class Agent:
 
     def switch(self, endpoint: LLMEndpoint | None = None, mode: str | None = None) -> None:
         """Another model or reply mode for the turns to come (the conversation goes on)."""
-        endpoint = endpoint or self.endpoint
-        mode = mode or self.mode
+        endpoint, mode = endpoint or self.endpoint, mode or self.mode
         _check_mode(endpoint, mode)
         if endpoint is not self.endpoint:
             self.endpoint, self._schema_ok = endpoint, True  # the new server may take a schema

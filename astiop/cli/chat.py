@@ -127,6 +127,11 @@ def chat(
         (lambda _s, _f=False: True) if yes else (ask_mission if interactive() else None)
     )
 
+    def ask_reaction(question: str) -> bool:
+        return typer.confirm(question, err=True)
+
+    confirm_reaction = (lambda _q: True) if yes else (ask_reaction if interactive() else None)
+
     def on_step(report) -> None:
         if not as_json:
             typer.echo(report.line(), err=True)
@@ -151,6 +156,7 @@ def chat(
         missions=runner,
         confirm_mission=confirm_mission,
         replace_mission=replace,
+        confirm_reaction=confirm_reaction,
     )
 
     streamed = []  # whether the answer came as tokens (a model's, the rules'), or whole

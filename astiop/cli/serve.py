@@ -105,7 +105,7 @@ def _start_node(st: CliState, domain: int, said: list[str]) -> subprocess.Popen 
         pass
     if up.is_set() and node.poll() is None:
         return node
-    _end_node(node)
+    _end_process(node)
     drain.join(5)  # its last lines, to say why
     return None
 
@@ -168,7 +168,7 @@ def _drain(node: subprocess.Popen, said: list[str], up: threading.Event) -> None
             up.set()
 
 
-def _end_node(node: subprocess.Popen) -> None:
+def _end_process(node: subprocess.Popen) -> None:
     if node.poll() is None:
         node.terminate()
         try:
@@ -176,6 +176,19 @@ def _end_node(node: subprocess.Popen) -> None:
         except subprocess.TimeoutExpired:
             node.kill()
             node.wait(5)
+
+
+def _start_watcher(base: list[str], env: dict[str, str]) -> subprocess.Popen:
+    """`astiop watch run` on the tabs' robot: its watches and built-in alerts evaluated with no
+    tab open (each tab's console evaluates them too: the database writes each alert once)."""
+    return subprocess.Popen(
+        [*base, "watch", "run", "--json"],
+        env={**os.environ, **env},
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL,  # its alerts are in the database: the bell, F8, astiop alerts
+        start_new_session=True,  # Ctrl-C reaches the server, which ends it
+        preexec_fn=_ends_with_its_parent,
+    )
 
 
 def serve(
@@ -208,6 +221,12 @@ def serve(
         True,
         "--warm/--no-warm",
         help="Keep one console process started ahead (its imports done, idle) for the next tab.",
+    ),
+    watch: bool = typer.Option(
+        True,
+        "--watch/--no-watch",
+        help="Evaluate the robot's watches and built-in alerts with no tab open (an `astiop "
+        "watch run` of its own; not where each tab simulates its own robot).",
     ),
     metrics: str | None = metrics_option.ADDRESS,
     metrics_token_file: Path | None = metrics_option.TOKEN_FILE,
@@ -281,6 +300,9 @@ def serve(
 
     import asyncio
 
+    watcher = None
+    if watch and (shared is not None or st.settings.robot.backend != "sim"):
+        watcher = _start_watcher(base, env)
     try:
         asyncio.run(serve_until_stopped(config, ready))
     except OSError as exc:
@@ -291,5 +313,7 @@ def serve(
         for button in buttons:
             if button is not None:
                 button.close()
+        if watcher is not None:
+            _end_process(watcher)
         if node is not None:
-            _end_node(node)
+            _end_process(node)

@@ -102,19 +102,27 @@ def add(
     as_json: bool = typer.Option(False, "--json"),
 ) -> None:
     """Add a watch: `add tell me when the battery is below 20 %`, or `add --field battery
-    --below 20 [--for 5] [--every]`."""
+    --below 20 [--for 5] [--every]`. A reaction that moves the robot (`..., then send it to the
+    dock`, or `--then dock`) is asked for approval, then armed."""
+    from astiop.agent.watch_turn import reaction_steps
+    from astiop.missions.steps import Step
     from astiop.watches.model import Watch, WatchError, validate
-    from astiop.watches.words import watch_from_words
+    from astiop.watches.words import split_reaction, watch_from_words
 
     st = state(ctx)
-    sentence = " ".join(words or []).strip()
+    sentence, reaction = split_reaction(" ".join(words or []).strip())
+    if reaction and then:
+        fail("say the reaction in words or with --then, not both")
+    places = {loc.name: (loc.x, loc.y) for loc in st.store.list_locations()}
     try:
+        steps = [Step(t) if t in ("dock", "undock") else Step("goto", place=t) for t in then or []]
+        if reaction:
+            steps = reaction_steps(reaction, places)
         if sentence:
             if field or below is not None or above is not None:
                 fail("say the watch in words or with --field and --below/--above, not both")
             from astiop.agent.intent import resolve_place
 
-            places = {loc.name: (loc.x, loc.y) for loc in st.store.list_locations()}
             robot = _robot(st)
             watch = watch_from_words(
                 sentence, robot, places, lambda said: resolve_place(said, list(places)),
@@ -131,8 +139,8 @@ def add(
             op, threshold = ("<", below) if below is not None else (">", above)
             assert threshold is not None  # one of the two, checked above
             watch = Watch(field, op, threshold, hold_s, "every" if every else "once", _robot(st))
-        if then:
-            watch = _armed(st, watch, then, yes)
+        if steps:
+            watch = _armed(st, watch, steps, yes)
         validate(watch, _profile(st))
     except WatchError as exc:
         fail(f"{exc}; nothing was stored")
@@ -143,17 +151,16 @@ def add(
         typer.echo(f"watch {watch_id}: I will tell you when {watch.sentence()}")
 
 
-def _armed(st: CliState, watch, then: list[str], yes: bool):
+def _armed(st: CliState, watch, steps: list, yes: bool):
     """The watch with mission steps as its reaction, approved here by the operator (once)."""
     import getpass
     import socket
     from dataclasses import replace
 
-    from astiop.missions.steps import Step, describe
+    from astiop.missions.steps import describe
     from astiop.watches.model import WatchError
     from astiop.watches.reactions import ReactionError, mission_reaction
 
-    steps = [Step(t) if t in ("dock", "undock") else Step("goto", place=t) for t in then]
     unknown = [s.place for s in steps if s.place and st.store.get_location(s.place) is None]
     if unknown:
         raise WatchError(f"no place called '{unknown[0]}' (astiop locations list)")

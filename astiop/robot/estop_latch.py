@@ -83,6 +83,8 @@ class EstopLatch:
         graph = self.station_latch
         if graph is not None and graph.engaged:
             return True
+        if graph is None and self.store is None:
+            return self._seen  # this process alone: its own press holds until it releases it
         try:
             return self._store_latch() is not None
         except Exception as exc:  # noqa: BLE001 - a damaged or vanished file: memory decides

@@ -144,6 +144,7 @@ class ChatScreen(ConsoleScreen):
             confirm=partial(self.app.safety.confirm_from_thread, robot=robot),
             confirm_mission=self.app.safety.confirm_mission_from_thread,
             replace_mission=self.app.safety.replace_mission_from_thread,
+            confirm_reaction=self.app.safety.confirm_reaction_from_thread,
             session="console",
             robot=robot,
         )

@@ -126,6 +126,13 @@ class SafetyKeys:
             f"Start this mission of {len(steps)} steps? It moves the robot.\n\n{listed}", None
         )
 
+    def confirm_reaction_from_thread(self, question: str) -> bool:
+        """A watch's reaction that moves the robot is armed once approved, its steps shown (as
+        a mission is, unless the operator turned confirmation off)."""
+        if not self.services.settings.robot.confirm_actuation:
+            return True
+        return self._ask_from_thread(question, None)
+
     def replace_mission_from_thread(self, running: str, steps, forever: bool = False) -> bool:
         """A new mission while one runs: asked always (confirmation off too), every step of the
         new one shown; yes ends the running one as replaced, then starts the new one."""

@@ -28,6 +28,16 @@ _BATTERY = re.compile(
     rf"(?P<dir>{_BELOW}|{_ABOVE})\s+{_NUM}",
     re.I,
 )
+# "when the battery reaches 20 %": which way it is to go is said ("drops to", "charges up to"),
+# else read from where the battery is now
+_REACH = re.compile(
+    r"\b(?:the\s+)?(?:robot'?s\s+)?battery(?:\s+(?:level|charge))?\s+(?:(?P<down>"
+    r"(?:drops|falls|goes\s+down|gets\s+down|runs\s+down|is\s+down)\s+to)|(?P<up>"
+    r"(?:charges|is\s+charged|climbs|rises|goes\s+up|gets\s+up|is\s+back\s+up|comes\s+back"
+    r"(?:\s+up)?)\s+to|is\s+(?:fully\s+)?charged\s+to)|(?:reaches|hits|gets\s+to|is\s+at))"
+    rf"\s+{_NUM}",
+    re.I,
+)
 _SPEED = re.compile(
     rf"\b(?:the\s+)?(?:robot'?s\s+)?speed\s+{_VERB}(?P<dir>{_BELOW}|{_ABOVE})\s+{_NUM}"
     rf"|\b(?:the\s+robot|it)\s+(?:moves|goes|drives|is\s+going|is\s+moving)\s+"
@@ -66,11 +76,11 @@ _CONVEYOR = re.compile(
     r"|^(?:the\s+robot|it)\s+(?:is|gets|has\s+been)\s+(?P<how2>loaded|unloaded)$",
     re.I,
 )
-# "..., then send it to the dock": a reaction that moves the robot is approved when the watch is
-# made (`astiop watch add ... --then`), never taken from the Chat's words alone
+# "..., then send it to the dock": the words of a reaction that moves the robot, after the
+# condition's; approved by the operator when the watch is made (`split_reaction`)
 _THEN = re.compile(
-    r"[,;]?\s*(?:and\s+)?then\s+(?:send|drive|move|take|bring|go|return|dock|undock|park|head)\b"
-    r"|[,;]\s*(?:and\s+)?(?:send|drive|move|take|bring|return)\s+(?:it|the\s+robot)\b",
+    r"\s*[,;]?\s*(?:and\s+)?then\s+(?=[a-z])"
+    r"|\s*[,;]\s*(?:and\s+)?(?=(?:send|drive|move|take|bring|return)\s+(?:it|the\s+robot)\b)",
     re.I,
 )
 _ROBOT_WORDS = {"the robot", "the astibot", "it"}
@@ -191,15 +201,41 @@ def _kinds(
     return None
 
 
+def _reach_op(m: re.Match[str], value: float, now: float | None) -> str:
+    """ "drops to 20 %": at most; "charges to 80 %": at least; "reaches 20 %": toward it from
+    where the battery is now (`now`, %), or WatchError when that is not known."""
+    if m["down"] or m["up"]:
+        return "<=" if m["down"] else ">="
+    if now is None or round(now, 1) == value:
+        why = "no reading of it here" if now is None else f"it is at {now:.1f} % now"
+        raise WatchError(
+            f"whether the battery is to fall or rise to {value:g} % is not known ({why}): "
+            f"say 'below {value:g} %' or 'above {value:g} %'"
+        )
+    return "<=" if now > value else ">="
+
+
+def split_reaction(request: str) -> tuple[str, str]:
+    """The watch's words and its reaction's: "tell me when the battery is below 20 %, then send
+    it to the dock" -> ("tell me when the battery is below 20 %", "send it to the dock");
+    ("...", "") when the request names no reaction."""
+    m = _THEN.search(request)
+    if m is None or _ASK.match(request) is None:
+        return request, ""
+    return request[: m.start()], request[m.end() :].strip(" .!?")
+
+
 def watch_from_words(
     request: str,
     robot: str = "",
     places: Mapping[str, tuple[float, float]] | None = None,
     resolve: Callable[[str], str | None] | None = None,
     robots: Sequence[str] = (),
+    battery_now: float | None = None,
 ) -> Watch | None:
     """`robot`: the robot asked; `places`: the named places of its map (x, y); `resolve`: how a
-    place's spoken name is read; `robots`: the robots a request may name."""
+    place's spoken name is read; `robots`: the robots a request may name; `battery_now`: its
+    battery (%) as last read, the way "reaches 20 %" goes."""
     ask = _ASK.match(request)
     if ask is None:
         return None
@@ -208,7 +244,7 @@ def watch_from_words(
         re.search(r"\b(?:every|each)\s+time\b", rest, re.I)
     )
     rest = re.sub(r"\s*,?\s*(?:every|each)\s+time$", "", rest, flags=re.I)
-    if _THEN.search(rest):
+    if _THEN.search(rest):  # the caller splits it off first (`split_reaction`)
         raise WatchError(
             "a reaction that moves the robot is approved when the watch is made: "
             "astiop watch add '...' --then dock (or a place)"
@@ -234,6 +270,9 @@ def watch_from_words(
         num, unit = (m["num"], m["unit"]) if m["dir"] else (m["num2"], m["unit2"])
         below = word.lower().startswith("slower") or re.match(_BELOW, word, re.I) is not None
         found = ("speed", "<" if below else ">", _value("speed", num, unit))
+    elif m := _REACH.search(rest):
+        value = _value("battery", m["num"], m["unit"])
+        found = ("battery", _reach_op(m, value, battery_now), value)
     if found is None:
         return None
     field, op, threshold = found

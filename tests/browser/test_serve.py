@@ -16,6 +16,7 @@ import aiohttp
 import pytest
 
 from astiop.store import Store
+from astiop.watches.model import Watch
 from astiop.web.access import (
     FREE_TRIES,
     Access,
@@ -390,11 +391,26 @@ def pose_x(terminal: Terminal) -> float | None:
 @pytest.mark.slow
 @pytest.mark.ros
 async def test_every_tab_sees_one_shared_simulated_robot_and_its_estop(tmp_path):
+    """...and its watches are evaluated with no tab open (the server's `astiop watch run`)."""
     require_ros()
     port = free_port()
+    store = Store(tmp_path / "a.db")
+    try:  # the simulated battery is at 85 %
+        store.add_watch(**Watch("battery", "<", 90.0).row())
+    finally:
+        store.close()
     server = start_serve(tmp_path / "a.db", port, "--no-warm", sim="shared")
     url = f"http://127.0.0.1:{port}"
     try:
+        store = Store(tmp_path / "a.db")
+        try:
+            deadline = time.monotonic() + 60
+            while not store.list_alerts() and time.monotonic() < deadline:
+                time.sleep(0.2)
+            (alert,) = store.list_alerts()
+        finally:
+            store.close()
+        assert alert["watch_id"] == 1 and alert["reading"].startswith("85."), alert
         async with aiohttp.ClientSession() as http:
             async with http.get(url + "/") as page:
                 text = await page.text()
@@ -443,6 +459,7 @@ async def test_every_tab_sees_one_shared_simulated_robot_and_its_estop(tmp_path)
                 with contextlib.suppress(OSError):  # a process may end meanwhile
                     names.append(Path(f"/proc/{pid}/cmdline").read_bytes())
             assert any(b"sim\0node" in n for n in names), "the simulator runs under the server"
+            assert any(b"watch\0run" in n for n in names), "and its watches' runner"
             await first.close()
             await second.close()
     finally:

@@ -17,3 +17,51 @@ async def test_a_watch_said_in_the_chat_notifies_the_console_when_it_fires(tmp_p
         assert alerted() == ["the battery is below 90 %: 85.00 %"]
         (alert,) = app.services.store.list_alerts()
         assert alert["watch_id"] == 1 and alert["reading"] == "85.00 %"
+
+
+async def test_a_reaction_said_in_the_chat_is_asked_armed_and_run_once(tmp_path):
+    """ "..., then undock": the operator is asked with the condition and every step; no, and
+    nothing is stored; yes, and the watch is armed; it fires and starts its mission once."""
+    from textual.widgets import Input
+
+    from tests.tui_helpers import sim_of
+
+    app = console(tmp_path)  # asks before moving the robot; the battery at 85 %, docked
+    async with app.run_test(size=(120, 40)) as pilot:
+        store = app.services.store
+
+        async def say(request: str, answer: str) -> str:
+            await pilot.press("f2")
+            await pilot.pause()
+            app.screen.query_one(Input).value = request
+            await pilot.press("enter")
+            await wait_for(pilot, lambda: type(app.screen).__name__ == "ConfirmModal")
+            question = str(app.screen.query_one("Static").render())
+            await pilot.press(answer)
+            await app.workers.wait_for_complete()
+            await pilot.pause()
+            return question
+
+        request = "tell me when the battery is below 90 %, then undock"
+        question = await say(request, "n")
+        assert question == (
+            "When the battery is below 90 %, the robot will: 1. undock (once). Arm it?"
+        )
+        said = " ".join(str(w.render()) for w in app.screen.query(".answer"))
+        assert "Not watched: the reaction was not approved; nothing was stored." in said
+        assert store.list_watches() == [] and sim_of(app).docked()
+        await say(request, "y")
+        said = " ".join(str(w.render()) for w in app.screen.query(".answer"))
+        assert (
+            "Watch 1: I will tell you when the battery is below 90 % (once), then 1. undock."
+            in said
+        )
+        assert " Armed, approved by " in said and "(the console's Chat)" in said
+        await wait_for(pilot, lambda: len(store.missions()) == 1, what="the reaction's mission")
+        (mission,) = store.missions()
+        assert mission["source"] == "watch" and mission["request"].startswith("watch 1: ")
+        await wait_for(pilot, lambda: not sim_of(app).docked(), what="the robot undocked")
+        (alert,) = store.list_alerts()
+        assert alert["watch_id"] == 1 and store.watch(1)["armed"] == 0
+        await pilot.pause(1.5)  # the watch reloaded: once, not again
+        assert len(store.missions()) == 1 and len(store.list_alerts()) == 1

@@ -47,7 +47,7 @@ def test_a_moving_reaction_is_refused_while_the_estop_holds_and_fires_no_more(st
     assert store.watch(wid)["armed"] == 0  # once: armed again only by hand
     watching.evaluator.reload()
     assert watching.step(gateway.state()) == []
-    assert gateway.backend.sim.docked  # the robot did not move
+    assert gateway.backend.sim.docked()  # the robot did not move
 
 
 def test_a_moving_reaction_starts_its_mission_once(store):
@@ -98,3 +98,16 @@ def test_watch_add_then_asks_for_approval_and_keeps_the_steps(tmp_path):
     finally:
         store.close()
     assert reaction["approved_by"].endswith("(astiop watch add)")
+
+
+def test_watch_add_reads_a_reaction_said_in_words(tmp_path):
+    db = str(tmp_path / "w.db")
+    said = "tell me when the robot reaches shipping, then send it to the dock"
+    kept = run_cli("--db", db, "watch", "add", said, input="y\n")
+    assert kept.returncode == 0, kept.stderr
+    assert "the robot will: 1. dock (once). Arm it?" in kept.stderr
+    assert kept.stdout.strip().endswith("(once), then 1. dock")
+    both = run_cli("--db", db, "watch", "add", said, "--then", "dock", "--yes")
+    assert both.returncode != 0 and "in words or with --then, not both" in both.stderr
+    idle = run_cli("--db", db, "watch", "add", said.replace("send it to the dock", "wave"))
+    assert idle.returncode != 0 and "not 'wave'; nothing was stored" in idle.stderr

@@ -65,6 +65,16 @@ def test_a_press_stops_the_robot_and_holds_every_process_on_the_database(tmp_pat
     assert SAID[id(mine)] == [] and SAID[id(theirs)] == []
 
 
+def test_a_press_with_no_database_nor_graph_holds_until_this_process_releases_it():
+    """A gateway with no store (the bench, the E-STOP button's): looking at the latch, as every
+    state read does, never lets the robot go (it did: no store read as 'released')."""
+    latch = EstopLatch(SimBackend(Simulator(seed=0), None), None, who="t", say_store_error=print)
+    assert latch.estop() == [] and latch.e_stopped
+    assert latch.follow_latch() and latch.e_stopped and latch.backend.e_stopped
+    assert latch.held_by_estop(validate(BACK_UP, latch.backend.catalog))
+    assert latch.release_estop() == [] and not latch.follow_latch() and not latch.e_stopped
+
+
 def test_a_restart_keeps_the_estop_until_it_is_released(tmp_path):
     store = Store(tmp_path / "a.db")
     store.latch_estop("yesterday's console")

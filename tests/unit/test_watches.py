@@ -216,6 +216,31 @@ def test_no_progress_and_conveyor_watches_and_what_stays_a_question():
         watch_from_words("tell me when the battery is below 20 %, then send it to the dock")
 
 
+def test_a_reaction_is_split_from_its_watch_and_read_as_mission_steps():
+    from astiop.agent.watch_turn import reaction_steps
+    from astiop.missions.steps import Step
+    from astiop.watches.words import split_reaction
+
+    said = "tell me when the battery is below 20 %, then send it to the dock."
+    assert split_reaction(said) == ("tell me when the battery is below 20 %", "send it to the dock")
+    assert split_reaction("alert me if it is stuck for a minute, send it to shipping") == (
+        "alert me if it is stuck for a minute", "send it to shipping",
+    )  # fmt: skip
+    assert split_reaction("go to shipping and then dock") == ("go to shipping and then dock", "")
+    assert split_reaction("tell me when the battery is below 20 %") == (
+        "tell me when the battery is below 20 %", "",
+    )  # fmt: skip
+    places = dict(PLACES)
+    assert reaction_steps("send it to shipping and then dock", places) == [
+        Step("goto", place="shipping"), Step("dock"),
+    ]  # fmt: skip
+    assert reaction_steps("undock", places) == [Step("undock")]
+    with pytest.raises(WatchError, match="not 'read the battery'"):
+        reaction_steps("read the battery", places)
+    with pytest.raises(WatchError, match="no place named in 'go to atlantis'"):
+        reaction_steps("go to atlantis", places)
+
+
 class _NoConveyor:
     def has(self, role):
         return role != "conveyor"
@@ -273,13 +298,32 @@ def test_a_watch_answered_to_a_request_that_is_none_is_scored_something_else():
 
 def test_words_that_name_neither_a_robot_nor_a_place_are_no_place_watch():
     """ "when battery reaches 20" is not read as a robot called 'battery' going to a place '20':
-    it is no watch (planned as before); a robot word or a known robot still gets its line."""
+    it is the battery's watch; a robot word or a known robot still gets its line."""
     from astiop.watches.model import WatchError
     from astiop.watches.words import watch_from_words
 
     places = {"shipping": (37.6, 4.0)}
-    assert watch_from_words("tell me when battery reaches 20", "", places) is None
+    reached = watch_from_words("tell me when battery reaches 20", "", places, battery_now=85.0)
+    assert reached is not None and reached.condition() == "the battery is at most 20 %"
+    assert watch_from_words("tell me when the pallet reaches 20", "", places) is None
     with pytest.raises(WatchError, match="no place called 'packing'"):
         watch_from_words("tell me when it arrives at packing", "", places)
     with pytest.raises(WatchError, match="no robot named 'someone'"):
         watch_from_words("tell me when someone arrives at shipping", "", places)
+
+
+def test_the_battery_reaching_a_level_goes_the_way_said_or_from_where_it_is_now():
+    def sentence(said: str, now: float | None = None) -> str:
+        found = watch_from_words(said, battery_now=now)
+        assert found is not None, said
+        return found.condition()
+
+    assert sentence("tell me when the battery reaches 20 %", 85.0) == "the battery is at most 20 %"
+    assert sentence("tell me when the battery reaches 90 %", 85.0) == "the battery is at least 90 %"
+    assert sentence("let me know when the battery drops to 30%") == "the battery is at most 30 %"
+    assert sentence("tell me when the battery is charged to 95 %") == "the battery is at least 95 %"
+    assert sentence("tell me when battery hits 50", 85.0) == "the battery is at most 50 %"
+    with pytest.raises(WatchError, match="no reading of it here\\): say 'below 20 %' or"):
+        watch_from_words("tell me when the battery reaches 20 %")
+    with pytest.raises(WatchError, match="it is at 85.0 % now"):
+        watch_from_words("tell me when the battery gets to 85 %", battery_now=85.0)
