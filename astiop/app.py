@@ -49,6 +49,7 @@ class AstiopApp(App):
     TITLE = "astiop"
     CSS_PATH = "app.tcss"
     MODES = {s.mode: s.screen for s in SCREENS}
+    camera_pixels: str | None = None  # the camera as sixel or tgp pixels; None: half-block cells
     BINDINGS = [
         Binding("ctrl+e", "estop", "E-STOP", priority=True),
         *(Binding(s.key, f"switch_mode('{s.mode}')", s.title) for s in SCREENS),

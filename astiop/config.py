@@ -160,6 +160,12 @@ class ServeSettings(_Section):
         return value
 
 
+class ConsoleSettings(_Section):
+    # the camera as real pixels where the terminal draws images (Sixel, kitty's protocol),
+    # asked of the terminal as the console starts; "cells": half-block cells everywhere
+    camera: Literal["auto", "cells"] = "auto"
+
+
 class Settings(BaseSettings):
     """`Settings()` reads them as astiop does: flags > ASTIOP_* environment > the TOML file."""
 
@@ -177,6 +183,7 @@ class Settings(BaseSettings):
     fleet: FleetSettings = Field(default_factory=FleetSettings)
     serve: ServeSettings = Field(default_factory=ServeSettings)
     watches: WatchSettings = Field(default_factory=WatchSettings)
+    console: ConsoleSettings = Field(default_factory=ConsoleSettings)
 
     @classmethod
     def settings_customise_sources(

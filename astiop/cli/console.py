@@ -79,6 +79,10 @@ def run_console(st: CliState, record: str | None = None) -> None:
     # what start-up made lives as long as the process: kept out of the collector's full scans,
     # which a planner's allocations trigger (in-process simulator: 0.97 → 0.69 ms a plan)
     gc.freeze()
+    from astiop.widgets import camera_pixels
+
+    # asked of the terminal before Textual reads it
+    app.camera_pixels = camera_pixels.detect(settings.console.camera)
     app.run()
 
 

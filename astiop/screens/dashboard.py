@@ -128,7 +128,9 @@ class DashboardScreen(ConsoleScreen):
                 yield MissionPanel(id="mission", classes="panel")
                 yield Static(id="robot", classes="panel")
                 yield BatteryGauge(id="battery", classes="panel")
-                yield CameraView(self._camera, self._robot_clock, id="camera")
+                yield CameraView(
+                    self._camera, self._robot_clock, pixels=self.app.camera_pixels, id="camera"
+                )
                 yield Static(id="agent", classes="panel")
                 yield LiveTable(id="topics", cursor_type="none")
                 yield Static(id="services", classes="panel")

@@ -1,10 +1,12 @@
 """The current robot's camera: its latest frame as half-block cells (▀, the upper pixel the
 foreground, the lower the background: two pixels a cell, in any terminal and in the browser),
-with its topic, size, encoding and age as every reading's age is shown."""
+or as real pixels where the terminal draws images (`camera_pixels`), with its topic, size,
+encoding and age as every reading's age is shown."""
 
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable
 
 import numpy as np
@@ -12,6 +14,7 @@ from rich.color import Color
 from rich.segment import Segment
 from rich.style import Style
 from textual import work
+from textual.app import ComposeResult
 from textual.geometry import Region
 from textual.strip import Strip
 from textual.widget import Widget
@@ -19,6 +22,7 @@ from textual.widget import Widget
 from astiop.robot.camera import CameraFrame, CameraReading
 
 HALF = "▀"
+PIXEL_PERIOD_S = {"sixel": 1.0, "tgp": 0.2}  # the fastest a pixel picture is drawn again
 CAPTION = Style(bold=True)
 DIM = Style(dim=True)
 
@@ -92,6 +96,7 @@ class CameraView(Widget):
     DEFAULT_CSS = """
     CameraView { height: 13; border: round $primary-darken-2; padding: 0 1; }
     CameraView.-absent { height: 3; }
+    CameraView #camera-pixels { margin-top: 1; width: auto; height: 1fr; }
     """
 
     def __init__(
@@ -99,15 +104,29 @@ class CameraView(Widget):
         read: Callable[[], CameraReading],
         clock: Callable[[], float | None],
         hz: float = 5.0,
+        pixels: str | None = None,
         **kw,
     ):
+        """`pixels`: 'sixel' or 'tgp' where the terminal draws images (`camera_pixels.detect`),
+        None for half-block cells."""
         super().__init__(**kw)
         self._read, self._clock, self._hz = read, clock, hz
+        self._pixels_kind = pixels
+        self._pixels: Widget | None = None
+        self._pixels_digest: tuple | None = None
+        self._pixels_at = -math.inf
         self.reading = CameraReading(None, "reading…")
         self._strips: list[Strip] = []
         self._drawn_for: tuple | None = None
         self._reading = False
         self._digest: tuple | None = None
+
+    def compose(self) -> ComposeResult:
+        if self._pixels_kind is not None:
+            from astiop.widgets.camera_pixels import pixel_widget
+
+            self._pixels = pixel_widget(self._pixels_kind)
+            yield self._pixels
 
     def on_mount(self) -> None:
         self.set_interval(1.0 / self._hz, self.read_frame)
@@ -138,14 +157,30 @@ class CameraView(Widget):
         # a robot with no camera keeps only the caption's line (the Dashboard's rows go to
         # the panels below); back to its size when a frame can come
         self.set_class(reading.absent, "-absent")
+        if self._pixels is not None:
+            self._draw_pixels(frame, digest)
         if same:  # the same picture (a robot standing still): only its age is drawn again
             self.refresh(Region(0, 0, self.size.width, 1))
         else:
             self.refresh()
 
+    def _draw_pixels(self, frame: CameraFrame | None, digest: tuple | None) -> None:
+        """A new picture to the pixel widget, at most every PIXEL_PERIOD_S (a Sixel frame is
+        encoded on the screen's thread: ~0.1 s for a photo at 270×200 px on 2 cores); one
+        held back is drawn at the next read after that."""
+        now = time.monotonic()
+        kind = self._pixels_kind or ""
+        if digest == self._pixels_digest or now - self._pixels_at < PIXEL_PERIOD_S.get(kind, 0):
+            return
+        from PIL import Image
+
+        self._pixels_digest, self._pixels_at = digest, now
+        picture = None if frame is None else Image.fromarray(frame.pixels, "RGB")
+        self._pixels.image = picture  # type: ignore[union-attr]  # textual-image's widget
+
     def _image_strips(self) -> list[Strip]:
         frame: CameraFrame | None = self.reading.frame
-        if frame is None:
+        if frame is None or self._pixels is not None:  # drawn as pixels by its child
             return []
         key = (self._digest, self.size.width, self.size.height)
         if key != self._drawn_for:  # a new frame, or a new size: drawn once

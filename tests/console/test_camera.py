@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import io
 import math
+import re
 
 import numpy as np
 import pytest
@@ -176,6 +177,40 @@ async def test_the_dashboard_draws_the_camera_in_half_blocks(tmp_path):
         # the upper and lower pixel of the centre cell: the station's green
         assert dominant(centre[1]) == "green" and dominant(centre[2]) == "green"
         assert dominant(drawn[0][1]) == "other"  # the wall beside it
+
+
+async def test_a_terminal_that_draws_images_gets_the_frame_as_sixel_pixels(tmp_path):
+    """Where the terminal draws Sixel (asked as the console starts), the frame goes whole to
+    textual-image's widget, which writes it as one Sixel picture; no half-block cells."""
+    from PIL import Image
+
+    from astiop.widgets.camera_view import CameraView
+
+    app = console(tmp_path, sim=Simulator(seed=0, start=DOCK_FACING))
+    app.camera_pixels = "sixel"  # what `camera_pixels.detect()` says in xterm -ti vt340
+    async with app.run_test(size=(120, 40)) as pilot:
+        view = app.screen.query_one(CameraView)
+        await app.workers.wait_for_complete()
+        await pilot.pause()
+        frame = view.reading.frame
+        assert frame is not None
+        pixels = app.screen.query_one("#camera-pixels")
+        picture = pixels.image  # type: ignore[attr-defined]
+        assert isinstance(picture, Image.Image) and picture.size == (frame.width, frame.height)
+        assert np.array_equal(np.asarray(picture), frame.pixels)  # the frame as published
+        assert not [r for r in _cells(view) if r and r[0][0] == "▀"]
+        (impl,) = pixels.children
+        drawn = "".join(seg.text for strip in impl.render_lines(impl.size.region) for seg in strip)
+        assert re.search(r'\x1bP0;0;0q"1;1;\d+;\d+#', drawn), drawn[:80]  # one Sixel picture
+        colours = re.findall(r"#\d+;2;(\d+);(\d+);(\d+)", drawn)  # its registers, in %
+        assert "green" in {dominant(int(v) * 255 // 100 for v in c) for c in colours}
+
+
+def test_the_pixels_are_asked_of_a_terminal_only():
+    from astiop.widgets.camera_pixels import detect
+
+    assert detect("cells") is None
+    assert detect() is None  # pytest's output is no terminal: half-block cells
 
 
 async def test_the_dashboard_says_no_camera_on_a_robot_without_one(tmp_path):

@@ -38,7 +38,8 @@ def test_another_clients_cancelled_nav2_goal_is_an_alert_once(tmp_path):
             assert action.wait_for_server(timeout_sec=15)
             goal = NavigateToPose.Goal()
             goal.pose.header.frame_id = "map"
-            goal.pose.pose.position.x, goal.pose.pose.position.y = 12.0, 4.0
+            # 24 m ahead: it ends only when stopped, however loaded the machine
+            goal.pose.pose.position.x, goal.pose.pose.position.y = 28.0, 4.0
             goal.pose.pose.orientation.w = 1.0
             handle = client.result(action.send_goal_async(goal))
             assert handle.accepted

@@ -161,7 +161,8 @@ def _estop_stops_a_running_goal(tmp_path, folder, namespace: str) -> None:
         assert action.wait_for_server(timeout_sec=15)
         goal = NavigateToPose.Goal()
         goal.pose.header.frame_id = "map"
-        goal.pose.pose.position.x, goal.pose.pose.position.y = 12.0, 4.0
+        # 24 m ahead (~27 s at 4x): a cold `astiop estop` through the CLI lands first, loaded too
+        goal.pose.pose.position.x, goal.pose.pose.position.y = 28.0, 4.0
         goal.pose.pose.orientation.w = 1.0
         handle = client.result(action.send_goal_async(goal))
         assert handle.accepted

@@ -59,4 +59,6 @@ def test_a_late_tick_is_not_caught_up():
     finally:
         schedule.stop()
     gaps = [b - a for a, b in zip(times[2:], times[3:])]
-    assert min(gaps) > 0.02, gaps  # no burst of the ticks missed while held up
+    # no burst of the ticks missed while held up: the first after it is a period from the next
+    # (later gaps may be shorter on a loaded machine: a tick late by jitter keeps its phase)
+    assert gaps[0] > 0.02, gaps

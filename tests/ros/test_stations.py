@@ -255,7 +255,7 @@ def test_a_hung_robot_of_the_fleet_is_named_and_stopped_once_it_resumes(tmp_path
             assert action.wait_for_server(timeout_sec=15)
             far = NavigateToPose.Goal()
             far.pose.header.frame_id = "map"
-            far.pose.pose.position.x, far.pose.pose.position.y = 12.0, 4.0
+            far.pose.pose.position.x, far.pose.pose.position.y = 28.0, 4.0
             far.pose.pose.orientation.w = 1.0
             assert client.result(action.send_goal_async(far)).accepted
             assert until(lambda: odom and abs(odom[-1][1].twist.twist.linear.x) > 0.05, 30)
