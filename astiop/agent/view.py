@@ -19,12 +19,15 @@ from astiop.agent.result import TurnResult
 from astiop.agent.roles import no_return
 from astiop.agent.summaries import summarize
 from astiop.bounded import one_line
-from astiop.robot.camera import CameraFrame, age_of, png_of
+from astiop.robot.camera import CameraFrame, age_of, fitted, png_of
 from astiop.transports.base import Execution
 
 Ask = Callable[..., Awaitable[Any]]  # the agent's one way to the model (`Agent._ask`)
 MAX_TOKENS = 160
 MAX_ANSWER_CHARS = 800
+# a frame's longer side as sent: Gemma 3's image encoder takes 896 x 896, and a robot's 1080p
+# frame would be ~3 MB of PNG in every request (the Waffle's upstream camera is 1920 x 1080)
+MODEL_MAX_SIDE = 896
 SYSTEM = (
     "You are shown one frame from the forward-facing camera of a warehouse mobile robot "
     "({width} x {height} px, taken {age}). Answer the operator's question in one or two short "
@@ -103,7 +106,7 @@ async def _snapshot(reads: Any) -> tuple[Snapshot | None, str]:
         frame = reading.frame
         if frame is None:
             return None, reading.note
-        png, encode_s = png_of(frame)
+        png, encode_s = png_of(frame, MODEL_MAX_SIDE)
         shot = Snapshot(frame, age_of(frame, gateway.state().t), png, encode_s)
         reads.ran.append(_frame_read(shot))
         return shot, ""
@@ -114,9 +117,15 @@ async def _snapshot(reads: Any) -> tuple[Snapshot | None, str]:
 def _frame_read(shot: Snapshot) -> Execution:
     """The frame sent, kept as the turn's read of the camera topic."""
     f = shot.frame
-    values = {"width": f.width, "height": f.height, "encoding": f.encoding,
-              "png_bytes": len(shot.png), "encode_ms": round(shot.encode_s * 1000, 2)}  # fmt: skip
-    said = f"camera frame {f.width} x {f.height} px ({f.encoding}), sent as {len(shot.png)} bytes of PNG"
+    w, h = fitted(f.width, f.height, MODEL_MAX_SIDE)
+    values = {"width": f.width, "height": f.height, "encoding": f.encoding, "sent_width": w,
+              "sent_height": h, "png_bytes": len(shot.png),
+              "encode_ms": round(shot.encode_s * 1000, 2)}  # fmt: skip
+    scaled = "" if (w, h) == (f.width, f.height) else f" scaled to {w} x {h}"
+    said = (
+        f"camera frame {f.width} x {f.height} px ({f.encoding}), sent{scaled} as "
+        f"{len(shot.png)} bytes of PNG"
+    )
     return Execution(
         f"ros2 topic echo {f.topic} --once", True, kind="read", executed=True, output=said,
         values=values, provenance="measured", age_s=shot.age_s, role="camera",

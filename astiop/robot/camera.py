@@ -91,14 +91,27 @@ def _decompress(msg: ImageMessage) -> np.ndarray:
         raise ImageError(f"{msg.topic}: a compressed image ({fmt}) that cannot be read") from None
 
 
-def png_of(frame: CameraFrame) -> tuple[bytes, float]:
-    """The frame's pixels as PNG bytes (what a model or an MCP client is sent), and the seconds
-    encoding them took."""
+def fitted(width: int, height: int, max_side: int | None) -> tuple[int, int]:
+    """The size a width x height picture is sent at: its longer side at most `max_side`
+    (None: as it is), at its aspect."""
+    longest = max(width, height)
+    if max_side is None or longest <= max_side:
+        return width, height
+    return max(1, round(width * max_side / longest)), max(1, round(height * max_side / longest))
+
+
+def png_of(frame: CameraFrame, max_side: int | None = None) -> tuple[bytes, float]:
+    """The frame's pixels as PNG bytes (what a model or an MCP client is sent), scaled down to
+    `fitted(..., max_side)`, and the seconds scaling and encoding took."""
     from PIL import Image as PILImage
 
     t0 = time.perf_counter()
     buf = io.BytesIO()
-    PILImage.fromarray(frame.pixels, "RGB").save(buf, "PNG")
+    picture = PILImage.fromarray(frame.pixels, "RGB")
+    size = fitted(frame.width, frame.height, max_side)
+    if size != picture.size:
+        picture = picture.resize(size, PILImage.Resampling.BILINEAR, reducing_gap=2.0)
+    picture.save(buf, "PNG")
     return buf.getvalue(), time.perf_counter() - t0
 
 

@@ -181,3 +181,19 @@ def _nearest_ahead(sim) -> float:
         if v["range_min"] <= r <= v["range_max"]
         and abs(math.degrees(v["angle_min"] + i * v["angle_increment"])) <= 30
     )
+
+
+def test_a_big_frame_is_sent_scaled_down_to_the_models_size_and_a_small_one_whole():
+    from astiop.agent.view import MODEL_MAX_SIDE
+    from astiop.robot.camera import CameraFrame, fitted, png_of
+
+    assert fitted(160, 120, MODEL_MAX_SIDE) == (160, 120)
+    assert fitted(1920, 1080, MODEL_MAX_SIDE) == (896, 504)
+    assert fitted(1080, 1920, 896) == (504, 896) and fitted(1920, 1080, None) == (1920, 1080)
+    pixels = np.zeros((1080, 1920, 3), dtype=np.uint8)
+    pixels[:, 960:] = (0, 200, 0)  # the right half green
+    frame = CameraFrame("/camera/image_raw", pixels, "rgb8", 1.0)
+    png, _ = png_of(frame, MODEL_MAX_SIDE)
+    sent = np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))
+    assert sent.shape == (504, 896, 3)
+    assert sent[:, :440].max() == 0 and (sent[:, 460:, 1] == 200).all()  # the same picture
