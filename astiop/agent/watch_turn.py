@@ -19,7 +19,7 @@ from astiop.missions.steps import Step, describe
 from astiop.robot.safety import Review
 from astiop.watches.model import Watch, WatchError, validate
 from astiop.watches.reactions import ReactionError, mission_reaction
-from astiop.watches.words import split_reaction, watch_from_words
+from astiop.watches.words import asks_to_be_told, split_reaction, watch_from_words
 
 # (the question: the condition and every step) -> approved
 ConfirmReaction = Callable[[str], bool]
@@ -70,6 +70,8 @@ def armed(watch: Watch, steps: list[Step], approved_by: str) -> Watch:
 def kept(request: str, agent: Any) -> str | None:
     """The answer when the request is a watch (kept or not), else None."""
     condition, then = split_reaction(request)
+    if not asks_to_be_told(condition):
+        return None  # planned as before, the robot not read here
     profile = agent.gateway.profile
     try:
         places = agent.places()  # the store's places of the robot's map

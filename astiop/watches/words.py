@@ -215,6 +215,12 @@ def _reach_op(m: re.Match[str], value: float, now: float | None) -> str:
     return "<=" if now > value else ">="
 
 
+def asks_to_be_told(request: str) -> bool:
+    """Whether the request asks to be told of something ("tell me when ...", "alert me if ..."):
+    only such a request can be a watch."""
+    return _ASK.match(request) is not None
+
+
 def split_reaction(request: str) -> tuple[str, str]:
     """The watch's words and its reaction's: "tell me when the battery is below 20 %, then send
     it to the dock" -> ("tell me when the battery is below 20 %", "send it to the dock");
