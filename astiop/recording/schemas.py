@@ -3,7 +3,7 @@ astiop's own (turns, events, missions)."""
 
 from __future__ import annotations
 
-from astiop.recording import missions
+from astiop.recording import alerts, missions
 from astiop.ros2.definitions import definitions
 from astiop.ros2.interfaces import normalize_type, used_types
 
@@ -47,4 +47,5 @@ JSON_SCHEMAS = {
         },
     },
     missions.TOPIC: missions.SCHEMA,
+    alerts.TOPIC: alerts.SCHEMA,
 }

@@ -3,8 +3,9 @@
 The robot's state topics are written as ROS 2 messages: `ros2msg` schemas built from astiop's
 interface definitions (the distro's), CDR-encoded by `mcap-ros2-support`. The agent's turns and
 the robot's events go on JSON channels with a JSON schema, and so do the missions (their start,
-each step's end, their end: /astiop/mission). Log time is the robot's clock: when
-the message was published (sim time on the simulator) or received (on the robot).
+each step's end, their end: /astiop/mission) and the alerts (/astiop/alerts). Log time is the
+robot's clock: when the message was published (sim time on the simulator) or received (on the
+robot).
 
 A chunk is closed and flushed at least every FLUSH_S, so a recording killed at any moment keeps
 everything up to its last chunk; `repair` (files.py) rewrites what such a file still holds.
@@ -24,7 +25,7 @@ from typing import Any
 from mcap.writer import Writer
 
 from astiop.bounded import one_line
-from astiop.recording import missions
+from astiop.recording import alerts, missions
 from astiop.recording.schemas import JSON_SCHEMAS, ros2msg
 
 FLUSH_S = 2.0
@@ -111,6 +112,7 @@ class SessionRecorder:
         # it ends, not in the order the turns started), so each is written once, when it ends.
         self._turns_after, self._turns_running = self._interaction_marks()
         self._missions = missions.MissionLog(store)
+        self._alerts = alerts.AlertLog(store)
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._flushed = time.monotonic()
@@ -175,6 +177,7 @@ class SessionRecorder:
         robot_now = robots[0][1]  # the clock the store's records are logged on
         turns = self._interactions()
         mission_records = self._missions.poll()
+        alert_records = self._alerts.poll()
         with self._lock:
             if self._finished:
                 return
@@ -198,6 +201,8 @@ class SessionRecorder:
                 self._interaction(turn, int(robot_now * 1e9))
             for record in mission_records:
                 self._json(missions.TOPIC, record, int(robot_now * 1e9))
+            for record in alert_records:
+                self._json(alerts.TOPIC, record, int(robot_now * 1e9))
             if time.monotonic() - self._flushed >= self.flush_s:
                 self._writer.flush()  # closes the open chunk: a kill from here on loses nothing
                 self._file.flush()

@@ -1,4 +1,4 @@
-"""Logs: every interaction and robot event from the store, filtered, exportable."""
+"""Logs: every interaction, robot event and alert from the store, filtered, exportable."""
 
 from __future__ import annotations
 
@@ -21,6 +21,7 @@ KINDS = [
     ("all rows", "all"),
     ("interactions", "interaction"),
     ("robot events", "event"),
+    ("alerts", "alert"),
 ]
 VALIDITY = [
     ("any validity", "any"),
@@ -94,6 +95,20 @@ class LogsScreen(ConsoleScreen):
                     "valid": None,
                     "summary": f"[{ev['severity']}] {ev['kind']}: {ev['message']}",
                     "record": ev,
+                    "commands": [],
+                }
+            )
+        for a in store.alerts_where(limit=500):  # every process's, as the Alerts screen (F8)
+            seen = f"acknowledged by {a['acknowledged_by']}" if a["acknowledged_at"] else "open"
+            rows.append(
+                {
+                    "kind": "alert",
+                    "robot": a["robot"] or "",
+                    "t": a["fired_at"],
+                    "model": "",
+                    "valid": None,
+                    "summary": f"[{a['kind']}] {a['message']} ({seen})",
+                    "record": a,
                     "commands": [],
                 }
             )
@@ -172,6 +187,19 @@ class LogsScreen(ConsoleScreen):
             text = (
                 f"{_when(rec['t'])}  sim t {rec['sim_t']}\n{rec['severity']} {rec['kind']}\n"
                 f"{rec['message']}"
+            )
+        elif r["kind"] == "alert":
+            age = rec["reading_age_s"]
+            reading = f"{rec['reading']} ({age:.2f} s old)" if age is not None else rec["reading"]
+            seen = (
+                f"acknowledged by {rec['acknowledged_by']} at {_when(rec['acknowledged_at'])}"
+                if rec["acknowledged_at"]
+                else "open (acknowledged on the Alerts screen, F8)"
+            )
+            watch = f"  watch {rec['watch_id']}" if rec["watch_id"] is not None else ""
+            text = (
+                f"{_when(rec['fired_at'])}  {rec['robot'] or 'the robot'}  {rec['kind']}{watch}\n"
+                f"{rec['message']}\nreading: {reading or '-'}\n{seen}"
             )
         else:
             lines = [

@@ -17,6 +17,14 @@ async def test_a_watch_said_in_the_chat_notifies_the_console_when_it_fires(tmp_p
         assert alerted() == ["the battery is below 90 %: 85.00 %"]
         (alert,) = app.services.store.list_alerts()
         assert alert["watch_id"] == 1 and alert["reading"] == "85.00 %"
+        await pilot.press("f3")  # Logs: the alert among the turns and the robot's events
+        logs = app.screen
+
+        def logged() -> list[str]:
+            return [r["summary"] for r in getattr(logs, "rows", []) if r["kind"] == "alert"]
+
+        await wait_for(pilot, lambda: bool(logged()), what="the alert in the Logs")
+        assert logged() == ["[watch] the battery is below 90 %: 85.00 % (open)"]
 
 
 async def test_a_reaction_said_in_the_chat_is_asked_armed_and_run_once(tmp_path):

@@ -248,3 +248,34 @@ def test_every_turn_reaches_the_recording_once_whatever_order_turns_end_in(tmp_p
     gateway.close()
     mcp.close()
     store.close()
+
+
+def test_the_alerts_any_process_fires_reach_the_recording_once(tmp_path):
+    """An alert fired before the recording is not in it; one another process writes during it
+    is, once, on /astiop/alerts, with its reading and the watch that fired it."""
+    from astiop.recording import SessionRecorder
+    from astiop.recording.alerts import POLL_S
+    from astiop.store import Store
+
+    store, sim, gateway = _sim_recording(tmp_path)
+    watcher = Store(tmp_path / "rec.db")  # `astiop watch run`, on its own connection
+    watcher.fire_alert("astibot/battery_low", robot="", kind="battery_low", message="before")
+    path = tmp_path / "alerts.mcap"
+    recorder = SessionRecorder(path, gateway, store, flush_s=0.0)
+    fired = watcher.fire_alert(
+        "/watch:3", robot="", kind="watch", message="the battery is below 90 %: 85.00 %",
+        reading="85.00 %", reading_age_s=0.1, watch_id=3,
+    )  # fmt: skip
+    for _ in range(3):
+        sim.step(0.1)
+        recorder.poll()
+        time.sleep(POLL_S)
+    recorder.stop()
+    written = [alert for _t, alert in _json_messages(path, "/astiop/alerts")]
+    assert [(a["id"], a["kind"], a["reading"], a["watch_id"]) for a in written] == [
+        (fired, "watch", "85.00 %", 3)
+    ]
+    assert written[0]["message"] == "the battery is below 90 %: 85.00 %"
+    gateway.close()
+    watcher.close()
+    store.close()
