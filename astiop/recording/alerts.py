@@ -9,20 +9,16 @@ from typing import Any
 
 TOPIC = "/astiop/alerts"
 POLL_S = 0.25  # the store is read at most this often (the recorder polls at 20 Hz)
-FIELDS = ("id", "robot", "kind", "message", "reading", "reading_age_s", "fired_at", "watch_id")
+# each field of the alert as stored, and its JSON type
+FIELDS: dict[str, str | list[str]] = {
+    "id": "integer", "robot": "string", "kind": "string", "message": "string",
+    "reading": ["string", "null"], "reading_age_s": ["number", "null"], "fired_at": "number",
+    "watch_id": ["integer", "null"],
+}  # fmt: skip
 SCHEMA = {
     "type": "object",
     "title": "astiop alert",
-    "properties": {
-        "id": {"type": "integer"},
-        "robot": {"type": "string"},
-        "kind": {"type": "string"},
-        "message": {"type": "string"},
-        "reading": {"type": ["string", "null"]},
-        "reading_age_s": {"type": ["number", "null"]},
-        "fired_at": {"type": "number"},
-        "watch_id": {"type": ["integer", "null"]},
-    },
+    "properties": {name: {"type": kind} for name, kind in FIELDS.items()},
 }
 
 

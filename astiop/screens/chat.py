@@ -134,17 +134,17 @@ class ChatScreen(ConsoleScreen):
         self.query_one(Input).focus()
 
     def _agent_for(self, gateway, robot: str = "") -> Agent:
-        services = self.services
+        services, safety = self.services, self.app.safety  # the operator's approvals
         return Agent(
             gateway,
             services.endpoint,
             services.store,
             mode=self._reply_mode or services.settings.llm.mode,
             max_tokens=services.settings.llm.max_tokens,
-            confirm=partial(self.app.safety.confirm_from_thread, robot=robot),
-            confirm_mission=self.app.safety.confirm_mission_from_thread,
-            replace_mission=self.app.safety.replace_mission_from_thread,
-            confirm_reaction=self.app.safety.confirm_reaction_from_thread,
+            confirm=partial(safety.confirm_from_thread, robot=robot),
+            confirm_mission=safety.confirm_mission_from_thread,
+            replace_mission=safety.replace_mission_from_thread,
+            confirm_reaction=safety.confirm_reaction_from_thread,
             session="console",
             robot=robot,
         )

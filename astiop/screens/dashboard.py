@@ -128,9 +128,8 @@ class DashboardScreen(ConsoleScreen):
                 yield MissionPanel(id="mission", classes="panel")
                 yield Static(id="robot", classes="panel")
                 yield BatteryGauge(id="battery", classes="panel")
-                yield CameraView(
-                    self._camera, self._robot_clock, pixels=self.app.camera_pixels, id="camera"
-                )
+                pixels = getattr(self.app, "camera_pixels", None)  # the console's (AstiopApp)
+                yield CameraView(self._camera, self._robot_clock, pixels=pixels, id="camera")
                 yield Static(id="agent", classes="panel")
                 yield LiveTable(id="topics", cursor_type="none")
                 yield Static(id="services", classes="panel")

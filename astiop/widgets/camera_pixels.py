@@ -30,7 +30,7 @@ def detect(setting: str = "auto") -> str | None:
         log.info("the terminal's image support not known: %s", exc)
         return None
     kinds = {renderable.SixelImage: "sixel", renderable.TGPImage: "tgp"}
-    kind = kinds.get(renderable.Image)  # type: ignore[call-overload]
+    kind = kinds.get(renderable.Image)
     if kind is not None:
         import textual_image.widget  # noqa: F401 - it asks the cell's size in pixels now too
     return kind
