@@ -1,9 +1,10 @@
 """The Dashboard's map in `astiop serve`'s browser tab (headless Chromium, Playwright): a mouse
-click on the floor opens the point's menu, and sending from it asks the same confirmation as a
-typed goal, after which the robot drives there. Screenshots kept in test-artifacts/browser/."""
+drag gives the point the heading dragged; a click on the floor opens the point's menu, and
+sending from it asks the same confirmation as a typed goal, after which the robot drives there. Screenshots kept in test-artifacts/browser/."""
 
 from __future__ import annotations
 
+import asyncio
 import re
 
 import pytest
@@ -41,7 +42,21 @@ async def test_a_click_on_the_map_in_the_browser_sends_the_robot_after_the_quest
             cw, ch = screen["width"] / cols, screen["height"] / rows
             col, row = _cell_of(tab, "inspection_zone_a")
             col += len("inspection_zone_a") // 2  # the middle of the zone: open floor
-            await page.mouse.click(screen["x"] + (col + 0.5) * cw, screen["y"] + (row + 0.5) * ch)
+            at_x, at_y = screen["x"] + (col + 0.5) * cw, screen["y"] + (row + 0.5) * ch
+            # pressed there and let go three rows up: the point, facing the way dragged (+y)
+            await page.mouse.move(at_x, at_y)
+            await page.mouse.down()
+            await page.mouse.move(at_x, at_y - 3 * ch, steps=4)
+            await page.mouse.up()
+            await tab.shows(r"Send this robot here \(\d+\.\d\d, \d+\.\d\d\), facing 90°")
+            await tab.shot("map-0-dragged-heading")
+            await page.keyboard.press("Escape")  # closed: nothing sent
+            for _ in range(100):
+                if not tab.terminal.has("Send this robot here"):
+                    break
+                await asyncio.sleep(0.1)
+            assert not tab.terminal.has("Send this robot here"), tab.terminal.text()
+            await page.mouse.click(at_x, at_y)
             await tab.shows(r"Send this robot here \(\d+\.\d\d, \d+\.\d\d\)")
             point = re.search(r"The point \((\d+\.\d\d), (\d+\.\d\d)\) m", tab.terminal.text())
             assert point is not None, tab.terminal.text()
