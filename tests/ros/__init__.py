@@ -245,11 +245,19 @@ class RosClient:
         assert until(future.done, timeout), "no answer in time"
         return future.result()
 
-    def call(self, srv_type, name: str, request, timeout: float = 15.0):
+    def call(self, srv_type, name: str, request, timeout: float = 15.0, resend_s: float = 0.0):
+        """The service's answer. `resend_s`: a request with no answer by then is sent again (a
+        call safe to repeat): on a loaded machine a server just discovered may take a request
+        whose answer never comes back, its response path not yet matched."""
         client = self.node.create_client(srv_type, name)
         try:
             assert client.wait_for_service(timeout_sec=timeout), f"{name} is not served"
-            return self.result(client.call_async(request), timeout)
+            future = client.call_async(request)
+            if resend_s and not until(future.done, resend_s):
+                again = client.call_async(request)
+                assert until(lambda: future.done() or again.done(), timeout), "no answer in time"
+                return future.result() if future.done() else again.result()
+            return self.result(future, timeout)
         finally:
             self.node.destroy_client(client)
 

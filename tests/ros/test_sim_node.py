@@ -55,7 +55,9 @@ def _undocked(client) -> list:
     from std_srvs.srv import Trigger
 
     status = client.collect(RobotStatus, "/robot_status")
-    assert client.call(Trigger, "/undock", Trigger.Request()).success
+    answer = client.call(Trigger, "/undock", Trigger.Request(), resend_s=5.0)
+    # sent again, the first may have undocked it: the second is then told so
+    assert answer.success or "not docked" in answer.message, answer
     assert until(lambda: status and status[-1][1].state == "idle" and not status[-1][1].docked, 30)
     odom = client.collect(Odometry, "/odom")
     assert until(lambda: odom, 10), "no /odom"
