@@ -113,6 +113,7 @@ class Terminal:
     """A console's screen as the browser draws it: its websocket's bytes through pyte."""
 
     def __init__(self, width: int = 120, height: int = 40):
+        self.closed = False  # its websocket closed (a reader that follows it says so)
         self.screen = pyte.Screen(width, height)
         self.stream = pyte.ByteStream(self.screen)
 

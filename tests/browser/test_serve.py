@@ -57,6 +57,30 @@ async def read_until(ws, terminal: Terminal, pattern: str, timeout: float = 30.0
             raise AssertionError(f"the console closed:\n{terminal.text()}")
 
 
+async def _pump(ws, terminal: Terminal) -> None:
+    """A tab's frames read as a browser reads them, all along: the server's heartbeat pings are
+    answered as they come (aiohttp answers them as it receives; a tab left unread for 15 s on a
+    loaded machine was closed by its heartbeat)."""
+    while True:
+        message = await ws.receive()
+        if message.type == aiohttp.WSMsgType.BINARY:
+            terminal.feed(message.data)
+        elif message.type in (
+            aiohttp.WSMsgType.CLOSE, aiohttp.WSMsgType.CLOSED, aiohttp.WSMsgType.ERROR
+        ):  # fmt: skip
+            terminal.closed = True
+            return
+
+
+async def _shown(terminal: Terminal, pattern: str, timeout: float = 30.0) -> None:
+    """Until the screen a `_pump` feeds matches."""
+    deadline = time.monotonic() + timeout
+    while not terminal.has(pattern):
+        assert not terminal.closed, f"the console closed:\n{terminal.text()}"
+        assert time.monotonic() < deadline, f"{pattern!r} never shown:\n{terminal.text()}"
+        await asyncio.sleep(0.05)
+
+
 def test_access_slows_wrong_tokens_in_turn_and_forgets_them():
     now = [0.0]
     access = Access(TOKEN, clock=lambda: now[0])
@@ -424,34 +448,39 @@ async def test_every_tab_sees_one_shared_simulated_robot_and_its_estop(tmp_path)
             one, two = Terminal(), Terminal()
             first = await http.ws_connect(url + "/ws?width=120&height=40")
             second = await http.ws_connect(url + "/ws?width=120&height=40")
-            await read_until(first, one, r"pose\s+x\s+1\.15 m", timeout=60)
-            await read_until(second, two, r"pose\s+x\s+1\.15 m", timeout=60)
+            pumps = [
+                asyncio.create_task(_pump(first, one)),
+                asyncio.create_task(_pump(second, two)),
+            ]
+            await _shown(one, r"pose\s+x\s+1\.15 m", timeout=60)
+            await _shown(two, r"pose\s+x\s+1\.15 m", timeout=60)
             await send_keys(first, "\x1bOQ")  # F2: Chat
-            await read_until(first, one, r"Ask the robot")
+            await _shown(one, r"Ask the robot")
             # both tabs are consoles of one robot: the one that took control first drives it;
             # the other takes it over (ctrl+t, asked), as an operator would
-            await read_until(first, one, r"in control|WATCHING", timeout=30)
+            await _shown(one, r"in control|WATCHING", timeout=30)
             if one.has("WATCHING"):
                 await send_keys(first, "\x14")
-                await read_until(first, one, r"Take control of the robot from console")
+                await _shown(one, r"Take control of the robot from console")
                 await send_keys(first, "y")
-                await read_until(first, one, r"in control", timeout=30)
-                await read_until(second, two, r"WATCHING", timeout=30)  # and that one is told
+                await _shown(one, r"in control", timeout=30)
+                await _shown(two, r"WATCHING", timeout=30)  # and that one is told
             await send_keys(first, "go to shipping\r")
-            await read_until(first, one, r"you: go to shipping")
-            await read_until(first, one, r"Run this command\? It moves the robot", timeout=60)
+            await _shown(one, r"you: go to shipping")
+            await _shown(one, r"Run this command\? It moves the robot", timeout=60)
             await send_keys(first, "y")
             # the robot the first tab sent away is the one the second tab shows
-            await read_until(second, two, r"pose\s+x\s+(?!1\.15)\d+\.\d+ m", timeout=60)
+            await _shown(two, r"pose\s+x\s+(?!1\.15)\d+\.\d+ m", timeout=60)
             async with http.post(url + "/estop", headers={"Origin": url, "X-Astiop": "estop"}) as r:
                 body = await r.json()
                 assert r.status == 200 and body["ok"], body
             # stopped from the server's own process (no `astiop estop` started), then recorded
             assert body["robot"] == "the robot was told to stop" and body["recorded"], body
-            await read_until(second, two, r"E.STOPPED", timeout=30)
+            await _shown(two, r"E.STOPPED", timeout=30)
+            await asyncio.sleep(1.5)  # the base brakes to a stop (the screen follows it live)
             settled = pose_x(two)
             await asyncio.sleep(2)
-            await read_until(second, two, r"pose")
+            await _shown(two, r"pose")
             assert abs(pose_x(two) - settled) < 0.05, "the shared robot stays stopped"
             processes = descendants(server.pid)
             names = []
@@ -460,6 +489,8 @@ async def test_every_tab_sees_one_shared_simulated_robot_and_its_estop(tmp_path)
                     names.append(Path(f"/proc/{pid}/cmdline").read_bytes())
             assert any(b"sim\0node" in n for n in names), "the simulator runs under the server"
             assert any(b"watch\0run" in n for n in names), "and its watches' runner"
+            for pump in pumps:
+                pump.cancel()
             await first.close()
             await second.close()
     finally:
