@@ -10,6 +10,7 @@ from pathlib import Path
 
 import typer
 
+from astiop import native_stdout
 from astiop.cli.common import CliState
 from astiop.robot.fleet import is_fleet
 
@@ -53,6 +54,7 @@ def _join_the_graph_early(settings) -> None:
 
 def run_console(st: CliState, record: str | None = None) -> None:
     spare = os.environ.pop(SPARE, None) == "1"  # first: ASTIOP_* names settings
+    native_stdout.stdout_is_the_screen()
     _join_the_graph_early(st.fleet_settings)
     from astiop.agent.models.specs import SpecError
     from astiop.app import make_app

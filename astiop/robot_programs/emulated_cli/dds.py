@@ -30,6 +30,7 @@ from rclpy.action import (
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
+from astiop.native_stdout import native_output_to_stderr
 from astiop.robot_programs.emulated_cli.call import Call, Interrupted
 from astiop.robot_programs.emulated_cli.dds_calls import DdsCalls
 from astiop.robot_programs.emulated_cli.dds_query import DdsGraph, Pairs, run_query
@@ -69,6 +70,7 @@ class DdsNode:
     destroyed when the call ends, as a ros2cli process's node goes with it."""
 
     def __init__(self) -> None:
+        native_output_to_stderr()
         self.context = rclpy.Context()
         rclpy.init(args=["--ros-args", "--disable-stdout-logs"], context=self.context)
         self.node = Node(NODE_NAME, context=self.context, start_parameter_services=False)

@@ -22,6 +22,8 @@ from rclpy.callback_groups import CallbackGroup
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
+from astiop.native_stdout import native_output_to_stderr
+
 _lock = threading.Lock()
 # Each timeout is a wake-up for nothing (measured idle: 0.45 % of a core at 0.1 s with the
 # wait-set executor, 0.04 % at 1 s); what the executor must see wakes it (humble: node.py
@@ -52,6 +54,7 @@ class Polled(CallbackGroup):
 
 class RosProcess:
     def __init__(self) -> None:
+        native_output_to_stderr()
         self.context = rclpy.Context()
         # No signal handlers on a non-default context. No log lines on stderr: that is the
         # console's screen (rcl's own warnings, such as ROS_LOCALHOST_ONLY's, included).
