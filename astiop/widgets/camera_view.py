@@ -6,6 +6,7 @@ encoding and age as every reading's age is shown."""
 from __future__ import annotations
 
 import math
+import textwrap
 import time
 from collections.abc import Callable
 
@@ -15,7 +16,7 @@ from rich.segment import Segment
 from rich.style import Style
 from textual import work
 from textual.app import ComposeResult
-from textual.geometry import Region
+from textual.geometry import Region, Size
 from textual.strip import Strip
 from textual.widget import Widget
 
@@ -80,13 +81,21 @@ def half_blocks(pixels: np.ndarray, cols: int, rows: int) -> list[Strip]:
     return strips
 
 
-def caption(reading: CameraReading, now: float | None) -> Strip:
+def caption(reading: CameraReading, now: float | None, width: int = 0) -> list[Strip]:
+    """The caption's lines: one with a frame; with none, why, wrapped to `width` (0: one line)."""
     frame = reading.frame
     if frame is None:
-        return Strip([Segment("camera ", CAPTION), Segment(reading.note or "no camera", DIM)])
+        note = reading.note or "no camera"
+        lines = textwrap.wrap(note, width - len("camera ")) if width > len("camera ") + 8 else []
+        lines = lines or [note]
+        first = Strip([Segment("camera ", CAPTION), Segment(lines[0], DIM)])
+        return [
+            first,
+            *(Strip([Segment(" " * len("camera ")), Segment(line, DIM)]) for line in lines[1:]),
+        ]
     age = "age unknown" if frame.at is None or now is None else f"{max(0.0, now - frame.at):.1f}s"
     text = f"{frame.topic} {frame.width}×{frame.height} {frame.encoding}"
-    return Strip([Segment("camera ", CAPTION), Segment(age + " "), Segment(text, DIM)])
+    return [Strip([Segment("camera ", CAPTION), Segment(age + " "), Segment(text, DIM)])]
 
 
 class CameraView(Widget):
@@ -95,7 +104,7 @@ class CameraView(Widget):
 
     DEFAULT_CSS = """
     CameraView { height: 13; border: round $primary-darken-2; padding: 0 1; }
-    CameraView.-absent { height: 3; }
+    CameraView.-absent { height: auto; }
     CameraView #camera-pixels { margin-top: 1; width: auto; height: 1fr; }
     """
 
@@ -157,6 +166,8 @@ class CameraView(Widget):
         # a robot with no camera keeps only the caption's line (the Dashboard's rows go to
         # the panels below); back to its size when a frame can come
         self.set_class(reading.absent, "-absent")
+        if reading.absent:  # its height is its note's lines
+            self.refresh(layout=True)
         if self._pixels is not None:
             self._draw_pixels(frame, digest)
         if same:  # the same picture (a robot standing still): only its age is drawn again
@@ -189,15 +200,14 @@ class CameraView(Widget):
             self._drawn_for = key
         return self._strips
 
+    def get_content_height(self, container: Size, viewport: Size, width: int) -> int:
+        return len(caption(self.reading, None, width))
+
     def render_line(self, y: int) -> Strip:
         base, width = self.rich_style, self.size.width
-        if y == 0:
-            return (
-                caption(self.reading, self._clock())
-                .apply_style(base)
-                .extend_cell_length(width, base)
-                .crop(0, width)
-            )
+        lines = caption(self.reading, self._clock(), width)
+        if y < len(lines):
+            return lines[y].apply_style(base).extend_cell_length(width, base).crop(0, width)
         strips = self._image_strips()
         if y - 1 < len(strips):
             return strips[y - 1].extend_cell_length(width, base)

@@ -17,7 +17,7 @@ from astiop.sim.simulator import Simulator
 from astiop.store import Store
 from astiop.transports.images import image_message
 from astiop.transports.simulator.backend import SimBackend
-from tests.tui_helpers import console
+from tests.tui_helpers import console, wait_for
 
 DOCK_FACING = (4.0, 3.0, math.pi)  # 2.95 m from the charging station, looking at it
 SPEC = CameraSpec()
@@ -224,6 +224,28 @@ async def test_the_dashboard_says_no_camera_on_a_robot_without_one(tmp_path):
         assert "".join(s.text for s in view.render_line(0)).startswith("camera no camera")
         assert view.size.height == 1  # collapsed to its caption: the rows go to the panels below
         assert view.reading.absent
+
+
+async def test_why_no_frame_comes_is_said_whole_on_a_narrow_panel():
+    """The CLI transport's reason (longer than the panel is wide) wraps instead of being cut."""
+    from textual.app import App
+
+    from astiop.robot.camera import CameraReading
+    from astiop.widgets.camera_view import CameraView
+
+    note = "/camera/image_raw: the ros2 CLI transport reads no camera frames (rclpy does)"
+
+    class Panel(App):
+        def compose(self):
+            yield CameraView(lambda: CameraReading(None, note, absent=True), lambda: None)
+
+    app = Panel()
+    async with app.run_test(size=(48, 20)) as pilot:
+        view = app.query_one(CameraView)
+        await wait_for(pilot, lambda: view.reading.absent and view.size.height > 1, 10, "wrapped")
+        shown = [view.render_line(y).text for y in range(view.size.height)]
+        assert " ".join(" ".join(shown).split()) == "camera " + note
+        assert view.size.height == len(shown) < 6
 
 
 def test_a_session_keeps_the_camera_once_a_second_and_replays_it(tmp_path):
