@@ -115,8 +115,17 @@ def _full_names(cmd) -> list[str]:
     return argv
 
 
+def shell_word(word: str) -> str:
+    """`word` quoted for a POSIX shell as a person reads it best: in double quotes when it holds
+    a single quote and nothing a shell expands there (YAML's `''`), else as `shlex` quotes."""
+    if "'" in word and not any(c in word for c in '"$`\\!'):
+        return f'"{word}"'
+    return shlex.quote(word)
+
+
 def sent_text(checked: Checked) -> str:
-    return "ros2 " + shlex.join(sent_argv(checked))
+    """The command as sent, to be read (and pasted into a shell) by the person approving it."""
+    return "ros2 " + " ".join(shell_word(word) for word in sent_argv(checked))
 
 
 def zero_twist() -> dict:

@@ -111,3 +111,21 @@ def test_hz_and_echo_on_the_simulator_run_the_verbs_one_implementation():
         assert bad.error == "/robot_pose has no field nope", bad.error
     finally:
         gateway.close()
+
+
+def test_the_command_to_approve_reads_plainly_and_means_in_a_shell_what_is_sent():
+    """A Nav2 goal's empty behavior_tree was shown as `'"'"''"'"'` in the approval dialog."""
+    import shlex
+
+    from astiop.ros2.catalog import astibot_catalog
+    from astiop.ros2.render import sent_argv, sent_text
+    from astiop.ros2.validation import validate
+
+    goal = (
+        "ros2 action send_goal /navigate_to_pose nav2_msgs/action/NavigateToPose "
+        "'{pose: {header: {frame_id: map}, pose: {position: {x: 28.0, y: 4.0}}}}'"
+    )
+    checked = validate(goal, astibot_catalog())
+    shown = sent_text(checked)
+    assert "behavior_tree: ''}" in shown and "'\"'\"'" not in shown
+    assert shlex.split(shown)[1:] == sent_argv(checked)  # the words a shell makes of it
