@@ -81,8 +81,9 @@ def kept(request: str, agent: Any) -> str | None:
             (agent.robot,) if agent.robot else (),
             None if battery is None else battery.percentage * 100.0,
         )  # fmt: skip
-        if watch is None:
-            return None
+        if watch is None:  # not a watch; one with a reaction is never planned to run now
+            what = "no condition I can watch (a reading, a place reached, no progress)"
+            return f"Not watched: {what} in '{condition}'; nothing was stored." if then else None
         watch = replace(validate(watch, profile), said=request.strip()[:300])
         steps = reaction_steps(then, places, profile, agent.gateway.review) if then else []
         if steps:

@@ -127,10 +127,9 @@ class SafetyKeys:
         )
 
     def confirm_reaction_from_thread(self, question: str) -> bool:
-        """A watch's reaction that moves the robot is armed once approved, its steps shown (as
-        a mission is, unless the operator turned confirmation off)."""
-        if not self.services.settings.robot.confirm_actuation:
-            return True
+        """A watch's reaction that moves the robot is armed once approved, its steps shown:
+        asked always (confirmation off too), as `astiop watch add` asks; it moves the robot
+        later, when no one may be looking."""
         return self._ask_from_thread(question, None)
 
     def replace_mission_from_thread(self, running: str, steps, forever: bool = False) -> bool:

@@ -79,7 +79,7 @@ _CONVEYOR = re.compile(
 # "..., then send it to the dock": the words of a reaction that moves the robot, after the
 # condition's; approved by the operator when the watch is made (`split_reaction`)
 _THEN = re.compile(
-    r"\s*[,;]?\s*(?:and\s+)?then\s+(?=[a-z])"
+    r"\s*[,;]?\s*(?:and\s+)?\bthen\s+(?=[a-z])"
     r"|\s*[,;]\s*(?:and\s+)?(?=(?:send|drive|move|take|bring|return)\s+(?:it|the\s+robot)\b)",
     re.I,
 )

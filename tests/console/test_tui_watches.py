@@ -82,3 +82,26 @@ async def test_a_reaction_said_in_the_chat_is_asked_armed_and_run_once(tmp_path)
         assert alert["watch_id"] == 1 and store.watch(1)["armed"] == 0
         await pilot.pause(1.5)  # the watch reloaded: once, not again
         assert len(store.missions()) == 1 and len(watch_alerts(store)) == 1
+
+
+async def test_with_confirmation_off_a_reaction_is_still_asked_and_an_unwatchable_one_not_run(
+    tmp_path,
+):
+    """A reaction moves the robot later, when no one may be looking: asked even when the
+    operator turned each command's confirmation off. One whose condition cannot be watched is
+    refused whole, never planned to run now."""
+    from tests.tui_helpers import sim_of
+
+    app = console(tmp_path, settings={"robot": {"confirm_actuation": False}})
+    async with app.run_test(size=(120, 40)) as pilot:
+        said = await ask(app, pilot, "tell me when the lidar is dirty, then undock")
+        assert "Not watched: no condition I can watch" in said and "nothing was stored" in said
+        assert sim_of(app).docked() and app.services.store.list_watches() == []
+        await pilot.press("f2")
+        await pilot.pause()
+        app.screen.query_one("Input").value = "tell me when the battery is below 90 %, then undock"
+        await pilot.press("enter")
+        await wait_for(pilot, lambda: type(app.screen).__name__ == "ConfirmModal", 30, "asked")
+        await pilot.press("n")
+        await app.workers.wait_for_complete()
+        assert app.services.store.list_watches() == [] and sim_of(app).docked()

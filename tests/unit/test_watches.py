@@ -227,6 +227,8 @@ def test_a_reaction_is_split_from_its_watch_and_read_as_mission_steps():
         "alert me if it is stuck for a minute", "send it to shipping",
     )  # fmt: skip
     assert split_reaction("go to shipping and then dock") == ("go to shipping and then dock", "")
+    strengthen = "tell me when it reaches the strengthen bay"  # "then" inside a word
+    assert split_reaction(strengthen) == (strengthen, "")
     assert split_reaction("tell me when the battery is below 20 %") == (
         "tell me when the battery is below 20 %", "",
     )  # fmt: skip
