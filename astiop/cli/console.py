@@ -10,8 +10,8 @@ from pathlib import Path
 
 import typer
 
-from astiop import native_stdout
 from astiop.cli.common import CliState
+from astiop.native_stdout import native_output_to_stderr
 from astiop.robot.fleet import is_fleet
 
 # `astiop serve`'s warm console: its services built (nothing running yet), waits for a tab
@@ -54,7 +54,7 @@ def _join_the_graph_early(settings) -> None:
 
 def run_console(st: CliState, record: str | None = None) -> None:
     spare = os.environ.pop(SPARE, None) == "1"  # first: ASTIOP_* names settings
-    native_stdout.stdout_is_the_screen()
+    native_output_to_stderr()  # first: a served console's stdout is its tab's stream
     _join_the_graph_early(st.fleet_settings)
     from astiop.agent.models.specs import SpecError
     from astiop.app import make_app
