@@ -49,7 +49,21 @@ def reaction_steps(
             raise WatchError(f"a reaction docks, undocks or goes to a place, not '{said.clause}'")
     if not steps:
         raise WatchError(f"no reaction in '{words}': dock, undock or go to a place")
+    return checked_steps(steps, places, profile, review)
+
+
+def checked_steps(
+    steps: list[Step],
+    places: Mapping[str, tuple[float, float]],
+    profile: Any = None,
+    review: Callable[[str], Review] | None = None,
+) -> list[Step]:
+    """`steps`, each one's command built now for `profile` (a place unknown, a step the robot
+    cannot take: WatchError) and, with `review`, validated and checked by safety."""
     for step in steps:
+        if step.place and step.place not in places:
+            known = ", ".join(sorted(places)) or "none on this map"
+            raise WatchError(f"no place called '{step.place}' (the places: {known})")
         command = step.command(profile, places.get)
         if command is None:
             raise WatchError(f"this robot cannot {step.label()}")
@@ -57,6 +71,16 @@ def reaction_steps(
         if checked is not None and not (checked.checked.valid and checked.allowed):
             raise WatchError(f"{step.label()}: {checked.reason or checked.checked.reason}")
     return steps
+
+
+def question(watch: Watch, steps: list[Step]) -> str:
+    """What the operator is asked before a reaction is armed."""
+    return f"When {watch.condition()}, the robot will: {describe(steps)} (once). Arm it?"
+
+
+def approver(where: str) -> str:
+    """Who approved a reaction, as its mission keeps it: "ana on jetson (astiop watch add)"."""
+    return f"{getpass.getuser()} on {socket.gethostname()} ({where})"
 
 
 def armed(watch: Watch, steps: list[Step], approved_by: str) -> Watch:
@@ -104,11 +128,9 @@ def kept(request: str, agent: Any) -> str | None:
                 "Not watched: a reaction that moves the robot is approved by the operator, and "
                 "no one can be asked here (astiop watch add '...' --then); nothing was stored."
             )
-        question = f"When {watch.condition()}, the robot will: {describe(steps)} (once). Arm it?"
-        if not ask(question):
+        if not ask(question(watch, steps)):
             return "Not watched: the reaction was not approved; nothing was stored."
-        where = _WHERE.get(agent.recorder.session, "chat")
-        approved = f"{getpass.getuser()} on {socket.gethostname()} ({where})"
+        approved = approver(_WHERE.get(agent.recorder.session, "chat"))
         watch = armed(watch, steps, approved)
     watch_id = agent.store.add_watch(**watch.row())
     said = f"Watch {watch_id}: I will tell you when {watch.sentence()}."

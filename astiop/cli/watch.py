@@ -104,7 +104,7 @@ def add(
     """Add a watch: `add tell me when the battery is below 20 %`, or `add --field battery
     --below 20 [--for 5] [--every]`. A reaction that moves the robot (`..., then send it to the
     dock`, or `--then dock`) is asked for approval, then armed."""
-    from astiop.agent.watch_turn import reaction_steps
+    from astiop.agent.watch_turn import checked_steps, reaction_steps
     from astiop.missions.steps import Step
     from astiop.watches.model import Watch, WatchError, validate
     from astiop.watches.words import split_reaction, watch_from_words
@@ -114,10 +114,12 @@ def add(
     if reaction and then:
         fail("say the reaction in words or with --then, not both")
     places = {loc.name: (loc.x, loc.y) for loc in st.store.list_locations()}
+    profile = _profile(st)
     try:
         steps = [Step(t) if t in ("dock", "undock") else Step("goto", place=t) for t in then or []]
+        steps = checked_steps(steps, places, profile)
         if reaction:
-            steps = reaction_steps(reaction, places)
+            steps = reaction_steps(reaction, places, profile)
         if sentence:
             if field or below is not None or above is not None:
                 fail("say the watch in words or with --field and --below/--above, not both")
@@ -139,9 +141,9 @@ def add(
             op, threshold = ("<", below) if below is not None else (">", above)
             assert threshold is not None  # one of the two, checked above
             watch = Watch(field, op, threshold, hold_s, "every" if every else "once", _robot(st))
+        validate(watch, profile)
         if steps:
-            watch = _armed(st, watch, steps, yes)
-        validate(watch, _profile(st))
+            watch = _armed(watch, steps, yes)
     except WatchError as exc:
         fail(f"{exc}; nothing was stored")
     watch_id = st.store.add_watch(**watch.row())
@@ -151,27 +153,13 @@ def add(
         typer.echo(f"watch {watch_id}: I will tell you when {watch.sentence()}")
 
 
-def _armed(st: CliState, watch, steps: list, yes: bool):
+def _armed(watch, steps: list, yes: bool):
     """The watch with mission steps as its reaction, approved here by the operator (once)."""
-    import getpass
-    import socket
-    from dataclasses import replace
+    from astiop.agent.watch_turn import approver, armed, question
 
-    from astiop.missions.steps import describe
-    from astiop.watches.model import WatchError
-    from astiop.watches.reactions import ReactionError, mission_reaction
-
-    unknown = [s.place for s in steps if s.place and st.store.get_location(s.place) is None]
-    if unknown:
-        raise WatchError(f"no place called '{unknown[0]}' (astiop locations list)")
-    said = f"When {watch.condition()}, the robot will: {describe(steps)} (once)."
-    if not yes and not typer.confirm(f"{said} Arm it?", default=False, err=True):
+    if not yes and not typer.confirm(question(watch, steps), default=False, err=True):
         fail("not approved; nothing was stored")
-    who = f"{getpass.getuser()} on {socket.gethostname()} (astiop watch add)"
-    try:
-        return replace(watch, reaction=mission_reaction(steps, who))
-    except ReactionError as exc:
-        raise WatchError(str(exc)) from None
+    return armed(watch, steps, approver("astiop watch add"))
 
 
 @app.command("remove")

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import os
 import socket
-import time
 
 from rich.text import Text
 from textual import work
@@ -16,6 +15,7 @@ from textual.containers import Horizontal
 from textual.widgets import DataTable, Footer, Header, Select, Static
 
 from astiop.screens.base import ConsoleScreen
+from astiop.watches.alert_text import reading_text, when
 from astiop.watches.builtins import KINDS
 
 POLL_S = 1.0  # another process's alert or acknowledgement shows within this
@@ -28,19 +28,14 @@ COLUMNS = (  # fit 120 columns: the acknowledgement is never scrolled out of sig
 SEVERE = ("estop", "fault", "contact_lost", "goal_aborted", "mission_failed", "no_progress")
 
 
-def _when(t: float | None) -> str:
-    return time.strftime("%m-%d %H:%M:%S", time.localtime(t)) if t else "-"
-
-
 def _cells(a: dict) -> list:
     acked = a["acknowledged_at"] is not None
     style = "dim" if acked else ("bold red" if a["kind"] in SEVERE else "yellow")
-    age = a["reading_age_s"]
-    reading = (a["reading"] or "-") + (f" ({age:.2f} s old)" if age is not None else "")
-    ack = f"{a['acknowledged_by']} at {_when(a['acknowledged_at'])}" if acked else "open"
+    reading = reading_text(a)
+    ack = f"{a['acknowledged_by']} at {when(a['acknowledged_at'])}" if acked else "open"
     return [
         str(a["id"]),
-        _when(a["fired_at"]),
+        when(a["fired_at"]),
         Text(a["robot"] or "-"),
         Text(a["kind"], style=style),
         Text(a["message"]),

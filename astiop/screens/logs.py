@@ -16,6 +16,7 @@ from textual.widgets import DataTable, Footer, Header, Input, Select, Static
 
 from astiop.bounded import escape_controls
 from astiop.screens.base import ConsoleScreen
+from astiop.watches.alert_text import reading_text, when
 
 KINDS = [
     ("all rows", "all"),
@@ -28,10 +29,6 @@ VALIDITY = [
     ("all valid", "valid"),
     ("some rejected", "invalid"),
 ]
-
-
-def _when(t: float | None) -> str:
-    return time.strftime("%m-%d %H:%M:%S", time.localtime(t)) if t else "-"
 
 
 class LogsScreen(ConsoleScreen):
@@ -167,7 +164,7 @@ class LogsScreen(ConsoleScreen):
             valid = "-" if r["valid"] is None else ("yes" if r["valid"] else "NO")
             # stored text is data, never markup: "[/scan]" prints as typed
             table.add_row(
-                _when(r["t"]),
+                when(r["t"]),
                 r["kind"] if not r["robot"] else f"{r['kind']} · {r['robot']}",
                 Text(escape_controls(r["model"])),
                 valid,
@@ -185,21 +182,20 @@ class LogsScreen(ConsoleScreen):
         rec = r["record"]
         if r["kind"] == "event":
             text = (
-                f"{_when(rec['t'])}  sim t {rec['sim_t']}\n{rec['severity']} {rec['kind']}\n"
+                f"{when(rec['t'])}  sim t {rec['sim_t']}\n{rec['severity']} {rec['kind']}\n"
                 f"{rec['message']}"
             )
         elif r["kind"] == "alert":
-            age = rec["reading_age_s"]
-            reading = f"{rec['reading']} ({age:.2f} s old)" if age is not None else rec["reading"]
+            reading = reading_text(rec)
             seen = (
-                f"acknowledged by {rec['acknowledged_by']} at {_when(rec['acknowledged_at'])}"
+                f"acknowledged by {rec['acknowledged_by']} at {when(rec['acknowledged_at'])}"
                 if rec["acknowledged_at"]
                 else "open (acknowledged on the Alerts screen, F8)"
             )
             watch = f"  watch {rec['watch_id']}" if rec["watch_id"] is not None else ""
             text = (
-                f"{_when(rec['fired_at'])}  {rec['robot'] or 'the robot'}  {rec['kind']}{watch}\n"
-                f"{rec['message']}\nreading: {reading or '-'}\n{seen}"
+                f"{when(rec['fired_at'])}  {rec['robot'] or 'the robot'}  {rec['kind']}{watch}\n"
+                f"{rec['message']}\nreading: {reading}\n{seen}"
             )
         else:
             lines = [
@@ -231,7 +227,7 @@ class LogsScreen(ConsoleScreen):
         records = [
             {
                 "kind": r["kind"],
-                "when": _when(r["t"]),
+                "when": when(r["t"]),
                 "model": r["model"],
                 "valid": r["valid"],
                 "summary": r["summary"],

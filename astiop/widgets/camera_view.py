@@ -162,11 +162,12 @@ class CameraView(Widget):
         frame = reading.frame
         digest = None if frame is None else (frame.pixels.shape, hash(frame.pixels.tobytes()))
         same = digest is not None and digest == self._digest
+        new_note = (reading.absent, reading.note) != (self.reading.absent, self.reading.note)
         self.reading, self._digest = reading, digest
-        # a robot with no camera keeps only the caption's line (the Dashboard's rows go to
-        # the panels below); back to its size when a frame can come
+        # a robot with no camera keeps only its note's lines (the Dashboard's rows go to the
+        # panels below); back to its size when a frame can come
         self.set_class(reading.absent, "-absent")
-        if reading.absent:  # its height is its note's lines
+        if reading.absent and new_note:
             self.refresh(layout=True)
         if self._pixels is not None:
             self._draw_pixels(frame, digest)

@@ -329,3 +329,11 @@ def test_the_battery_reaching_a_level_goes_the_way_said_or_from_where_it_is_now(
         watch_from_words("tell me when the battery reaches 20 %")
     with pytest.raises(WatchError, match="it is at 85.0 % now"):
         watch_from_words("tell me when the battery gets to 85 %", battery_now=85.0)
+
+
+def test_an_alert_s_reading_is_shown_with_its_age_and_a_dash_for_none():
+    from astiop.watches.alert_text import reading_text
+
+    assert reading_text({"reading": "85.00 %", "reading_age_s": 0.123}) == "85.00 % (0.12 s old)"
+    assert reading_text({"reading": None, "reading_age_s": 0.5}) == "- (0.50 s old)"  # not "None"
+    assert reading_text({"reading": "", "reading_age_s": None}) == "-"
