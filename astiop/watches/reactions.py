@@ -1,12 +1,14 @@
 """A watch's reaction that moves the robot: mission steps the operator approved when the watch
 was made, run once by the process that wrote the watch's alert (so once across processes), and
-refused while the E-STOP holds. Another operator's control and every step's own checks are the
+refused while the E-STOP holds. Control of a robot no one held is taken for the mission and let
+go of when it ends. Another operator's control and every step's own checks are the
 mission's (the gateway refuses them as it refuses any command)."""
 
 from __future__ import annotations
 
 import json
 import logging
+import threading
 import time
 from typing import Any
 
@@ -71,10 +73,16 @@ def react(gateway: Any, store: Any, alert: dict, e_stopped: bool) -> str | None:
     if steps is not None:
         from astiop.missions.runner import MissionError, MissionRunner
 
+        lease = getattr(gateway, "lease", None)
+        borrowed = lease is not None and not lease.held  # taken by the mission's first motion
         try:
             runner = MissionRunner(gateway, store)
             mission = runner.start(steps, f"watch {row['id']}: {alert['message']}", "watch")
             said = f"watch {row['id']}: mission {mission} started ({describe(steps)})"
+            if borrowed:
+                threading.Thread(
+                    target=_give_back, args=(runner, gateway), name="reaction", daemon=True
+                ).start()
         except (MissionError, Exception) as exc:  # noqa: BLE001 - the watcher goes on
             said = f"watch {row['id']}: reaction not run: {exc}"
     try:
@@ -82,3 +90,10 @@ def react(gateway: Any, store: Any, alert: dict, e_stopped: bool) -> str | None:
     except Exception as exc:  # noqa: BLE001 - said to the caller all the same
         log.info("the reaction's outcome not kept: %s", exc)
     return said
+
+
+def _give_back(runner: Any, gateway: Any) -> None:
+    """Control a reaction took (the robot free before it) is let go of when its mission ends:
+    a headless watcher does not keep every operator's console from the robot."""
+    runner.wait()
+    gateway.let_go_of_control()

@@ -7,6 +7,8 @@ import json
 import subprocess
 import sys
 
+import pytest
+
 from astiop.missions.steps import Step
 from astiop.robot.gateway import RobotGateway
 from astiop.robot.safety import SafetyPolicy
@@ -111,3 +113,30 @@ def test_watch_add_reads_a_reaction_said_in_words(tmp_path):
     assert both.returncode != 0 and "in words or with --then, not both" in both.stderr
     idle = run_cli("--db", db, "watch", "add", said.replace("send it to the dock", "wave"))
     assert idle.returncode != 0 and "not 'wave'; nothing was stored" in idle.stderr
+
+
+@pytest.mark.parametrize("held_before", [False, True], ids=["free", "held"])
+def test_control_a_reaction_took_of_a_free_robot_is_let_go_of_when_its_mission_ends(
+    store, held_before
+):
+    """A headless watcher (serve's `watch run`) that runs a reaction on a robot no one held does
+    not keep it from every operator afterwards; a process that held it before keeps it."""
+    from astiop.robot.lease import Lease
+    from tests.ros import until
+
+    wid = _undock_when_below_90(store)
+    gateway, watching = _watching(store)
+    gateway.lease = lease = Lease(store, "/@0", "the robot", "astiop watch run")
+    try:
+        if held_before:
+            assert gateway.take_control() is None
+        (alert,) = watching.step(gateway.state())
+        assert alert["reaction"].startswith(f"watch {wid}: mission ")
+        assert until(lambda: store.missions()[0]["status"] == "succeeded", 60)
+        if held_before:
+            assert not until(lambda: not lease.held, 2)
+            assert store.lease("/@0")["token"] == lease.token
+        else:
+            assert until(lambda: not lease.held and store.lease("/@0") is None, 10)
+    finally:
+        gateway.close()
