@@ -15,6 +15,7 @@ import typer
 from astiop.cli import metrics_option
 from astiop.cli.common import CliState, fail, state
 from astiop.cli.mcp import loopback
+from astiop.cli.serve_watcher import Watcher
 
 
 def _global_args(st: CliState) -> list[str]:
@@ -179,8 +180,7 @@ def _end_process(node: subprocess.Popen) -> None:
 
 
 def _start_watcher(base: list[str], env: dict[str, str]) -> subprocess.Popen:
-    """`astiop watch run` on the tabs' robot: its watches and built-in alerts evaluated with no
-    tab open (each tab's console evaluates them too: the database writes each alert once)."""
+    """`astiop watch run` on the tabs' robot (cli/serve_watcher.py)."""
     return subprocess.Popen(
         [*base, "watch", "run", "--json"],
         env={**os.environ, **env},
@@ -302,7 +302,8 @@ def serve(
 
     watcher = None
     if watch and (shared is not None or st.settings.robot.backend != "sim"):
-        watcher = _start_watcher(base, env)
+        watcher = Watcher(lambda: _start_watcher(base, env), _end_process)
+        watcher.start()
     try:
         asyncio.run(serve_until_stopped(config, ready))
     except OSError as exc:
@@ -314,6 +315,6 @@ def serve(
             if button is not None:
                 button.close()
         if watcher is not None:
-            _end_process(watcher)
+            watcher.close()
         if node is not None:
             _end_process(node)
