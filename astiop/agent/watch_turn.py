@@ -17,7 +17,7 @@ from astiop.agent import intent
 from astiop.agent.intent import resolve_place
 from astiop.missions.steps import Step, describe
 from astiop.robot.safety import Review
-from astiop.watches.model import Watch, WatchError, validate
+from astiop.watches.model import Watch, WatchError, battery_percent, validate
 from astiop.watches.reactions import ReactionError, mission_reaction
 from astiop.watches.words import asks_to_be_told, split_reaction, watch_from_words
 
@@ -99,11 +99,11 @@ def kept(request: str, agent: Any) -> str | None:
     profile = agent.gateway.profile
     try:
         places = agent.places()  # the store's places of the robot's map
-        battery = agent.gateway.state().battery  # "reaches 20 %": down from here, or up
+        battery = battery_percent(agent.gateway.state())  # "reaches 20 %": down or up from here
         watch = watch_from_words(
             condition, agent.robot, places, lambda said: resolve_place(said, list(places)),
             (agent.robot,) if agent.robot else (),
-            None if battery is None else battery.percentage * 100.0,
+            battery,
         )  # fmt: skip
         if watch is None:  # not a watch; one with a reaction is never planned to run now
             what = "no condition I can watch (a reading, a place reached, no progress)"

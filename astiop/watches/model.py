@@ -31,7 +31,8 @@ class WatchError(ValueError):
     """A watch that cannot be kept, in one line (nothing was stored)."""
 
 
-def _battery(s: RobotState) -> float | None:
+def battery_percent(s: RobotState) -> float | None:
+    """The battery's charge in %, None with no reading."""
     return None if s.battery is None else s.battery.percentage * 100.0
 
 
@@ -104,7 +105,7 @@ def _conveyor(w: Watch, what: str) -> str:
 
 FIELDS: dict[str, Field] = {
     "battery": Field(
-        "battery", ("battery",), "%", "the battery", _threshold(_battery), 0, 100, 1.0, 2
+        "battery", ("battery",), "%", "the battery", _threshold(battery_percent), 0, 100, 1.0, 2
     ),
     "speed": Field(
         "speed", ("odometry", "status"), "m/s", "the speed", _threshold(lambda s: s.speed),
