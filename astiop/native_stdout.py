@@ -43,5 +43,5 @@ def native_output_to_stderr() -> None:
     )
     sys.stdout = moved
     if sys.__stdout__ is stream:
-        sys.__stdout__ = moved
+        sys.__stdout__ = moved  # type: ignore[misc]  # Final in typeshed; settable at run time
     os.dup2(2, 1)
