@@ -26,7 +26,7 @@ ConfirmReaction = Callable[[str], bool]
 _WHERE = {"console": "the console's Chat", "cli": "astiop chat"}
 
 
-def reaction_steps(
+def steps_from_words(
     words: str,
     places: Mapping[str, tuple[float, float]],
     profile: Any = None,
@@ -109,7 +109,7 @@ def kept(request: str, agent: Any) -> str | None:
             what = "no condition I can watch (a reading, a place reached, no progress)"
             return f"Not watched: {what} in '{condition}'; nothing was stored." if then else None
         watch = replace(validate(watch, profile), said=request.strip()[:300])
-        steps = reaction_steps(then, places, profile, agent.gateway.review) if then else []
+        steps = steps_from_words(then, places, profile, agent.gateway.review) if then else []
         if steps:
             armed(watch, steps, "-")  # it can be kept (once, at most 10 steps) before it is asked
     except WatchError as exc:

@@ -104,7 +104,7 @@ def add(
     """Add a watch: `add tell me when the battery is below 20 %`, or `add --field battery
     --below 20 [--for 5] [--every]`. A reaction that moves the robot (`..., then send it to the
     dock`, or `--then dock`) is asked for approval, then armed."""
-    from astiop.agent.watch_turn import checked_steps, reaction_steps
+    from astiop.agent.watch_turn import checked_steps, steps_from_words
     from astiop.missions.steps import Step
     from astiop.watches.model import Watch, WatchError, validate
     from astiop.watches.words import split_reaction, watch_from_words
@@ -119,7 +119,7 @@ def add(
         steps = [Step(t) if t in ("dock", "undock") else Step("goto", place=t) for t in then or []]
         steps = checked_steps(steps, places, profile)
         if reaction:
-            steps = reaction_steps(reaction, places, profile)
+            steps = steps_from_words(reaction, places, profile)
         if sentence:
             if field or below is not None or above is not None:
                 fail("say the watch in words or with --field and --below/--above, not both")

@@ -217,7 +217,7 @@ def test_no_progress_and_conveyor_watches_and_what_stays_a_question():
 
 
 def test_a_reaction_is_split_from_its_watch_and_read_as_mission_steps():
-    from astiop.agent.watch_turn import reaction_steps
+    from astiop.agent.watch_turn import steps_from_words
     from astiop.missions.steps import Step
     from astiop.watches.words import split_reaction
 
@@ -233,14 +233,14 @@ def test_a_reaction_is_split_from_its_watch_and_read_as_mission_steps():
         "tell me when the battery is below 20 %", "",
     )  # fmt: skip
     places = dict(PLACES)
-    assert reaction_steps("send it to shipping and then dock", places) == [
+    assert steps_from_words("send it to shipping and then dock", places) == [
         Step("goto", place="shipping"), Step("dock"),
     ]  # fmt: skip
-    assert reaction_steps("undock", places) == [Step("undock")]
+    assert steps_from_words("undock", places) == [Step("undock")]
     with pytest.raises(WatchError, match="not 'read the battery'"):
-        reaction_steps("read the battery", places)
+        steps_from_words("read the battery", places)
     with pytest.raises(WatchError, match="no place named in 'go to atlantis'"):
-        reaction_steps("go to atlantis", places)
+        steps_from_words("go to atlantis", places)
 
 
 class _NoConveyor:
