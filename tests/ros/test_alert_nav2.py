@@ -52,7 +52,11 @@ def test_another_clients_cancelled_nav2_goal_is_an_alert_once(tmp_path):
                 fired.extend(ev.step(state, now=state.t, events=events))
                 return [a for a in fired if a["kind"].startswith("goal_")]
 
-            assert until(lambda: step() == [] and gateway.state().status.active_goal, 15)
+            def running() -> bool:  # no status until the goal status topic is matched and read
+                status = gateway.state().status
+                return status is not None and bool(status.active_goal)
+
+            assert until(lambda: step() == [] and running(), 30)
             client.result(handle.cancel_goal_async(), 15)
             done = client.result(handle.get_result_async(), 20)
             assert done.status == GoalStatus.STATUS_CANCELED
