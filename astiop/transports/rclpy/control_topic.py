@@ -54,19 +54,26 @@ class ControlTopic:
 
     def settle(self, timeout_s: float = 5.0, least_s: float = 0.5) -> None:
         """Until every other writer on the topic has been heard (their last words come at once,
-        transient-local) and every reader known matches this writer, and at least `least_s`
-        (a writer's endpoint may be discovered a moment after its process), or `timeout_s`: a
-        take must not miss a holder that is there, nor a holder miss the take."""
-        t0 = time.monotonic()
-        deadline = t0 + timeout_s
+        transient-local) and every reader known matches this writer, at least `least_s` after
+        another node of the graph was first seen (a loaded machine may take seconds to discover
+        anyone; the others on the domain are found in the same round, their writers a moment
+        later), or `timeout_s`: a take must not miss a holder that is there, nor a holder miss
+        the take, and a station started later must hear a press."""
+        deadline = time.monotonic() + timeout_s
         node = self.proc.node
+        me = (node.get_name(), node.get_namespace())
+        graph_seen: float | None = None  # when another node was first seen
         while time.monotonic() < deadline:
+            now = time.monotonic()
+            if graph_seen is None and any(n != me for n in node.get_node_names_and_namespaces()):
+                graph_seen = now
             others = node.count_publishers(self.name) - 1
             with self._lock:
                 heard = len(self._heard)
             readers = node.count_subscribers(self.name)
             matched = self._pub.get_subscription_count() >= readers
-            if heard >= others and matched and time.monotonic() - t0 >= least_s:
+            settled = graph_seen is not None and now - graph_seen >= least_s
+            if heard >= others and matched and settled:
                 return
             time.sleep(0.05)
 
