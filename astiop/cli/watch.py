@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import signal
+import threading
 import time
 from pathlib import Path
 
@@ -220,8 +221,14 @@ def run(
         report=lambda text: typer.echo(f"astiop: {text}", err=True),
         hz=settings.watches.hz,
     )
+
+    def halt(*_) -> None:
+        # set from another thread: the handler runs on the main thread, which may hold the
+        # event's lock inside `halt.wait` (setting it here could wait on that lock forever)
+        threading.Thread(target=runner.halt.set, name="halt").start()
+
     for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda *_: runner.halt.set())
+        signal.signal(sig, halt)
     typer.echo(f"watching {gateway.label} (Ctrl-C to stop)", err=True)
     try:
         runner.run()
