@@ -31,7 +31,13 @@ def estop(
 
     st = state(ctx)
     if hold:
-        _hold(st, hold, pressed_by)
+        from astiop.robot.factory import leave_the_graph
+
+        try:
+            _hold(st, hold, pressed_by)
+        finally:  # its word said and closed: no interpreter teardown of rclpy's threads after
+            leave_the_graph(LEAVE_S)
+            Ending.at_once = True
         return
     if every and st.robot_name is not None:
         fail("--all stops every robot of the fleet: leave out --robot-name")

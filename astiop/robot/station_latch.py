@@ -26,8 +26,11 @@ from typing import Any
 
 log = logging.getLogger("astiop.robot")
 LAST_WORD_S = 1.0  # a station's last word: how long it waits for every reader to have it
-SETTLE_S = 5.0
-HEARD_LEAST_S = 1.0  # a writer's endpoint may be discovered a moment after its participant  # a new station waits at most this for the others' words before it actuates
+ECHO_S = 4.0  # a press or release made here: how long, at most, its station waits at its close
+# for every other station to say it back (a loaded machine may take seconds to deliver it)
+SAY_AGAIN_S = 0.5
+SETTLE_S = 5.0  # a new station waits at most this for the others' words before it actuates
+HEARD_LEAST_S = 1.0  # a writer's endpoint may be discovered a moment after its participant
 
 
 @dataclass(frozen=True, order=True)
@@ -61,6 +64,11 @@ class Act:
         return self.host == socket.gethostname() and self.pid == os.getpid()
 
 
+def _covers(theirs: Act | None, mine: Act | None) -> bool:
+    """Whether a station that says `theirs` knows of `mine` (or of one newer)."""
+    return mine is None or (theirs is not None and theirs >= mine)
+
+
 def _newer(mine: Act | None, theirs: Act | None) -> Act | None:
     if theirs is None:
         return mine
@@ -85,6 +93,7 @@ class StationLatch:
         self._press: Act | None = None
         self._release: Act | None = None
         self._channel: Any = None
+        self._made_here = False  # a press or release said by this station, not only heard
         self._ready = threading.Event()
         self._changed = threading.Event()
         self._closed = threading.Event()
@@ -121,10 +130,12 @@ class StationLatch:
     # -- what this station says -----------------------------------------------------------
     def pressed(self, act: Act) -> None:
         """A press made here: said on the graph at once (never raises)."""
+        self._made_here = True
         self._merge(act, None)
         self._say()
 
     def released(self, act: Act) -> None:
+        self._made_here = True
         self._merge(None, act)
         self._say()
 
@@ -192,8 +203,10 @@ class StationLatch:
                 log.error("the E-STOP on the robot's graph could not be followed: %s", exc)
 
     def close(self) -> None:
-        """Done with the robot: this station's last word is heard by every station on the
-        graph before its writer goes (a one-shot `astiop estop` ends right after its press)."""
+        """Done with the robot: a press or a release made here is heard by every station on
+        the graph before this station's writer goes (a one-shot `astiop estop` ends right after
+        it, and its word goes with its writer): said until each other station says it back,
+        for `ECHO_S` at most."""
         if self._press is not None or self._release is not None:
             self._ready.wait(SETTLE_S)  # its channel opened first: the word is said on it
         self._closed.set()
@@ -204,5 +217,38 @@ class StationLatch:
         if self._press is not None or self._release is not None:
             with contextlib.suppress(Exception):
                 channel.announce(self._word(), LAST_WORD_S)
+        if self._made_here:
+            self._wait_for_echo(channel)
         with contextlib.suppress(Exception):
             channel.close()
+
+    def _wait_for_echo(self, channel: Any) -> None:
+        deadline = time.monotonic() + ECHO_S
+        said = time.monotonic()
+        while not self._echoed(channel):
+            now = time.monotonic()
+            if now >= deadline:
+                log.warning("the E-STOP's last word was not said back by every station")
+                return
+            if now - said >= SAY_AGAIN_S:
+                with contextlib.suppress(Exception):
+                    channel.announce(self._word())
+                said = now
+            time.sleep(0.05)
+
+    def _echoed(self, channel: Any) -> bool:
+        """Whether every other writer on the graph says this station's press and release."""
+        press, release = self._press, self._release
+        try:
+            others = channel.writers() - 1
+            words = channel.words()
+        except Exception:  # noqa: BLE001 - the process is ending: nothing more to wait for
+            return True
+        echoed = sum(
+            1
+            for word in words
+            if word.get("token") != self.token
+            and _covers(Act.read(word.get("press")), press)
+            and _covers(Act.read(word.get("release")), release)
+        )
+        return echoed >= others

@@ -287,16 +287,19 @@ def test_a_goal_is_cancelled_by_another_client_and_preempted_by_a_new_one(tb3, c
     from action_msgs.msg import GoalStatus
     from action_msgs.srv import CancelGoal
 
-    x, y = _xy(_amcl(client)[-1][1])
-    first = _send(client, x + 8.0, y)
-    time.sleep(0.5)
-    second = _send(client, x + 8.0, y + 0.5)  # a new goal preempts: the first is aborted
-    aborted = client.result(first.get_result_async(), 20)
-    assert aborted.status == GoalStatus.STATUS_ABORTED and aborted.result.error_code == 0
-    with ros_client("tb3_other") as other:  # anyone may cancel: zero id and stamp cancel all
-        reply = other.call(
-            CancelGoal, "/navigate_to_pose/_action/cancel_goal", CancelGoal.Request()
-        )
+    # the other client found the server before the goals: on a loaded machine its discovery
+    # may take longer than the fast robot takes to arrive
+    with ros_client("tb3_other") as other:
+        cancel = other.node.create_client(CancelGoal, "/navigate_to_pose/_action/cancel_goal")
+        assert cancel.wait_for_service(timeout_sec=15)
+        x, y = _xy(_amcl(client)[-1][1])
+        first = _send(client, x + 8.0, y)
+        time.sleep(0.5)
+        second = _send(client, x + 8.0, y + 0.5)  # a new goal preempts: the first is aborted
+        aborted = client.result(first.get_result_async(), 20)
+        assert aborted.status == GoalStatus.STATUS_ABORTED and aborted.result.error_code == 0
+        # anyone may cancel: zero id and stamp cancel all
+        reply = other.result(cancel.call_async(CancelGoal.Request()), 15)
         assert reply.goals_canceling
     canceled = client.result(second.get_result_async(), 20)
     assert canceled.status == GoalStatus.STATUS_CANCELED

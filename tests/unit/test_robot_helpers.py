@@ -137,38 +137,57 @@ def test_a_store_that_cannot_be_read_or_written_never_undoes_a_press(tmp_path, m
 
 class Graph:
     """A robot's graph in memory: every station's channel hears every word said on it, and a
-    channel opened later hears each station's last word at once (transient-local)."""
+    channel opened later hears each station's last word at once (transient-local). `lost`: how
+    many words said on it are lost on the way to every other station (a loaded machine)."""
 
-    def __init__(self) -> None:
+    def __init__(self, lost: int = 0) -> None:
         self.last: dict[int, dict[str, Any]] = {}
-        self.heard: list[Callable[[dict[str, Any]], None]] = []
+        self.heard: dict[int, Callable[[dict[str, Any]], None]] = {}
         self.lock = threading.Lock()
+        self.lost = lost
 
     def channel(self, _namespace: str, on_word: Callable[[dict[str, Any]], None]) -> Channel:
+        channel = Channel(self, on_word)
         with self.lock:
-            self.heard.append(on_word)
+            self.heard[id(channel)] = on_word
             words = list(self.last.values())
         for word in words:
             on_word(word)
-        return Channel(self)
+        return channel
 
 
 class Channel:
-    def __init__(self, graph: Graph):
+    def __init__(self, graph: Graph, on_word: Callable[[dict[str, Any]], None]):
         self.graph = graph
+        self.on_word = on_word
+        self.said: dict[str, Any] | None = None
 
     def announce(self, word: dict[str, Any], _timeout_s: float | None = None) -> None:
         with self.graph.lock:
+            self.said = word
+            lost, self.graph.lost = self.graph.lost > 0, max(0, self.graph.lost - 1)
+            if lost:
+                return
             self.graph.last[id(self)] = word
-            heard = list(self.graph.heard)
+            heard = list(self.graph.heard.values())
         for on_word in heard:
             on_word(word)
 
     def settle(self, _timeout_s: float, _least_s: float) -> None:
         return None
 
-    def close(self) -> None:
-        return None
+    def writers(self) -> int:
+        with self.graph.lock:
+            return len(self.graph.heard)
+
+    def words(self) -> list[dict[str, Any]]:
+        with self.graph.lock:
+            return list(self.graph.last.values())
+
+    def close(self) -> None:  # its writer, and its word, go with it
+        with self.graph.lock:
+            self.graph.heard.pop(id(self), None)
+            self.graph.last.pop(id(self), None)
 
 
 def test_stations_on_one_graph_hold_each_other_whatever_their_databases(tmp_path, monkeypatch):
@@ -192,6 +211,30 @@ def test_stations_on_one_graph_hold_each_other_whatever_their_databases(tmp_path
     finally:
         here.close()
         there.close()
+
+
+def test_a_release_said_as_its_station_ends_is_said_until_every_other_station_has_it(
+    tmp_path, monkeypatch
+):
+    """A one-shot `astiop estop --release` ends right after its release, and its word goes with
+    its writer: a word lost on the way (a loaded machine) must not leave a keeper holding."""
+    graph = Graph()
+    keeper, releaser = (latch_on(Store(tmp_path / f"{n}.db")) for n in ("keeper", "releaser"))
+    for latch in (keeper, releaser):
+        monkeypatch.setattr(latch.backend, "estop_channel", graph.channel)
+        latch.follow_stations("")
+        assert latch.station_latch is not None and latch.station_latch.wait_ready(5)
+    try:
+        keeper.estop()
+        assert until(lambda: releaser.pressed_by() is not None, 5)
+        graph.lost = 2  # the release's first words never arrive
+        releaser.release_estop()
+        releaser.close()
+        assert keeper.station_latch is not None and not keeper.station_latch.engaged, (
+            "the releasing station ended before the keeper heard its release"
+        )
+    finally:
+        keeper.close()
 
 
 # -- the reading of the robot's graph ------------------------------------------------------

@@ -95,6 +95,10 @@ class ControlTopic:
         if acked_s > 0:  # ros2/rclpy humble rclpy/rclpy/publisher.py: wait_for_all_acked
             self._pub.wait_for_all_acked(Duration(nanoseconds=int(acked_s * 1e9)))
 
+    def writers(self) -> int:
+        """How many writers the topic has now, this one's included."""
+        return self.proc.node.count_publishers(self.name)
+
     def words(self) -> list[dict[str, Any]]:
         """Every word heard, one per writer, however old."""
         with self._lock:
