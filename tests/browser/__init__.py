@@ -67,7 +67,9 @@ class Tab:
             size = json.loads(payload)[1]
             self.terminal.resize(size["width"], size["height"])
 
-    async def shows(self, pattern: str, timeout: float = 30.0) -> None:
+    async def shows(self, pattern: str, timeout: float = 60.0) -> None:
+        """Until the screen shows `pattern`: on a CI machine running four workers on two cores
+        (a tab's console and Chromium each), a step has been seen to take over 30 s."""
         deadline = time.monotonic() + timeout
         while not self.terminal.has(pattern):
             if time.monotonic() > deadline:
