@@ -26,8 +26,8 @@ from typing import Any
 
 log = logging.getLogger("astiop.robot")
 LAST_WORD_S = 1.0  # a station's last word: how long it waits for every reader to have it
-ECHO_S = 4.0  # a press or release made here: how long, at most, its station waits at its close
-# for every other station to say it back (a loaded machine may take seconds to deliver it)
+ECHO_S = 4.0  # a release made here: how long, at most, its station waits at its close for every
+# other station to say it back (a loaded machine may take seconds to deliver it)
 SAY_AGAIN_S = 0.5
 SETTLE_S = 5.0  # a new station waits at most this for the others' words before it actuates
 HEARD_LEAST_S = 1.0  # a writer's endpoint may be discovered a moment after its participant
@@ -93,7 +93,8 @@ class StationLatch:
         self._press: Act | None = None
         self._release: Act | None = None
         self._channel: Any = None
-        self._made_here = False  # a press or release said by this station, not only heard
+        self._opening: Any = None  # the channel while it settles: words said, none followed
+        self._released_here = False  # a release said by this station, not only heard
         self._ready = threading.Event()
         self._changed = threading.Event()
         self._closed = threading.Event()
@@ -130,12 +131,11 @@ class StationLatch:
     # -- what this station says -----------------------------------------------------------
     def pressed(self, act: Act) -> None:
         """A press made here: said on the graph at once (never raises)."""
-        self._made_here = True
         self._merge(act, None)
         self._say()
 
     def released(self, act: Act) -> None:
-        self._made_here = True
+        self._released_here = True
         self._merge(None, act)
         self._say()
 
@@ -155,7 +155,7 @@ class StationLatch:
         }
 
     def _say(self) -> None:
-        channel = self._channel
+        channel = self._channel or self._opening
         if channel is None:
             return
         try:
@@ -176,11 +176,16 @@ class StationLatch:
         try:
             channel = self._open_channel(self._heard)
             if channel is not None:
+                # said at once, before it settles: a station settling meanwhile (a keeper, a
+                # station that started with it) hears this one's word instead of waiting it out
+                self._opening = channel
+                self._say()
                 channel.settle(SETTLE_S, HEARD_LEAST_S)
         except Exception as exc:  # noqa: BLE001 - the store still holds the latch here
             if not self._closed.is_set():  # else: the process ended while it opened
                 log.error("the E-STOP is not followed on the robot's graph: %s", exc)
             channel = None
+        self._opening = None
         if channel is not None and self._closed.is_set():
             with contextlib.suppress(Exception):  # closed while it opened: never said
                 channel.close()
@@ -203,12 +208,15 @@ class StationLatch:
                 log.error("the E-STOP on the robot's graph could not be followed: %s", exc)
 
     def close(self) -> None:
-        """Done with the robot: a press or a release made here is heard by every station on
-        the graph before this station's writer goes (a one-shot `astiop estop` ends right after
-        it, and its word goes with its writer): said until each other station says it back,
-        for `ECHO_S` at most."""
+        """Done with the robot: this station's last word is heard by every station on the graph
+        before its writer goes (a one-shot `astiop estop` ends right after its press or
+        release, and its word goes with its writer). A release made here is said until each
+        station heard saying the press says it back (`ECHO_S` at most): a keeper that missed it
+        would hold the robot stopped for good. A one-shot press needs no such wait: the keeper it started is
+        handed the press on its command line and says it to every station from then on."""
         if self._press is not None or self._release is not None:
             self._ready.wait(SETTLE_S)  # its channel opened first: the word is said on it
+        self._opening = None
         self._closed.set()
         self._changed.set()
         channel, self._channel = self._channel, None
@@ -217,7 +225,7 @@ class StationLatch:
         if self._press is not None or self._release is not None:
             with contextlib.suppress(Exception):
                 channel.announce(self._word(), LAST_WORD_S)
-        if self._made_here:
+        if self._released_here:
             self._wait_for_echo(channel)
         with contextlib.suppress(Exception):
             channel.close()
@@ -228,7 +236,7 @@ class StationLatch:
         while not self._echoed(channel):
             now = time.monotonic()
             if now >= deadline:
-                log.warning("the E-STOP's last word was not said back by every station")
+                log.warning("the E-STOP's release was not said back by every station that held it")
                 return
             if now - said >= SAY_AGAIN_S:
                 with contextlib.suppress(Exception):
@@ -237,18 +245,15 @@ class StationLatch:
             time.sleep(0.05)
 
     def _echoed(self, channel: Any) -> bool:
-        """Whether every other writer on the graph says this station's press and release."""
-        press, release = self._press, self._release
+        """Whether every other station heard saying a press says this station's release (or a
+        newer one): a station that never held the press holds nothing after it either."""
+        release = self._release
         try:
-            others = channel.writers() - 1
             words = channel.words()
         except Exception:  # noqa: BLE001 - the process is ending: nothing more to wait for
             return True
-        echoed = sum(
-            1
+        return all(
+            _covers(Act.read(word.get("release")), release)
             for word in words
-            if word.get("token") != self.token
-            and _covers(Act.read(word.get("press")), press)
-            and _covers(Act.read(word.get("release")), release)
+            if word.get("token") != self.token and Act.read(word.get("press")) is not None
         )
-        return echoed >= others

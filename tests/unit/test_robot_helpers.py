@@ -176,10 +176,6 @@ class Channel:
     def settle(self, _timeout_s: float, _least_s: float) -> None:
         return None
 
-    def writers(self) -> int:
-        with self.graph.lock:
-            return len(self.graph.heard)
-
     def words(self) -> list[dict[str, Any]]:
         with self.graph.lock:
             return list(self.graph.last.values())

@@ -48,6 +48,7 @@ class ControlTopic:
         self._on_word = on_word  # called on the executor's thread with each word heard
         self._lock = threading.Lock()
         self._heard: dict[str, tuple[float, dict[str, Any]]] = {}  # token -> (when, word)
+        self._mine: set[str] = set()  # the tokens this writer said (heard back, not others')
         node = proc.node
         self._pub = node.create_publisher(String, self.name, QOS)
         self._sub = node.create_subscription(String, self.name, self._receive, QOS)
@@ -69,7 +70,7 @@ class ControlTopic:
                 graph_seen = now
             others = node.count_publishers(self.name) - 1
             with self._lock:
-                heard = len(self._heard)
+                heard = len(self._heard.keys() - self._mine)
             readers = node.count_subscribers(self.name)
             matched = self._pub.get_subscription_count() >= readers
             settled = graph_seen is not None and now - graph_seen >= least_s
@@ -91,13 +92,11 @@ class ControlTopic:
     def announce(self, word: dict[str, Any], acked_s: float = 0.0) -> None:
         """Say it; with `acked_s`, wait that long at most for every reader to have it (a word
         said just before this process ends: a takeover, a release)."""
+        with self._lock:
+            self._mine.add(str(word.get("token")))
         self._pub.publish(String(data=json.dumps(word)))
         if acked_s > 0:  # ros2/rclpy humble rclpy/rclpy/publisher.py: wait_for_all_acked
             self._pub.wait_for_all_acked(Duration(nanoseconds=int(acked_s * 1e9)))
-
-    def writers(self) -> int:
-        """How many writers the topic has now, this one's included."""
-        return self.proc.node.count_publishers(self.name)
 
     def words(self) -> list[dict[str, Any]]:
         """Every word heard, one per writer, however old."""
