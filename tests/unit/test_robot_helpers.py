@@ -186,13 +186,18 @@ class Channel:
             self.graph.last.pop(id(self), None)
 
 
-def test_stations_on_one_graph_hold_each_other_whatever_their_databases(tmp_path, monkeypatch):
-    graph = Graph()
-    here, there = latch_on(Store(tmp_path / "here.db")), latch_on(Store(tmp_path / "there.db"))
-    for latch in (here, there):
+def stations_on(graph: Graph, tmp_path, monkeypatch, *names: str) -> list[EstopLatch]:
+    """A station per name, each with its own database, on `graph`, its first words heard."""
+    latches = [latch_on(Store(tmp_path / f"{name}.db")) for name in names]
+    for latch in latches:
         monkeypatch.setattr(latch.backend, "estop_channel", graph.channel)
         latch.follow_stations("")
         assert latch.station_latch is not None and latch.station_latch.wait_ready(5)
+    return latches
+
+
+def test_stations_on_one_graph_hold_each_other_whatever_their_databases(tmp_path, monkeypatch):
+    here, there = stations_on(Graph(), tmp_path, monkeypatch, "here", "there")
     try:
         here.estop()
         assert until(lambda: there.backend.e_stopped, 5), "a press at one station holds all"
@@ -215,11 +220,7 @@ def test_a_release_said_as_its_station_ends_is_said_until_every_other_station_ha
     """A one-shot `astiop estop --release` ends right after its release, and its word goes with
     its writer: a word lost on the way (a loaded machine) must not leave a keeper holding."""
     graph = Graph()
-    keeper, releaser = (latch_on(Store(tmp_path / f"{n}.db")) for n in ("keeper", "releaser"))
-    for latch in (keeper, releaser):
-        monkeypatch.setattr(latch.backend, "estop_channel", graph.channel)
-        latch.follow_stations("")
-        assert latch.station_latch is not None and latch.station_latch.wait_ready(5)
+    keeper, releaser = stations_on(graph, tmp_path, monkeypatch, "keeper", "releaser")
     try:
         keeper.estop()
         assert until(lambda: releaser.pressed_by() is not None, 5)
