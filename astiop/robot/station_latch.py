@@ -169,6 +169,8 @@ class StationLatch:
         if word.get("token") == self.token:
             return
         if self._merge(Act.read(word.get("press")), Act.read(word.get("release"))):
+            if self._opening is not None:  # settling: said back now, not once settled
+                self._say()
             self._changed.set()
 
     def _run(self) -> None:
@@ -211,9 +213,10 @@ class StationLatch:
         """Done with the robot: this station's last word is heard by every station on the graph
         before its writer goes (a one-shot `astiop estop` ends right after its press or
         release, and its word goes with its writer). A release made here is said until each
-        station heard saying the press says it back (`ECHO_S` at most): a keeper that missed it
-        would hold the robot stopped for good. A one-shot press needs no such wait: the keeper it started is
-        handed the press on its command line and says it to every station from then on."""
+        station still on the graph that said the press says it back (`ECHO_S` at most): a
+        keeper that missed it would hold the robot stopped for good. A press needs no such
+        wait: every station that heard it says it again, and a one-shot press's keeper is
+        handed it on its command line."""
         if self._press is not None or self._release is not None:
             self._ready.wait(SETTLE_S)  # its channel opened first: the word is said on it
         self._opening = None
@@ -245,8 +248,9 @@ class StationLatch:
             time.sleep(0.05)
 
     def _echoed(self, channel: Any) -> bool:
-        """Whether every other station heard saying a press says this station's release (or a
-        newer one): a station that never held the press holds nothing after it either."""
+        """Whether every other station on the graph heard saying a press says this station's
+        release (or a newer one): a station that never held the press holds nothing after it
+        either."""
         release = self._release
         try:
             words = channel.words()

@@ -3,10 +3,8 @@ Importable without ROS 2 (the console checks with it before starting `astiop sim
 
 from __future__ import annotations
 
-import contextlib
 import os
 import signal
-import threading
 from collections.abc import Callable
 from typing import Any
 
@@ -82,13 +80,8 @@ def refuse_a_taken_graph(velocity_topics: list[str], join: bool) -> None:
 def serve_until_signal(robot: Any, started: Callable[[], str], say: Callable[[str], None]) -> None:
     """Start `robot` (start/spin/stop/close), say `started()`, serve until SIGINT or SIGTERM —
     even when started with SIGINT ignored (a script's `&` job)."""
-
-    def stop(*_) -> None:  # from another thread: the main thread may hold a lock `stop` takes
-        with contextlib.suppress(RuntimeError):  # the interpreter is already ending
-            threading.Thread(target=robot.stop, name="stop").start()
-
     for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, stop)
+        signal.signal(sig, lambda *_: robot.stop())
     robot.start()
     try:
         say(started())

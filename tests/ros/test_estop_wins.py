@@ -20,7 +20,8 @@ PUBLISH = (
     "ros2 topic pub -t 300 -r 10 /cmd_vel geometry_msgs/msg/Twist "
     "'{linear: {x: 0.3}}'"
 )  # 30 s of motion unless something ends it
-IN_FLIGHT_S = 0.15  # a message sent as its publisher was ended, still on its way
+IN_FLIGHT_S = 0.5  # a message sent as its publisher was ended, still on its way (a loaded
+# machine); a publish that goes on sends five in that time
 
 
 def _actuate(inflight: InFlight, i: int, go, stopped, sent_after: list[str]) -> None:

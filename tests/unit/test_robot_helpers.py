@@ -138,7 +138,8 @@ def test_a_store_that_cannot_be_read_or_written_never_undoes_a_press(tmp_path, m
 class Graph:
     """A robot's graph in memory: every station's channel hears every word said on it, and a
     channel opened later hears each station's last word at once (transient-local). `lost`: how
-    many words said on it are lost on the way to every other station (a loaded machine)."""
+    many words carrying a release are lost on the way to every other station (a loaded
+    machine)."""
 
     def __init__(self, lost: int = 0) -> None:
         self.last: dict[int, dict[str, Any]] = {}
@@ -165,8 +166,8 @@ class Channel:
     def announce(self, word: dict[str, Any], _timeout_s: float | None = None) -> None:
         with self.graph.lock:
             self.said = word
-            lost, self.graph.lost = self.graph.lost > 0, max(0, self.graph.lost - 1)
-            if lost:
+            if word.get("release") is not None and self.graph.lost > 0:
+                self.graph.lost -= 1
                 return
             self.graph.last[id(self)] = word
             heard = list(self.graph.heard.values())

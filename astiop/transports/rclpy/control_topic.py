@@ -50,6 +50,7 @@ class ControlTopic:
         self._heard: dict[str, tuple[float, dict[str, Any]]] = {}  # token -> (when, word)
         self._mine: set[str] = set()  # the tokens this writer said (heard back, not others')
         node = proc.node
+        self._me = node.get_fully_qualified_name()  # said in each word: whose it is
         self._pub = node.create_publisher(String, self.name, QOS)
         self._sub = node.create_subscription(String, self.name, self._receive, QOS)
 
@@ -94,14 +95,21 @@ class ControlTopic:
         said just before this process ends: a takeover, a release)."""
         with self._lock:
             self._mine.add(str(word.get("token")))
-        self._pub.publish(String(data=json.dumps(word)))
+        self._pub.publish(String(data=json.dumps({**word, "node": self._me})))
         if acked_s > 0:  # ros2/rclpy humble rclpy/rclpy/publisher.py: wait_for_all_acked
             self._pub.wait_for_all_acked(Duration(nanoseconds=int(acked_s * 1e9)))
 
     def words(self) -> list[dict[str, Any]]:
-        """Every word heard, one per writer, however old."""
+        """The last word of each writer whose node is still on the graph (a word with no node
+        named, from an older astiop, counts as still there), however old."""
+        node = self.proc.node
+        live = {
+            f"{space.rstrip('/')}/{name}" for name, space in node.get_node_names_and_namespaces()
+        }
+        live.add(self._me)
         with self._lock:
-            return [w for _, w in self._heard.values()]
+            words = [w for _, w in self._heard.values()]
+        return [w for w in words if w.get("node", self._me) in live]
 
     def holders(self, released: bool = False) -> list[dict[str, Any]]:
         """Every holder heard within the lease's time that has not let go (`released`: and
