@@ -35,6 +35,20 @@ QOS = QoSProfile(
 )
 
 
+def _peers_listed(node: Any, me: tuple[str, str]) -> bool:
+    """Whether every other astiop node seen has had its writers discovered too (a loaded machine
+    may find a node a second or more before its writers: its /rosout at least is listed)."""
+    for name, space in node.get_node_names_and_namespaces():
+        if (name, space) == me or not name.startswith("astiop_"):
+            continue
+        try:
+            if not node.get_publisher_names_and_types_by_node(name, space):
+                return False
+        except Exception:  # noqa: BLE001 - gone meanwhile: nothing of it to wait for
+            continue
+    return True
+
+
 class ControlTopic:
     def __init__(
         self,
@@ -75,7 +89,7 @@ class ControlTopic:
             readers = node.count_subscribers(self.name)
             matched = self._pub.get_subscription_count() >= readers
             settled = graph_seen is not None and now - graph_seen >= least_s
-            if heard >= others and matched and settled:
+            if heard >= others and matched and settled and _peers_listed(node, me):
                 return
             time.sleep(0.05)
 
