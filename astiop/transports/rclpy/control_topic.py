@@ -23,6 +23,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from std_msgs.msg import String
 
 from astiop.store.leases import LEASE_TTL_S
+from astiop.transports.rclpy.graph import full_name
 from astiop.transports.rclpy.node import RosProcess
 
 CONTROL = "astiop_control"  # the lease
@@ -117,9 +118,7 @@ class ControlTopic:
         """The last word of each writer whose node is still on the graph (a word with no node
         named, from an older astiop, counts as still there), however old."""
         node = self.proc.node
-        live = {
-            f"{space.rstrip('/')}/{name}" for name, space in node.get_node_names_and_namespaces()
-        }
+        live = {full_name(space, name) for name, space in node.get_node_names_and_namespaces()}
         live.add(self._me)
         with self._lock:
             words = [w for _, w in self._heard.values()]
