@@ -182,7 +182,12 @@ class StationLatch:
                 # station that started with it) hears this one's word instead of waiting it out
                 self._opening = channel
                 self._say()
-                channel.settle(SETTLE_S, HEARD_LEAST_S)
+                if not channel.settle(SETTLE_S, HEARD_LEAST_S):
+                    log.warning(
+                        "not every station on the robot's graph was heard within %.0f s: "
+                        "an E-STOP pressed there may not hold here yet",
+                        SETTLE_S,
+                    )
         except Exception as exc:  # noqa: BLE001 - the store still holds the latch here
             if not self._closed.is_set():  # else: the process ended while it opened
                 log.error("the E-STOP is not followed on the robot's graph: %s", exc)

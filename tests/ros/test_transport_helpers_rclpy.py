@@ -5,6 +5,7 @@ the test's own."""
 from __future__ import annotations
 
 import threading
+import time
 import uuid
 
 import pytest
@@ -190,3 +191,44 @@ def test_the_verbs_transport_publishes_and_is_refused_while_the_estop_holds(part
         with pytest.raises(BackendError, match=HELD):
             verbs.execute(checked, 10.0)
         teleop.close()
+
+
+def test_a_control_topic_answers_a_newcomer_and_an_asker_with_its_last_word(parts):
+    """A late joiner's history is not always handed over on a loaded machine: a station's word
+    is said again to each newcomer's first word and to each word marked `asking` (a reader with
+    no history of its own hears only those answers)."""
+    import json
+
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+    from std_msgs.msg import String
+
+    from astiop.transports.rclpy.control_topic import ESTOP, QOS, ControlTopic
+
+    keeper = ControlTopic(parts.proc, parts.ns, ESTOP)
+    keeper.announce({"token": "keeper", "press": {"at": 1.0}})
+    name = f"{parts.ns}/{ESTOP}"
+    fresh_only = QoSProfile(
+        depth=10, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE
+    )
+    try:
+        with ros_client("newcomer") as newcomer:
+            got = newcomer.collect(String, name, fresh_only)
+            pub = newcomer.node.create_publisher(String, name, QOS)
+            assert until(lambda: keeper._pub.get_subscription_count() >= 2, 10)  # noqa: SLF001
+            assert until(lambda: pub.get_subscription_count() >= 1, 10)
+
+            def answers() -> int:
+                return sum(json.loads(m.data)["token"] == "keeper" for _, m in got)
+
+            pub.publish(String(data=json.dumps({"token": "new"})))
+            assert until(lambda: answers() == 1, 10), "a newcomer's first word was not answered"
+            time.sleep(0.5)
+            pub.publish(String(data=json.dumps({"token": "new"})))  # heard before: no answer
+            pub.publish(String(data=json.dumps({"token": "new", "asking": True})))
+            assert until(lambda: answers() == 2, 10), "a word asking was not answered"
+            time.sleep(1.0)
+            assert answers() == 2
+            word = json.loads(next(m.data for _, m in got if "keeper" in m.data))
+            assert word["press"] == {"at": 1.0} and word["node"] == keeper._me  # noqa: SLF001
+    finally:
+        keeper.close()

@@ -174,8 +174,8 @@ class Channel:
         for on_word in heard:
             on_word(word)
 
-    def settle(self, _timeout_s: float, _least_s: float) -> None:
-        return None
+    def settle(self, _timeout_s: float, _least_s: float) -> bool:
+        return True
 
     def words(self) -> list[dict[str, Any]]:
         with self.graph.lock:

@@ -7,7 +7,12 @@ Why a transient-local topic: a console that joins later is handed every holder's
 once (each writer keeps its own), with no server to ask and none to fail; a holder that dies
 takes its writer, and so its word, with it; anyone can read it (`ros2 topic echo
 /astibot_2/astiop_control`). The holder says it again every heartbeat; a word not heard again
-for the lease's time is a holder gone."""
+for the lease's time is a holder gone.
+
+A late joiner's history is not always handed over: on a loaded machine a station started later
+was seen to hear nothing of a writer it had discovered for 12 s and more (Fast DDS, Jazzy). So
+every writer answers a newcomer's first word with its own, and a station still settling asks
+again every `ASK_S` (its word marked `asking`) until it has heard every writer it knows of."""
 
 from __future__ import annotations
 
@@ -34,6 +39,8 @@ QOS = QoSProfile(
     reliability=ReliabilityPolicy.RELIABLE,
     durability=DurabilityPolicy.TRANSIENT_LOCAL,
 )
+ASK_S = 0.5  # a settling station asks the writers it has not heard again this often
+ANSWER_S = 0.25  # a writer answers one asker at most this often
 
 
 def _peers_listed(node: Any, me: tuple[str, str]) -> bool:
@@ -64,22 +71,25 @@ class ControlTopic:
         self._lock = threading.Lock()
         self._heard: dict[str, tuple[float, dict[str, Any]]] = {}  # token -> (when, word)
         self._mine: set[str] = set()  # the tokens this writer said (heard back, not others')
+        self._said: dict[str, Any] | None = None  # this writer's last word: each answer repeats it
+        self._answered: dict[str, float] = {}  # token -> when it was last answered
         node = proc.node
         self._me = node.get_fully_qualified_name()  # said in each word: whose it is
         self._pub = node.create_publisher(String, self.name, QOS)
         self._sub = node.create_subscription(String, self.name, self._receive, QOS)
 
-    def settle(self, timeout_s: float = 5.0, least_s: float = 0.5) -> None:
+    def settle(self, timeout_s: float = 5.0, least_s: float = 0.5) -> bool:
         """Until every other writer on the topic has been heard (their last words come at once,
         transient-local) and every reader known matches this writer, at least `least_s` after
         another node of the graph was first seen (a loaded machine may take seconds to discover
         anyone; the others on the domain are found in the same round, their writers a moment
         later), or `timeout_s`: a take must not miss a holder that is there, nor a holder miss
-        the take, and a station started later must hear a press."""
+        the take, and a station started later must hear a press. False: `timeout_s` ran out."""
         deadline = time.monotonic() + timeout_s
         node = self.proc.node
         me = (node.get_name(), node.get_namespace())
         graph_seen: float | None = None  # when another node was first seen
+        asked = time.monotonic()
         while time.monotonic() < deadline:
             now = time.monotonic()
             if graph_seen is None and any(n != me for n in node.get_node_names_and_namespaces()):
@@ -91,8 +101,19 @@ class ControlTopic:
             matched = self._pub.get_subscription_count() >= readers
             settled = graph_seen is not None and now - graph_seen >= least_s
             if heard >= others and matched and settled and _peers_listed(node, me):
-                return
+                return True
+            if heard < others and now - asked >= ASK_S:
+                self._ask()
+                asked = now
             time.sleep(0.05)
+        return False
+
+    def _ask(self) -> None:
+        """This writer's last word again, marked for every writer that hears it to answer."""
+        with self._lock:
+            said = self._said
+        if said is not None:
+            self._pub.publish(String(data=json.dumps({**said, "asking": True})))
 
     def _receive(self, msg: String) -> None:  # the executor's thread
         try:
@@ -100,17 +121,32 @@ class ControlTopic:
             token = str(word["token"])
         except (ValueError, KeyError, TypeError):
             return  # not ours: nothing to follow
+        now = time.monotonic()
         with self._lock:
-            self._heard[token] = (time.monotonic(), word)
+            newcomer = token not in self._heard
+            self._heard[token] = (now, word)
+            said = self._said
+            answer = (
+                said is not None
+                and token not in self._mine
+                and (newcomer or bool(word.get("asking")))
+                and now - self._answered.get(token, -ANSWER_S) >= ANSWER_S
+            )
+            if answer:
+                self._answered[token] = now
+        if answer:
+            self._pub.publish(String(data=json.dumps(said)))
         if self._on_word is not None:
             self._on_word(word)
 
     def announce(self, word: dict[str, Any], acked_s: float = 0.0) -> None:
         """Say it; with `acked_s`, wait that long at most for every reader to have it (a word
         said just before this process ends: a takeover, a release)."""
+        said = {**word, "node": self._me}
         with self._lock:
             self._mine.add(str(word.get("token")))
-        self._pub.publish(String(data=json.dumps({**word, "node": self._me})))
+            self._said = said
+        self._pub.publish(String(data=json.dumps(said)))
         if acked_s > 0:  # ros2/rclpy humble rclpy/rclpy/publisher.py: wait_for_all_acked
             self._pub.wait_for_all_acked(Duration(nanoseconds=int(acked_s * 1e9)))
 
