@@ -232,7 +232,8 @@ def test_stop_the_robot_in_chat_cancels_a_nav2_goal_and_says_so(tmp_path):
             cancel, zero = (c.command for c in result.commands)
             assert cancel.startswith("ros2 service call /navigate_to_pose/_action/cancel_goal")
             assert zero.startswith("ros2 topic pub --once /cmd_vel")
-            assert all(c.executed and not c.error for c in result.commands), result.commands
+            ran = [(c.command[:40], c.executed, c.error) for c in result.commands]
+            assert all(c.executed and not c.error for c in result.commands), ran
             assert "cancel" in result.answer.lower(), result.answer
             done = client.result(handle.get_result_async(), 20)
             assert done.status == GoalStatus.STATUS_CANCELED, done.status  # not SUCCEEDED

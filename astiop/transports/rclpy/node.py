@@ -125,8 +125,9 @@ class RosProcess:
     def ask(self, client: Any, request: Any, timeout: float, what: str, *, again: bool) -> Any:
         """The answer to one request. A Fast DDS server drops its answer to a client whose
         response reader it has not matched within 100 ms (ros2/rmw_fastrtps#390): on a loaded
-        machine a first call can go unanswered. `again`: a read, asked again every ASK_AGAIN_S
-        until `timeout`; an actuation is asked once (it may have been done)."""
+        machine a first call can go unanswered. `again`: a read, or a call that only makes the
+        robot safer (a stop, a goal's cancel), asked again every ASK_AGAIN_S until `timeout`;
+        any other actuation is asked once (it may have been done)."""
         deadline = time.monotonic() + timeout
         while True:
             left = deadline - time.monotonic()
