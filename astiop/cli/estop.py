@@ -155,7 +155,7 @@ def _hold(st, at: float, by: int) -> None:
     import time
 
     from astiop.robot.factory import make_robot_gateway
-    from astiop.robot.station_latch import SETTLE_S, Act
+    from astiop.robot.station_latch import OPENED_S, Act
     from astiop.transports.base import BackendError
 
     store, _why = store_softly(st)
@@ -172,7 +172,7 @@ def _hold(st, at: float, by: int) -> None:
         # held from its first word, said as its channel opens: a release said while it settles
         # then waits for this keeper to say it back
         graph.pressed(Act(at, "estop", Act.here("").host, by))
-        if not graph.wait_ready(2 * SETTLE_S) or not graph.on_graph:  # opened, then settled
+        if not graph.wait_ready(OPENED_S) or not graph.on_graph:  # opened, then settled
             return
         seen, there = time.monotonic(), gateway.backend.robot_present()
         while graph.engaged:

@@ -8,7 +8,7 @@ it, where (host, process) and when. The E-STOP is engaged while the newest press
 the newest release. Both only ever grow, so the words merge in any order and a late word never
 undoes a newer one: a press is never undone by a release made before it, and a release made
 after a press is never undone by that press's late steps. A station that joins later is handed
-every live writer's last word at once (transient-local), and every station that heard a press
+every live writer's last word (transient-local, or in answer to its first word), and every station that heard a press
 says it again, so the press outlives the process that made it while any station lives."""
 
 from __future__ import annotations
@@ -30,6 +30,7 @@ ECHO_S = 4.0  # a release made here: how long, at most, its station waits at its
 # other station to say it back (a loaded machine may take seconds to deliver it)
 SAY_AGAIN_S = 0.5
 SETTLE_S = 5.0  # a new station waits at most this for the others' words before it actuates
+OPENED_S = 2 * SETTLE_S  # a keeper waits at most this for its channel to open, then settle
 HEARD_LEAST_S = 1.0  # a writer's endpoint may be discovered a moment after its participant
 
 
@@ -201,7 +202,7 @@ class StationLatch:
         self._ready.set()
         if self._channel is None:
             return
-        self._say()  # every station says a word: one that joins later hears them all
+        self._say()  # a press made as it stopped settling, before `_channel` was set
         while not self._closed.is_set():
             if not self._changed.wait(1.0):
                 continue

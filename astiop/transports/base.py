@@ -151,8 +151,8 @@ class RobotTransport(ABC):
 
     def estop_channel(self, namespace: str, on_word: Callable[[dict[str, Any]], None]):
         """Where the robot's E-STOP latch is announced on its graph (robot/station_latch.py):
-        a channel with `announce(word)`, `settle()`, `words()` and `close()`, calling `on_word`
-        with each word heard; None: this transport cannot (the store alone holds it)."""
+        a channel with `announce(word)`, `settle()` (False: it ran out of time), `words()` and
+        `close()`, calling `on_word` with each word heard; None: this transport cannot (the store alone holds it)."""
         return None
 
     def discovering(self) -> bool:

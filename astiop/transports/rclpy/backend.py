@@ -24,7 +24,7 @@ from astiop.transports.live_catalog import GraphLists, LiveGraph, describe_graph
 from astiop.transports.live_robot import MOVING, without_finished_plan
 from astiop.transports.rclpy.estop import RclpyEstop
 from astiop.transports.rclpy.graph import read_lists, read_params
-from astiop.transports.rclpy.node import ros_process
+from astiop.transports.rclpy.node import NODE_PREFIX, ros_process
 from astiop.transports.rclpy.state_watches import IMAGE_TYPES, RclpyStateWatches
 from astiop.transports.rclpy.teleop import RclpyTeleop
 from astiop.transports.rclpy.verbs import RclpyVerbs
@@ -142,7 +142,7 @@ class RclpyBackend(RobotTransport):
         names = self.proc.node.get_node_names_and_namespaces()
         ns = self._fixed.namespace.rstrip("/")
         return any(
-            not name.startswith("astiop_") and (not ns or space.startswith(ns))
+            not name.startswith(NODE_PREFIX) and (not ns or space.startswith(ns))
             for name, space in names
         )
 

@@ -11,8 +11,9 @@ for the lease's time is a holder gone.
 
 A late joiner's history is not always handed over: on a loaded machine a station started later
 was seen to hear nothing of a writer it had discovered for 12 s and more (Fast DDS, Jazzy). So
-every writer answers a newcomer's first word with its own, and a station still settling asks
-again every `ASK_S` (its word marked `asking`) until it has heard every writer it knows of."""
+every writer answers a newcomer's first word with its own, and a station that has spoken asks
+again every `ASK_S` while it settles (its word marked `asking`) until it has heard every writer
+it knows of."""
 
 from __future__ import annotations
 
@@ -29,7 +30,7 @@ from std_msgs.msg import String
 
 from astiop.store.leases import LEASE_TTL_S
 from astiop.transports.rclpy.graph import full_name
-from astiop.transports.rclpy.node import RosProcess
+from astiop.transports.rclpy.node import NODE_PREFIX, RosProcess
 
 CONTROL = "astiop_control"  # the lease
 ESTOP = "astiop_estop"  # the E-STOP latch
@@ -47,7 +48,7 @@ def _peers_listed(node: Any, me: tuple[str, str]) -> bool:
     """Whether every other astiop node seen has had its writers discovered too (a loaded machine
     may find a node a second or more before its writers: its /rosout at least is listed)."""
     for name, space in node.get_node_names_and_namespaces():
-        if (name, space) == me or not name.startswith("astiop_"):
+        if (name, space) == me or not name.startswith(NODE_PREFIX):
             continue
         try:
             if not node.get_publisher_names_and_types_by_node(name, space):
@@ -70,7 +71,6 @@ class ControlTopic:
         self._on_word = on_word  # called on the executor's thread with each word heard
         self._lock = threading.Lock()
         self._heard: dict[str, tuple[float, dict[str, Any]]] = {}  # token -> (when, word)
-        self._mine: set[str] = set()  # the tokens this writer said (heard back, not others')
         self._said: dict[str, Any] | None = None  # this writer's last word: each answer repeats it
         self._answered: dict[str, float] = {}  # token -> when it was last answered
         node = proc.node
@@ -79,24 +79,27 @@ class ControlTopic:
         self._sub = node.create_subscription(String, self.name, self._receive, QOS)
 
     def settle(self, timeout_s: float = 5.0, least_s: float = 0.5) -> bool:
-        """Until every other writer on the topic has been heard (their last words come at once,
-        transient-local) and every reader known matches this writer, at least `least_s` after
-        another node of the graph was first seen (a loaded machine may take seconds to discover
-        anyone; the others on the domain are found in the same round, their writers a moment
-        later), or `timeout_s`: a take must not miss a holder that is there, nor a holder miss
-        the take, and a station started later must hear a press. False: `timeout_s` ran out."""
+        """Until every other writer on the topic has been heard (transient-local, or in answer
+        to this writer's words: asked again every `ASK_S` meanwhile), every reader known matches
+        this writer and every other astiop node seen has its writers listed, at least `least_s`
+        after another node of the graph was first seen (a loaded machine may take seconds to
+        discover anyone; the others on the domain are found in the same round, their writers a
+        moment later), or `timeout_s`: a take must not miss a holder that is there, nor a holder
+        miss the take, and a station started later must hear a press. False: `timeout_s` ran
+        out."""
         deadline = time.monotonic() + timeout_s
         node = self.proc.node
         me = (node.get_name(), node.get_namespace())
         graph_seen: float | None = None  # when another node was first seen
-        asked = time.monotonic()
+        asked = deadline - timeout_s
         while time.monotonic() < deadline:
             now = time.monotonic()
             if graph_seen is None and any(n != me for n in node.get_node_names_and_namespaces()):
                 graph_seen = now
             others = node.count_publishers(self.name) - 1
             with self._lock:
-                heard = len(self._heard.keys() - self._mine)
+                own = str(self._said.get("token")) if self._said else None
+                heard = sum(token != own for token in self._heard)
             readers = node.count_subscribers(self.name)
             matched = self._pub.get_subscription_count() >= readers
             settled = graph_seen is not None and now - graph_seen >= least_s
@@ -128,7 +131,7 @@ class ControlTopic:
             said = self._said
             answer = (
                 said is not None
-                and token not in self._mine
+                and token != str(said.get("token"))
                 and (newcomer or bool(word.get("asking")))
                 and now - self._answered.get(token, -ANSWER_S) >= ANSWER_S
             )
@@ -144,7 +147,6 @@ class ControlTopic:
         said just before this process ends: a takeover, a release)."""
         said = {**word, "node": self._me}
         with self._lock:
-            self._mine.add(str(word.get("token")))
             self._said = said
         self._pub.publish(String(data=json.dumps(said)))
         if acked_s > 0:  # ros2/rclpy humble rclpy/rclpy/publisher.py: wait_for_all_acked

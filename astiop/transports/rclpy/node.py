@@ -28,6 +28,7 @@ _lock = threading.Lock()
 # Each timeout is a wake-up for nothing (measured idle: 0.45 % of a core at 0.1 s with the
 # wait-set executor, 0.04 % at 1 s); what the executor must see wakes it (humble: node.py
 # _wake_executor on each entity made or destroyed; close() wakes it).
+NODE_PREFIX = "astiop_"  # each astiop process's node: astiop_<pid>
 SPIN_TIMEOUT_S = 1.0
 POLL_S = 0.1  # the state topics' messages are taken ten times a second
 ASK_AGAIN_S = 2.0  # a read service unanswered this long is asked again
@@ -61,7 +62,7 @@ class RosProcess:
         rclpy.init(args=["--ros-args", "--disable-stdout-logs"], context=self.context)
         # no parameter services: a console has no parameters to offer the robot's graph
         self.node = Node(
-            f"astiop_{os.getpid()}", context=self.context, start_parameter_services=False
+            f"{NODE_PREFIX}{os.getpid()}", context=self.context, start_parameter_services=False
         )
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
