@@ -17,7 +17,7 @@ from astiop.transports.base import Execution
 GOAL = re.compile(r"\bgoals?\b", re.I)
 _PLACE_IN_COMMAND = re.compile(r"name:\s*'?([\w-]+)")
 _PLACE_IN_REPORT = re.compile(
-    r"(?:goal accepted|arrived|still going to|stopped short of):? ([\w-]+)"
+    r"(?:goal accepted|goal sent|arrived|still going to|stopped short of):? ([\w-]+)"
 )
 
 

@@ -20,6 +20,7 @@ NAVIGATING = ("/goto_position", "/dock", "/undock", "send_goal", POSE_STAMPED)
 MOVING = ("navigating", "docking", "undocking", "blocked")
 ARRIVED_M = 0.3
 STATUS_LAG_S = 2.0  # a status stream may still say idle this long after a goal starts
+ACCEPTED, SENT = "goal accepted", "goal sent"
 NO_STATUS_S = 15.0  # a robot that reports no status at all: the pose decides after this
 
 
@@ -77,8 +78,14 @@ def started_text(gateway: RobotGateway, ex: Execution) -> str:
         if togo is not None or time.monotonic() > deadline:
             break
         time.sleep(0.05)
-    text = f"goal accepted: {goal_name(ex)}"
+    text = f"{started_word(ex)}: {goal_name(ex)}"
     return text + (f", {togo:.1f} m to go" if togo is not None else "")
+
+
+def started_word(ex: Execution) -> str:
+    """'goal accepted' as the robot said it; 'goal sent' for one published on a goal topic,
+    which tells nothing of acceptance."""
+    return SENT if POSE_STAMPED in ex.command else ACCEPTED
 
 
 async def follow(
@@ -114,7 +121,7 @@ async def follow(
             break
     if timed_out:
         outcome = "still going"
-    where = re.sub(r", [\d.]+ m to go$", "", started_line.removeprefix("goal accepted: "))
+    where = re.sub(r"^goal (?:accepted|sent): |, [\d.]+ m to go$", "", started_line)
     if outcome is None:
         outcome = await asyncio.to_thread(outcome_at, gateway, target, where)
     state = await asyncio.to_thread(gateway.state)

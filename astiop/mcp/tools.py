@@ -308,10 +308,15 @@ class RobotTools(MissionTools):
         values = ex.values if isinstance(ex.values, dict) else {}
         if goal is None:
             return ex.output + "".join(f"note: {n}\n" for n in ex.notes)
-        if not (values.get("success") or values.get("accepted")):
+        if not goals.started(ex):
             raise Refused(f"the robot refused the goal: {values.get('message') or ex.output}")
         started = goals.started_text(self.gateway, ex)
         self._follow(started, goal[1])
+        if goals.started_word(ex) == goals.SENT:  # on a navigator's goal topic: no answer
+            return (
+                f"{started} (published on the navigator's goal topic, which answers nothing; "
+                "robot_state reports its progress)"
+            )
         return f"{started} (the goal is accepted, not reached; robot_state reports its outcome)"
 
     def _clearance(self, text: str):

@@ -130,7 +130,8 @@ def test_estop_sends_zero_twist_even_without_a_stop_service(monkeypatch):
         on_path(monkeypatch, folder)
         gateway = make_gateway(stream=False)
         try:
-            time.sleep(0.6)  # the armed publisher has paid its start-up
+            # the armed publisher has started (under CI's load that took more than 0.6 s)
+            assert until(lambda: ARMED_ESTOP in ros2_calls(folder))
             pressed = time.monotonic()
             assert gateway.estop() == []  # a robot with no stop service: said, not failed
             said = [e.message for e in gateway.events_since(0) if e.kind == "estop"]

@@ -383,6 +383,15 @@ async def test_an_outside_agent_reads_and_drives_a_turtlebot3_through_mcp(tmp_pa
             assert 0 <= state["battery"]["age_s"] < 5, state
             error, text = await call(c, "read_topic", {"topic": "/battery_state"})
             assert not error and "percentage:" in text, text
+            # its NavigateToPose action discovered by the server too (under load an action's
+            # endpoints may come seconds after the rest; before, a goal goes on /goal_pose)
+            deadline = time.monotonic() + 30
+            while time.monotonic() < deadline:
+                actions = (await call(c, "ros2_query", {"command": "ros2 action list"}))[1]
+                if "/navigate_to_pose" in actions:
+                    break
+                time.sleep(0.5)
+            assert "/navigate_to_pose" in actions, actions
             error, text = await call(c, "go_to_pose", {"x": 12.0, "y": 4.0, "theta_deg": 0.0})
             assert not error and text.startswith("goal accepted"), text
             time.sleep(2.0)

@@ -350,10 +350,12 @@ def test_a_robot_that_takes_goals_on_a_topic_is_sent_them_there_and_fenced():
     assert "outside the geofence" in fence.review(far, False).reason
     odom = validate(goal.replace("frame_id: map", "frame_id: odom"), catalog)
     assert "map frame" in fence.review(odom, False).reason
-    from astiop.agent.goals import started
+    from astiop.agent.goals import started, started_word
     from astiop.transports.base import Execution
 
-    assert started(Execution(goal, True, kind="actuate", executed=True))  # followed to arrival
+    sent = Execution(goal, True, kind="actuate", executed=True)
+    assert started(sent)  # followed to arrival
+    assert started_word(sent) == "goal sent"  # a topic answers nothing: never "accepted"
 
 
 def test_a_pose_told_to_the_localiser_is_never_a_stop_and_is_fenced():
