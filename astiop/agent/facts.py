@@ -11,13 +11,20 @@ from typing import Any
 
 from astiop.agent.roles import role_of
 from astiop.agent.stated_numbers import NUMBER, quantities_in
-from astiop.agent.summaries import STATUS_WORDS, commanded_twist, directions, summarize
+from astiop.agent.summaries import (
+    GOAL_ACCEPTED,
+    GOAL_SENT,
+    STATUS_WORDS,
+    commanded_twist,
+    directions,
+    summarize,
+)
 from astiop.transports.base import Execution
 
 GOAL = re.compile(r"\bgoals?\b", re.I)
 _PLACE_IN_COMMAND = re.compile(r"name:\s*'?([\w-]+)")
 _PLACE_IN_REPORT = re.compile(
-    r"(?:goal accepted|goal sent|arrived|still going to|stopped short of):? ([\w-]+)"
+    rf"(?:{GOAL_ACCEPTED}|{GOAL_SENT}|arrived|still going to|stopped short of):? ([\w-]+)"
 )
 
 

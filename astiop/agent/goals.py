@@ -1,4 +1,5 @@
-"""A goal a turn started: what the robot reported when it accepted it, and how it ended.
+"""A goal a turn started: what the robot reported when it accepted it (or that it was sent, on a
+goal topic, which answers nothing), and how it ended.
 
 A turn never waits for its last goal; it says what was started, and the follow-up says how it
 ended (arrived, aborted, canceled, e-stopped) when it does.
@@ -11,6 +12,8 @@ import math
 import re
 import time
 
+from astiop.agent.summaries import GOAL_ACCEPTED as ACCEPTED
+from astiop.agent.summaries import GOAL_SENT as SENT
 from astiop.robot.gateway import RobotGateway
 from astiop.ros2.render import POSE_STAMPED
 from astiop.transports.base import Execution
@@ -20,7 +23,6 @@ NAVIGATING = ("/goto_position", "/dock", "/undock", "send_goal", POSE_STAMPED)
 MOVING = ("navigating", "docking", "undocking", "blocked")
 ARRIVED_M = 0.3
 STATUS_LAG_S = 2.0  # a status stream may still say idle this long after a goal starts
-ACCEPTED, SENT = "goal accepted", "goal sent"
 NO_STATUS_S = 15.0  # a robot that reports no status at all: the pose decides after this
 
 
@@ -28,7 +30,7 @@ def started(ex: Execution) -> bool:
     """Whether the command started a goal the robot is now driving to."""
     if not ex.executed or ex.error or not any(k in ex.command for k in NAVIGATING):
         return False
-    if POSE_STAMPED in ex.command:  # a goal published on a navigator's /goal_pose: sent
+    if started_word(ex) == SENT:  # a goal published on a navigator's /goal_pose
         return True
     v = ex.values if isinstance(ex.values, dict) else {}
     return bool(v.get("success") or v.get("accepted"))
@@ -71,7 +73,8 @@ def outcome_at(gateway: RobotGateway, target: tuple[float, float] | None, name: 
 
 
 def started_text(gateway: RobotGateway, ex: Execution) -> str:
-    """'goal accepted: shipping, 11.4 m to go', the distance along the robot's own /plan."""
+    """'goal accepted: shipping, 11.4 m to go' ('goal sent: …' on a goal topic), the distance
+    along the robot's own /plan."""
     deadline = time.monotonic() + 1.0
     while True:
         togo = gateway.state().distance_remaining
@@ -121,7 +124,7 @@ async def follow(
             break
     if timed_out:
         outcome = "still going"
-    where = re.sub(r"^goal (?:accepted|sent): |, [\d.]+ m to go$", "", started_line)
+    where = re.sub(rf"^(?:{ACCEPTED}|{SENT}): |, [\d.]+ m to go$", "", started_line)
     if outcome is None:
         outcome = await asyncio.to_thread(outcome_at, gateway, target, where)
     state = await asyncio.to_thread(gateway.state)

@@ -18,6 +18,8 @@ from astiop.ros2.roles import ROLE_BY_NAME
 from astiop.transports.base import Execution
 
 # action_msgs/srv/CancelGoal.srv's return codes
+# how a started goal is said: accepted as the robot answered, or sent on a goal topic (no answer)
+GOAL_ACCEPTED, GOAL_SENT = "goal accepted", "goal sent"
 CANCEL_CODES = {0: "accepted", 1: "rejected", 2: "unknown goal", 3: "goal already ended"}
 STATUS_WORDS = {0: "unknown", 1: "charging", 2: "discharging", 3: "not charging", 4: "full"}
 STALE_PERIODS = 2  # a reading older than this many of its topic's periods is said with its age

@@ -312,7 +312,7 @@ class RobotTools(MissionTools):
             raise Refused(f"the robot refused the goal: {values.get('message') or ex.output}")
         started = goals.started_text(self.gateway, ex)
         self._follow(started, goal[1])
-        if goals.started_word(ex) == goals.SENT:  # on a navigator's goal topic: no answer
+        if started.startswith(goals.SENT):  # on a navigator's goal topic: no answer
             return (
                 f"{started} (published on the navigator's goal topic, which answers nothing; "
                 "robot_state reports its progress)"

@@ -8,8 +8,9 @@ it, where (host, process) and when. The E-STOP is engaged while the newest press
 the newest release. Both only ever grow, so the words merge in any order and a late word never
 undoes a newer one: a press is never undone by a release made before it, and a release made
 after a press is never undone by that press's late steps. A station that joins later is handed
-every live writer's last word (transient-local, or in answer to its first word), and every station that heard a press
-says it again, so the press outlives the process that made it while any station lives."""
+every live writer's last word (transient-local, or in answer to its first word), and every
+station that heard a press says it again, so the press outlives the process that made it
+while any station lives."""
 
 from __future__ import annotations
 

@@ -92,10 +92,16 @@ def message_of(checked: Checked) -> dict[str, Any]:
     return checked.values
 
 
+def harmless(checked: Checked) -> bool:
+    """A read, or a command that only makes the robot safer (a stop, a goal's cancel): it runs
+    while the E-STOP holds, and asking it twice does no harm."""
+    return checked.kind != "actuate" or always_allowed(checked)
+
+
 def actuating(inflight: InFlight, checked: Checked) -> AbstractContextManager[Job | None]:
     """The job an actuating command runs as in `inflight` (refused while the E-STOP holds, ended
     by it); None for a read and for the stop itself, which must run while the E-STOP holds."""
-    if checked.kind != "actuate" or always_allowed(checked):
+    if harmless(checked):
         return contextlib.nullcontext(None)
     cmd = command_of(checked)
     return inflight.running(cmd.display(), cmd.name or "")
@@ -152,7 +158,8 @@ class RobotTransport(ABC):
     def estop_channel(self, namespace: str, on_word: Callable[[dict[str, Any]], None]):
         """Where the robot's E-STOP latch is announced on its graph (robot/station_latch.py):
         a channel with `announce(word)`, `settle()` (False: it ran out of time), `words()` and
-        `close()`, calling `on_word` with each word heard; None: this transport cannot (the store alone holds it)."""
+        `close()`, calling `on_word` with each word heard; None: this transport cannot (the
+        store alone holds it)."""
         return None
 
     def discovering(self) -> bool:

@@ -3,8 +3,9 @@ one ROS 2 domain as the store makes it hold between processes on one machine: th
 `<namespace>/astiop_control`, the E-STOP latch on `<namespace>/astiop_estop`; std_msgs/msg/String
 holding JSON, reliable and transient-local with depth 1.
 
-Why a transient-local topic: a console that joins later is handed every holder's last word at
-once (each writer keeps its own), with no server to ask and none to fail; a holder that dies
+Why a transient-local topic: a console that joins later is handed every holder's last word
+(each writer keeps its own; see below for when it is not), with no server to ask and none to
+fail; a holder that dies
 takes its writer, and so its word, with it; anyone can read it (`ros2 topic echo
 /astibot_2/astiop_control`). The holder says it again every heartbeat; a word not heard again
 for the lease's time is a holder gone.
@@ -87,17 +88,17 @@ class ControlTopic:
         moment later), or `timeout_s`: a take must not miss a holder that is there, nor a holder
         miss the take, and a station started later must hear a press. False: `timeout_s` ran
         out."""
-        deadline = time.monotonic() + timeout_s
+        asked = time.monotonic()  # its first word asked already, if it has said one
+        deadline = asked + timeout_s
         node = self.proc.node
         me = (node.get_name(), node.get_namespace())
         graph_seen: float | None = None  # when another node was first seen
-        asked = deadline - timeout_s
         while time.monotonic() < deadline:
             now = time.monotonic()
             if graph_seen is None and any(n != me for n in node.get_node_names_and_namespaces()):
                 graph_seen = now
             others = node.count_publishers(self.name) - 1
-            with self._lock:
+            with self._lock:  # one token per writer: its own is that of its last word
                 own = str(self._said.get("token")) if self._said else None
                 heard = sum(token != own for token in self._heard)
             readers = node.count_subscribers(self.name)
@@ -116,7 +117,10 @@ class ControlTopic:
         with self._lock:
             said = self._said
         if said is not None:
-            self._pub.publish(String(data=json.dumps({**said, "asking": True})))
+            self._publish({**said, "asking": True})
+
+    def _publish(self, word: dict[str, Any]) -> None:
+        self._pub.publish(String(data=json.dumps(word)))
 
     def _receive(self, msg: String) -> None:  # the executor's thread
         try:
@@ -137,8 +141,8 @@ class ControlTopic:
             )
             if answer:
                 self._answered[token] = now
-        if answer:
-            self._pub.publish(String(data=json.dumps(said)))
+        if answer and said is not None:  # `said` is never None here: for the type checker
+            self._publish(said)
         if self._on_word is not None:
             self._on_word(word)
 
@@ -148,7 +152,7 @@ class ControlTopic:
         said = {**word, "node": self._me}
         with self._lock:
             self._said = said
-        self._pub.publish(String(data=json.dumps(said)))
+        self._publish(said)
         if acked_s > 0:  # ros2/rclpy humble rclpy/rclpy/publisher.py: wait_for_all_acked
             self._pub.wait_for_all_acked(Duration(nanoseconds=int(acked_s * 1e9)))
 

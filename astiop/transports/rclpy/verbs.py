@@ -16,13 +16,14 @@ from rclpy.qos import qos_profile_sensor_data
 from astiop.ros2.message_objects import MessageTypeError, interface_class, to_dict, to_message
 from astiop.ros2.printing import ros2cli_yaml
 from astiop.ros2.render import STAMPED
-from astiop.ros2.validation import Checked, always_allowed
+from astiop.ros2.validation import Checked
 from astiop.ros2.verbs import VERBS
 from astiop.ros2.verbs.transport import Sample
 from astiop.transports.base import (
     BackendError,
     actuating,
     command_of,
+    harmless,
     interface_of,
     message_of,
     name_of,
@@ -219,7 +220,7 @@ class RclpyVerbs:
             if not client.wait_for_service(timeout_sec=timeout):
                 raise BackendError(f"service {name} is not available (waited {timeout:g} s)")
         lines.append(f"requester: making request: {request!r}\n")
-        again = c.kind != "actuate" or always_allowed(c)  # a read, a stop, a cancel
+        again = harmless(c)  # a read, a stop, a cancel
         response = self.proc.ask(client, request, timeout, f"service {name}", again=again)
         lines.append(f"response:\n{response!r}\n")
         if c.local_name == "/stop":
