@@ -127,7 +127,7 @@ def test_a_send_goal_returns_at_acceptance_and_stop_cancels_it(robot_gateway):
         '"{pose: {pose: {position: {x: 37.6, y: 4.0}, orientation: {w: 1.0}}}}"',
         confirm=YES,
     )
-    assert r.executed and r.values["accepted"], r.output
+    assert r.executed and r.values and r.values["accepted"], (r.output, r.error)
     assert "Goal accepted with ID:" in r.output and r.output.startswith(
         "Waiting for an action server to become available...\nSending goal:\n     pose:"
     )
